@@ -1,0 +1,25 @@
+"""Column names of the candidate and dataset tables (DESIGN's contract), in table order."""
+
+from __future__ import annotations
+
+
+def _xy(prefix: str, names: tuple[str, ...]) -> tuple[str, ...]:
+    return tuple(f"{prefix}{n}_{axis}" for n in names for axis in ("x", "y"))
+
+
+IDENTITY = ("object_id", "grasp_id", "grip_id", "two_finger")
+CONTACTS = _xy("p", ("1", "2", "3"))
+NORMALS = _xy("n", ("1", "2", "3"))
+FORCES = _xy("f", ("1", "2", "3"))
+REGIONS = _xy("r", ("1a", "1b", "2a", "2b", "3a", "3b"))
+CURVATURES = ("rho1", "rho2", "rho3")
+FOCI = ("cg_x", "cg_y", "cc_x", "cc_y")
+HAND = ("e1", "e2", "e3", "spread", "hand_x", "hand_y", "hand_yaw")
+OBJECT = ("area", "centroid_x", "centroid_y", "semi_major", "semi_minor")
+FEATURES = ("S1", "S2", "S3", "S4", "G1", "G2", "C1", "C2", "C3", "C4", "C5", "C6")
+INDEXES = ("Q_G", "Q_C")
+OUTCOMES = ("trials", "successes", "success_rate", "success")
+
+DESCRIPTORS = CONTACTS + NORMALS + FORCES + REGIONS + CURVATURES + FOCI + HAND + OBJECT
+CANDIDATE_COLUMNS = IDENTITY + DESCRIPTORS + FEATURES + INDEXES
+DATASET_COLUMNS = CANDIDATE_COLUMNS + OUTCOMES

@@ -1,0 +1,161 @@
+"""Typed, validated configuration: one section per part of the pipeline, read from YAML.
+
+``load_config(path)`` reads a YAML file with a safe loader; unknown keys and out-of-range values
+raise ``ValueError`` naming the offending key. ``configs/default.yaml`` is the embedded default.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Literal
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from grip_env.params import GraspParams
+
+DEFAULT_CONFIG_PATH = Path(__file__).resolve().parents[1] / "configs" / "default.yaml"
+
+
+class _Section(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+class ObjectsConfig(_Section):
+    """Which objects a job runs on."""
+
+    set: str = Field("default", description="named object set, or 'procedural'")
+    procedural_count: int = Field(0, ge=0, le=1_000_000, description="extra procedural objects")
+    procedural_size_mm: tuple[float, float] = Field((50.0, 150.0), description="size range across")
+    thickness_mm: float = Field(30.0, gt=0.0, le=500.0, description="extrusion height")
+
+
+class PerceptionConfig(_Section):
+    """Top-down rendering, segmentation, curvature and region cutting."""
+
+    source: Literal["polygon", "render"] = Field("polygon", description="contour the grips plan on")
+    resolution_px: int = Field(256, ge=32, le=4096, description="rendered image side (pixels)")
+    mm_per_px: float = Field(1.0, gt=0.0, le=20.0, description="rendered image scale")
+    pixel_noise: float = Field(0.0, ge=0.0, le=1.0, description="grey-level noise std before thresholding")
+    contour_spacing_mm: float = Field(1.0, gt=0.0, le=20.0, description="contour resampling step")
+    curvature_sigma_mm: float = Field(2.0, gt=0.0, le=50.0, description="curvature smoothing scale")
+    max_turn_rad: float = Field(0.35, gt=0.0, le=3.2, description="max accumulated turn in a region")
+    curvature_jump: float = Field(0.08, gt=0.0, le=10.0, description="curvature step that cuts (1/mm)")
+    min_region_mm: float = Field(12.0, gt=0.0, le=500.0, description="shortest region for a finger")
+
+
+class SynthesisConfig(_Section):
+    """Grasp synthesis and Barrett configuration search."""
+
+    contacts_per_region: int = Field(5, ge=1, le=50, description="candidate contacts per region")
+    max_grasps: int = Field(200, ge=1, le=100_000, description="keep the best grasps by Q_G")
+    thumb_search_steps: int = Field(61, ge=3, le=10_000, description="thumb directions tried")
+    min_extension_mm: float = Field(30.0, ge=0.0, le=500.0, description="shortest finger reach")
+    max_extension_mm: float = Field(160.0, gt=0.0, le=1000.0, description="longest finger reach")
+    max_spread_rad: float = Field(1.5, gt=0.0, le=3.2, description="largest usable spread")
+    finger_width_mm: float = Field(25.0, gt=0.0, le=100.0, description="finger width")
+
+
+class SimConfig(_Section):
+    """PyBullet execution of one grip."""
+
+    timestep: float = Field(1.0 / 240.0, gt=0.0, le=0.05, description="physics step (s)")
+    solver_iterations: int = Field(50, ge=1, le=1000, description="constraint solver iterations")
+    finger_force_n: float = Field(15.0, gt=0.0, le=200.0, description="fingertip force")
+    finger_friction: float = Field(1.0, gt=0.0, le=3.0, description="finger pad lateral friction")
+    lift_height_mm: float = Field(60.0, gt=0.0, le=1000.0, description="lift distance")
+    shake_amplitude_mm: float = Field(10.0, ge=0.0, le=200.0, description="shake amplitude")
+    shake_frequency_hz: float = Field(2.0, ge=0.0, le=50.0, description="shake frequency")
+    hold_tolerance_mm: float = Field(20.0, gt=0.0, le=500.0, description="drift that still counts as held")
+    mass_per_weight_kg: float = Field(0.3, gt=0.0, le=50.0, description="object mass for W = 1")
+
+
+class UncertaintyConfig(_Section):
+    """Execution noise, each drawn from a seeded generator per trial."""
+
+    position_std_mm: float = Field(1.0, ge=0.0, le=50.0, description="palm position error std")
+    yaw_std_rad: float = Field(0.02, ge=0.0, le=1.0, description="palm orientation error std")
+    friction_range: tuple[float, float] = Field((0.4, 1.0), description="true friction drawn in")
+    mass_rel_std: float = Field(0.2, ge=0.0, le=2.0, description="object mass relative std")
+    perceived_contour: bool = Field(False, description="plan on the perceived contour")
+
+
+class DatasetConfig(_Section):
+    """Dataset generation."""
+
+    trials: int = Field(5, ge=1, le=1000, description="simulated trials per grip")
+    seed: int = Field(0, ge=0, description="run seed")
+    workers: int = Field(2, ge=1, le=1024, description="parallel workers")
+    backend: Literal["process", "ray"] = Field("process", description="parallel backend")
+    max_grips_per_object: int = Field(40, ge=1, le=10_000, description="best grips by Q_C simulated")
+
+
+class LearningConfig(_Section):
+    """Classifiers, evaluation and ablation."""
+
+    models: tuple[str, ...] = Field(
+        ("svm", "mlp_torch", "mlp_sklearn", "knn", "logreg", "rank_qc", "rank_qg", "random"),
+        description="models trained and compared",
+    )
+    folds: int = Field(5, ge=2, le=100, description="grouped CV folds")
+    repeats: int = Field(3, ge=1, le=100, description="CV repeats over seeds")
+    seed: int = Field(0, ge=0, description="learning seed")
+    test_fraction: float = Field(0.25, gt=0.0, lt=1.0, description="held-out object fraction")
+
+
+class SelectorConfig(_Section):
+    """RL selector training."""
+
+    timesteps: int = Field(20_000, ge=1, le=100_000_000, description="training timesteps")
+    max_candidates: int = Field(64, ge=2, le=4096, description="K, candidates per observation")
+    max_attempts: int = Field(1, ge=1, le=100, description="attempts per episode")
+    seed: int = Field(0, ge=0, description="training seed")
+
+
+class Config(_Section):
+    """The whole configuration; every section has defaults."""
+
+    grasp: GraspParams = GraspParams()
+    objects: ObjectsConfig = ObjectsConfig()
+    perception: PerceptionConfig = PerceptionConfig()
+    synthesis: SynthesisConfig = SynthesisConfig()
+    sim: SimConfig = SimConfig()
+    uncertainty: UncertaintyConfig = UncertaintyConfig()
+    dataset: DatasetConfig = DatasetConfig()
+    learning: LearningConfig = LearningConfig()
+    selector: SelectorConfig = SelectorConfig()
+
+    def override(self, **sections: dict[str, Any]) -> Config:
+        """A copy with some fields replaced, e.g. ``override(dataset={"trials": 3})``."""
+        data = self.model_dump()
+        for name, fields in sections.items():
+            if name not in data:
+                raise ValueError(f"unknown config section {name!r}")
+            data[name] = {**data[name], **fields}
+        return config_from_dict(data)
+
+
+def config_from_dict(data: dict[str, Any]) -> Config:
+    """Validate a nested dict into a ``Config``; errors name the offending key."""
+    try:
+        return Config.model_validate(data)
+    except ValidationError as exc:
+        problems = "; ".join(
+            f"{'.'.join(str(p) for p in err['loc'])}: {err['msg']}" for err in exc.errors()
+        )
+        raise ValueError(f"invalid config: {problems}") from None
+
+
+def load_config(path: str | Path | None = None) -> Config:
+    """Read a YAML config (the embedded default when ``path`` is None)."""
+    path = Path(path) if path is not None else DEFAULT_CONFIG_PATH
+    if not path.is_file():
+        raise ValueError(f"config file not found: {path}")
+    with path.open() as stream:
+        try:
+            data = yaml.safe_load(stream) or {}
+        except yaml.YAMLError as exc:
+            raise ValueError(f"config {path} is not valid YAML: {exc}") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"config {path} must be a mapping of sections, got {type(data).__name__}")
+    return config_from_dict(data)

@@ -1,0 +1,112 @@
+"""Named planar shapes and the object sets built from them (sizes fit the Barrett hand)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from grip_env.objects.planar import PlanarObject
+
+Vertices = NDArray[np.float64]
+
+
+def rectangle(width: float, height: float) -> Vertices:
+    """Axis-aligned rectangle centred at the origin."""
+    w, h = width / 2, height / 2
+    return np.array([[-w, -h], [w, -h], [w, h], [-w, h]])
+
+
+def regular_polygon(sides: int, radius: float, phase: float = 0.0) -> Vertices:
+    """Regular polygon with the given circumradius."""
+    angles = phase + 2 * np.pi * np.arange(sides) / sides
+    return radius * np.column_stack([np.cos(angles), np.sin(angles)])
+
+
+def ellipse(a: float, b: float, points: int = 96) -> Vertices:
+    """Ellipse with semi-axes a (x) and b (y), sampled at ``points`` vertices."""
+    t = 2 * np.pi * np.arange(points) / points
+    return np.column_stack([a * np.cos(t), b * np.sin(t)])
+
+
+def star(tips: int, outer: float, inner: float) -> Vertices:
+    """Star polygon alternating outer and inner radii."""
+    angles = np.pi / 2 + np.pi * np.arange(2 * tips) / tips
+    radii = np.where(np.arange(2 * tips) % 2 == 0, outer, inner)
+    return np.column_stack([radii * np.cos(angles), radii * np.sin(angles)])
+
+
+def rounded_rectangle(width: float, height: float, radius: float, arc_points: int = 8) -> Vertices:
+    """Rectangle with circular corners of the given radius."""
+    w, h = width / 2 - radius, height / 2 - radius
+    corners = [(w, -h, -np.pi / 2), (w, h, 0.0), (-w, h, np.pi / 2), (-w, -h, np.pi)]
+    t = np.linspace(0, np.pi / 2, arc_points)
+    arcs = [np.column_stack([cx + radius * np.cos(a0 + t), cy + radius * np.sin(a0 + t)])
+            for cx, cy, a0 in corners]
+    return np.vstack(arcs)
+
+
+_SHAPES: dict[str, Callable[[], Vertices]] = {
+    "rectangle": lambda: rectangle(90, 55),
+    "square": lambda: rectangle(65, 65),
+    "triangle": lambda: regular_polygon(3, 55, np.pi / 2),
+    "right_triangle": lambda: np.array([[0, 0], [100, 0], [0, 65]], dtype=float),
+    "trapezoid": lambda: np.array([[-55, -30], [55, -30], [30, 30], [-30, 30]], dtype=float),
+    "parallelogram": lambda: np.array([[-50, -25], [35, -25], [50, 25], [-35, 25]], dtype=float),
+    "pentagon": lambda: regular_polygon(5, 45, np.pi / 2),
+    "hexagon": lambda: regular_polygon(6, 42),
+    "l_shape": lambda: np.array(
+        [[0, 0], [100, 0], [100, 40], [40, 40], [40, 110], [0, 110]], dtype=float),
+    "t_shape": lambda: np.array(
+        [[-18, -60], [18, -60], [18, 20], [55, 20], [55, 55], [-55, 55], [-55, 20], [-18, 20]],
+        dtype=float),
+    "cross": lambda: np.array(
+        [[-18, -55], [18, -55], [18, -18], [55, -18], [55, 18], [18, 18], [18, 55], [-18, 55],
+         [-18, 18], [-55, 18], [-55, -18], [-18, -18]], dtype=float),
+    "star": lambda: star(5, 65, 32),
+    "notched_rectangle": lambda: np.array(
+        [[-50, -30], [50, -30], [50, 30], [12, 30], [12, 12], [-12, 12], [-12, 30], [-50, 30]],
+        dtype=float),
+    "rounded_rectangle": lambda: rounded_rectangle(100, 60, 12),
+    "ellipse": lambda: ellipse(55, 35),
+    "disc": lambda: ellipse(38, 38, points=72),
+    "u_shape": lambda: np.array(
+        [[-50, -40], [50, -40], [50, 40], [25, 40], [25, -10], [-25, -10], [-25, 40], [-50, 40]],
+        dtype=float),
+    "bean": lambda: _bean(),
+}
+
+
+def _bean(points: int = 96) -> Vertices:
+    """A kidney shape: an ellipse with a smooth concave dent on one long side."""
+    t = 2 * np.pi * np.arange(points) / points
+    x, y = 60 * np.cos(t), 35 * np.sin(t)
+    y = y - 22 * np.exp(-((x / 25) ** 2)) * (np.sin(t) > 0)
+    return np.column_stack([x, y])
+
+
+SHAPE_NAMES: tuple[str, ...] = tuple(_SHAPES)
+
+OBJECT_SETS: dict[str, tuple[str, ...]] = {
+    "default": SHAPE_NAMES,
+    "basic": ("rectangle", "triangle", "hexagon", "l_shape"),
+}
+
+
+def make_shape(name: str) -> PlanarObject:
+    """One named shape, centred on its centroid."""
+    if name not in _SHAPES:
+        raise ValueError(f"unknown shape {name!r}; known shapes: {', '.join(SHAPE_NAMES)}")
+    return PlanarObject.from_polygon(_SHAPES[name](), name=name).centred()
+
+
+def load_object_set(name: str = "default") -> list[PlanarObject]:
+    """A named set of objects (``"default"`` holds every named shape)."""
+    if name in OBJECT_SETS:
+        return [make_shape(shape) for shape in OBJECT_SETS[name]]
+    if name in _SHAPES:
+        return [make_shape(name)]
+    raise ValueError(
+        f"unknown object set {name!r}; known sets: {', '.join(OBJECT_SETS)} or a shape name"
+    )

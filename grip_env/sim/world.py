@@ -1,0 +1,194 @@
+"""``World``: one PyBullet client (headless) and the bodies every scene shares.
+
+This package is the only place that calls pybullet. Geometry arrives in millimetres and leaves in
+millimetres; metres exist only inside this layer.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pybullet
+from numpy.typing import NDArray
+from pybullet_utils.bullet_client import BulletClient
+
+from grip_env.objects import PlanarObject
+
+MM = 1e-3  # metres per millimetre
+
+
+@dataclass(frozen=True)
+class Body:
+    """A body in a ``World``: its PyBullet id and the height of its top face (mm)."""
+
+    uid: int
+    top_mm: float
+
+
+class World:
+    """A headless PyBullet world owning its own client; use as a context manager or ``close()``."""
+
+    def __init__(self, timestep: float = 1.0 / 240.0, solver_iterations: int = 50) -> None:
+        self.client = BulletClient(connection_mode=pybullet.DIRECT)
+        self.timestep = timestep
+        self.solver_iterations = solver_iterations
+        self.reset()
+
+    # ------------------------------------------------------------------ lifecycle
+    def reset(self) -> None:
+        """Empty the world and restore gravity and solver settings."""
+        c = self.client
+        c.resetSimulation()
+        c.setGravity(0, 0, -9.81)
+        c.setPhysicsEngineParameter(
+            fixedTimeStep=self.timestep, numSolverIterations=self.solver_iterations
+        )
+
+    def close(self) -> None:
+        """Disconnect the client (idempotent)."""
+        if getattr(self, "client", None) is not None:
+            try:
+                self.client.disconnect()
+            except pybullet.error:
+                pass
+            self.client = None
+
+    def __enter__(self) -> World:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        self.close()
+
+    def step(self, steps: int = 1) -> None:
+        """Advance the simulation ``steps`` fixed steps."""
+        for _ in range(steps):
+            self.client.stepSimulation()
+
+    # ------------------------------------------------------------------ bodies
+    def add_table(self, friction: float = 0.5, half_size_mm: float = 500.0) -> Body:
+        """A static table whose top face is at z = 0."""
+        c = self.client
+        half = [half_size_mm * MM, half_size_mm * MM, 0.01]
+        shape = c.createCollisionShape(pybullet.GEOM_BOX, halfExtents=half)
+        visual = c.createVisualShape(pybullet.GEOM_BOX, halfExtents=half, rgbaColor=[1, 1, 1, 1])
+        uid = c.createMultiBody(0, shape, visual, basePosition=[0, 0, -0.01])
+        c.changeDynamics(uid, -1, lateralFriction=friction)
+        return Body(uid, 0.0)
+
+    def add_object(
+        self,
+        obj: PlanarObject,
+        thickness_mm: float = 30.0,
+        mass_kg: float = 0.3,
+        friction: float = 0.5,
+        rgba: tuple[float, float, float, float] = (0.15, 0.15, 0.15, 1.0),
+    ) -> Body:
+        """The object extruded to ``thickness_mm``, resting on z = 0, one exact prism per convex piece.
+
+        The body frame is the object's plane frame (x, y in mm scaled to m, origin at the plane
+        origin), so planar coordinates map to world coordinates without a transform.
+        """
+        if thickness_mm <= 0 or mass_kg <= 0:
+            raise ValueError(f"thickness and mass must be positive, got {thickness_mm}, {mass_kg}")
+        c = self.client
+        shapes, visuals = [], []
+        for piece in obj.convex_pieces():
+            vertices = _prism(piece, thickness_mm)
+            shapes.append(c.createCollisionShape(pybullet.GEOM_MESH, vertices=vertices))
+            visuals.append(_visual_prism(c, piece, thickness_mm, rgba))
+        centroid = [obj.centroid[0] * MM, obj.centroid[1] * MM, thickness_mm * MM / 2]
+        uid = self._compound(shapes, visuals, mass_kg, centroid)
+        c.changeDynamics(
+            uid, -1, lateralFriction=friction, spinningFriction=0.001, rollingFriction=0.0
+        )
+        return Body(uid, thickness_mm)
+
+    def _compound(
+        self, shapes: list[int], visuals: list[int], mass_kg: float, com: list[float]
+    ) -> int:
+        c = self.client
+        n = len(shapes)
+        if n == 1:
+            return c.createMultiBody(
+                mass_kg, shapes[0], visuals[0], basePosition=[0, 0, 0],
+                baseInertialFramePosition=com,
+            )
+        # A massless-looking base is avoided: the whole mass sits in the base, links are fixed.
+        return c.createMultiBody(
+            baseMass=mass_kg,
+            baseCollisionShapeIndex=shapes[0],
+            baseVisualShapeIndex=visuals[0],
+            basePosition=[0, 0, 0],
+            baseInertialFramePosition=com,
+            linkMasses=[0.0] * (n - 1),
+            linkCollisionShapeIndices=shapes[1:],
+            linkVisualShapeIndices=visuals[1:],
+            linkPositions=[[0, 0, 0]] * (n - 1),
+            linkOrientations=[[0, 0, 0, 1]] * (n - 1),
+            linkInertialFramePositions=[[0, 0, 0]] * (n - 1),
+            linkInertialFrameOrientations=[[0, 0, 0, 1]] * (n - 1),
+            linkParentIndices=[0] * (n - 1),
+            linkJointTypes=[pybullet.JOINT_FIXED] * (n - 1),
+            linkJointAxis=[[0, 0, 1]] * (n - 1),
+        )
+
+    def pose_mm(self, body: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Position (mm) and quaternion (x, y, z, w) of a body's base."""
+        pos, orn = self.client.getBasePositionAndOrientation(body)
+        return np.asarray(pos) / MM, np.asarray(orn)
+
+    # ------------------------------------------------------------------ camera
+    def render_top_down(
+        self, center_mm: NDArray[np.float64], resolution_px: int, mm_per_px: float,
+        plane_z_mm: float = 0.0, height_mm: float = 1000.0,
+    ) -> NDArray[np.uint8]:
+        """Top-down grey image of the plane z = ``plane_z_mm``, centred on ``center_mm``.
+
+        Row 0 is at +y. The scale ``mm_per_px`` holds exactly on that plane (the object's top face).
+
+        A long focal length (narrow field of view from high up) makes the perspective negligible;
+        pixel (r, c) looks at x = cx + (c + 0.5 - n/2) mm_per_px, y = cy - (r + 0.5 - n/2) mm_per_px.
+        """
+        c = self.client
+        n = resolution_px
+        half_extent_m = n * mm_per_px * MM / 2
+        eye_height = height_mm * MM
+        cx, cy = center_mm[0] * MM, center_mm[1] * MM
+        plane_z = plane_z_mm * MM
+        view = c.computeViewMatrix([cx, cy, plane_z + eye_height], [cx, cy, plane_z], [0, 1, 0])
+        fov = 2 * np.degrees(np.arctan(half_extent_m / eye_height))
+        projection = c.computeProjectionMatrixFOV(fov, 1.0, eye_height * 0.5, eye_height * 1.5)
+        _, _, rgba, _, _ = c.getCameraImage(
+            n, n, view, projection, renderer=pybullet.ER_TINY_RENDERER, shadow=0,
+            lightDirection=[0, 0, 1],
+        )
+        rgb = np.asarray(rgba, dtype=np.uint8).reshape(n, n, 4)[..., :3]
+        return rgb.mean(axis=2).astype(np.uint8)
+
+
+def _prism(piece: NDArray[np.float64], thickness_mm: float) -> list[list[float]]:
+    bottom = [[x * MM, y * MM, 0.0] for x, y in piece]
+    top = [[x * MM, y * MM, thickness_mm * MM] for x, y in piece]
+    return bottom + top
+
+
+def _visual_prism(
+    client: BulletClient, piece: NDArray[np.float64], thickness_mm: float,
+    rgba: tuple[float, float, float, float],
+) -> int:
+    n = len(piece)
+    vertices = _prism(piece, thickness_mm)
+    indices: list[int] = []
+    for i in range(1, n - 1):  # top and bottom fans
+        indices += [n, n + i, n + i + 1]
+        indices += [0, i + 1, i]
+    for i in range(n):  # sides
+        j = (i + 1) % n
+        indices += [i, j, n + j, i, n + j, n + i]
+    return client.createVisualShape(
+        pybullet.GEOM_MESH, vertices=vertices, indices=indices, rgbaColor=list(rgba)
+    )
