@@ -1,0 +1,32 @@
+"""The ``grip-env`` command line: one subcommand per job.
+
+Each job lives in its own module here and registers itself on ``app``. Bad input ends with a
+one-line message and exit code 2, never a traceback.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+import typer
+
+app = typer.Typer(
+    name="grip-env",
+    help="Learn which Barrett BH8-280 grips hold: generate, train, ablate, select, study, show.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_enable=False,
+)
+
+_COMMAND_MODULES = ("show",)
+
+
+def _register_commands() -> None:
+    for name in _COMMAND_MODULES:
+        importlib.import_module(f"grip_env.cli.{name}").register(app)
+
+
+def main() -> None:
+    """Console-script entry point."""
+    _register_commands()
+    app()
