@@ -36,11 +36,11 @@ class PerceptionConfig(_Section):
     source: Literal["polygon", "render"] = Field("polygon", description="contour the grips plan on")
     resolution_px: int = Field(256, ge=32, le=4096, description="rendered image side (pixels)")
     mm_per_px: float = Field(1.0, gt=0.0, le=20.0, description="rendered image scale")
-    pixel_noise: float = Field(0.0, ge=0.0, le=1.0, description="grey-level noise std before thresholding")
+    pixel_noise: float = Field(0.0, ge=0.0, le=1.0, description="grey-level noise std")
     contour_spacing_mm: float = Field(1.0, gt=0.0, le=20.0, description="contour resampling step")
     curvature_sigma_mm: float = Field(2.0, gt=0.0, le=50.0, description="curvature smoothing scale")
-    max_turn_rad: float = Field(0.35, gt=0.0, le=3.2, description="max accumulated turn in a region")
-    curvature_jump: float = Field(0.08, gt=0.0, le=10.0, description="curvature step that cuts (1/mm)")
+    max_turn_rad: float = Field(0.35, gt=0.0, le=3.2, description="max turn in a region")
+    curvature_jump: float = Field(0.08, gt=0.0, le=10.0, description="curvature step (1/mm)")
     min_region_mm: float = Field(12.0, gt=0.0, le=500.0, description="shortest region for a finger")
 
 
@@ -66,7 +66,7 @@ class SimConfig(_Section):
     lift_height_mm: float = Field(60.0, gt=0.0, le=1000.0, description="lift distance")
     shake_amplitude_mm: float = Field(10.0, ge=0.0, le=200.0, description="shake amplitude")
     shake_frequency_hz: float = Field(2.0, ge=0.0, le=50.0, description="shake frequency")
-    hold_tolerance_mm: float = Field(20.0, gt=0.0, le=500.0, description="drift that still counts as held")
+    hold_tolerance_mm: float = Field(20.0, gt=0.0, le=500.0, description="drift still held")
     mass_per_weight_kg: float = Field(0.3, gt=0.0, le=50.0, description="object mass for W = 1")
 
 
@@ -87,7 +87,7 @@ class DatasetConfig(_Section):
     seed: int = Field(0, ge=0, description="run seed")
     workers: int = Field(2, ge=1, le=1024, description="parallel workers")
     backend: Literal["process", "ray"] = Field("process", description="parallel backend")
-    max_grips_per_object: int = Field(40, ge=1, le=10_000, description="best grips by Q_C simulated")
+    max_grips_per_object: int = Field(40, ge=1, le=10_000, description="best grips by Q_C")
 
 
 class LearningConfig(_Section):

@@ -23,7 +23,7 @@ class GraspParams(BaseModel):
     weight: float = Field(1.0, gt=0.0, le=10.0, description="object weight class W")
     eta: float = Field(101.5, gt=0.0, le=500.0, description="optimal maximum finger extension (mm)")
     rho_scale: float = Field(10.0, gt=0.0, le=1000.0, description="curvature scale for rho (mm)")
-    feature_cap: float = Field(100.0, gt=1.0, le=1e6, description="value stored for infinite features")
+    feature_cap: float = Field(100.0, gt=1.0, le=1e6, description="stored for infinite values")
 
     @property
     def friction_angle(self) -> float:

@@ -1,4 +1,4 @@
-"""``PlanarObject``: a flat part given by its outer contour, with the descriptors the measures use."""
+"""``PlanarObject``: a flat part given by its outer contour, with its descriptors."""
 
 from __future__ import annotations
 
@@ -36,7 +36,7 @@ class PlanarObject:
     @classmethod
     def from_polygon(cls, vertices_mm: ArrayLike, name: str = "polygon") -> PlanarObject:
         """An object from its polygon vertices (mm), in either orientation."""
-        return cls(np.asarray(vertices_mm, dtype=float), name=name, source="polygon")
+        return cls(vertices_mm, name=name, source="polygon")
 
     @classmethod
     def from_mask(cls, mask: ArrayLike, mm_per_px: float, name: str = "mask") -> PlanarObject:
@@ -199,11 +199,15 @@ def _validated_contour(contour: ArrayLike, name: str) -> NDArray[np.float64]:
     keep = np.linalg.norm(pts - np.roll(pts, 1, axis=0), axis=1) > 1e-9
     pts = pts[keep] if keep.any() else pts[:1]
     if len(pts) < 3:
-        raise ValueError(f"object {name!r}: a polygon needs at least 3 distinct vertices, got {len(pts)}")
+        raise ValueError(
+            f"object {name!r}: a polygon needs at least 3 distinct vertices, got {len(pts)}"
+        )
     polygon = Polygon(pts)
-    if polygon.area <= _MIN_AREA_MM2:
-        raise ValueError(f"object {name!r}: polygon has zero area")
+    if np.linalg.matrix_rank(pts - pts.mean(axis=0), tol=1e-9) < 2:
+        raise ValueError(f"object {name!r}: polygon has zero area (collinear vertices)")
     if not polygon.is_valid:
         reason = shapely.is_valid_reason(polygon)
         raise ValueError(f"object {name!r}: polygon is not simple ({reason})")
+    if polygon.area <= _MIN_AREA_MM2:
+        raise ValueError(f"object {name!r}: polygon has zero area")
     return _ccw(pts)

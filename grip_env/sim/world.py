@@ -6,6 +6,7 @@ millimetres; metres exist only inside this layer.
 
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 
 import numpy as np
@@ -48,10 +49,8 @@ class World:
     def close(self) -> None:
         """Disconnect the client (idempotent)."""
         if getattr(self, "client", None) is not None:
-            try:
+            with contextlib.suppress(pybullet.error):
                 self.client.disconnect()
-            except pybullet.error:
-                pass
             self.client = None
 
     def __enter__(self) -> World:
@@ -87,7 +86,7 @@ class World:
         friction: float = 0.5,
         rgba: tuple[float, float, float, float] = (0.15, 0.15, 0.15, 1.0),
     ) -> Body:
-        """The object extruded to ``thickness_mm``, resting on z = 0, one exact prism per convex piece.
+        """The object extruded to ``thickness_mm`` on z = 0, one exact prism per convex piece.
 
         The body frame is the object's plane frame (x, y in mm scaled to m, origin at the plane
         origin), so planar coordinates map to world coordinates without a transform.
@@ -150,8 +149,8 @@ class World:
 
         Row 0 is at +y. The scale ``mm_per_px`` holds exactly on that plane (the object's top face).
 
-        A long focal length (narrow field of view from high up) makes the perspective negligible;
-        pixel (r, c) looks at x = cx + (c + 0.5 - n/2) mm_per_px, y = cy - (r + 0.5 - n/2) mm_per_px.
+        A narrow field of view from high up makes the perspective negligible; pixel (r, c)
+        looks at x = cx + (c + 0.5 - n/2) s, y = cy - (r + 0.5 - n/2) s with s = mm_per_px.
         """
         c = self.client
         n = resolution_px
