@@ -18,6 +18,12 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 
+
+@app.callback()
+def _root() -> None:
+    """Learn which Barrett BH8-280 grips hold: generate, train, ablate, select, study, show."""
+
+
 _COMMAND_MODULES = ("show",)
 
 

@@ -3,6 +3,7 @@
 from grip_env.objects.planar import PlanarObject, polygon_moments
 from grip_env.objects.procedural import procedural_objects, random_object
 from grip_env.objects.shapes import OBJECT_SETS, SHAPE_NAMES, load_object_set, make_shape
+from grip_env.objects.sources import object_from_spec
 
 __all__ = [
     "OBJECT_SETS",
@@ -10,6 +11,7 @@ __all__ = [
     "PlanarObject",
     "load_object_set",
     "make_shape",
+    "object_from_spec",
     "polygon_moments",
     "procedural_objects",
     "random_object",

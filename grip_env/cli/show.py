@@ -1,0 +1,63 @@
+"""``grip-env show``: draw an object with its regions and best grips, or a simulated trial."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from grip_env.cli.errors import user_errors
+
+
+def show(
+    obj: Annotated[str, typer.Argument(help="shape name, image file, or vertex file (.json/.csv)")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="PNG file to write")] = Path("show.png"),
+    grips: Annotated[int, typer.Option(help="draw the best N grips by Q_C (0: regions only)")] = 0,
+    config: Annotated[Path | None, typer.Option(help="YAML config (default: embedded)")] = None,
+    mm_per_px: Annotated[float, typer.Option(help="scale of an image object")] = 1.0,
+    sim: Annotated[bool, typer.Option("--sim", help="simulate the best grip")] = False,
+    seed: Annotated[int, typer.Option(help="seed of the simulated trial")] = 0,
+) -> None:
+    """Draw OBJECT with its grasping regions (and grips) to a PNG."""
+    with user_errors():
+        if grips < 0:
+            raise ValueError(f"--grips must be >= 0, got {grips}")
+        from grip_env.config import load_config
+        from grip_env.objects import object_from_spec
+
+        cfg = load_config(config)
+        planar = object_from_spec(obj, mm_per_px)
+        path = _render_trial(planar, cfg, seed, out) if sim else _draw(planar, cfg, grips, out)
+    typer.echo(f"wrote {path}")
+
+
+def _draw(planar, cfg, grips: int, out: Path) -> Path:  # type: ignore[no-untyped-def]
+    from grip_env.drawing import object_figure, save_figure
+    from grip_env.perception.regions import find_regions
+
+    regions = find_regions(planar, cfg.perception, cfg.grasp)
+    table = None
+    if grips:
+        from grip_env.pipeline import candidates
+
+        table = candidates(planar, cfg.grasp, cfg, regions=regions).head(grips)
+    title = f"{planar.name}: {len(regions)} regions"
+    if table is not None:
+        title += f", best {len(table)} grips by Q_C"
+    return save_figure(object_figure(planar, regions, table, title), out)
+
+
+def _render_trial(planar, cfg, seed: int, out: Path) -> Path:  # type: ignore[no-untyped-def]
+    from grip_env.pipeline import candidates
+    from grip_env.sim import render_trial_strip
+
+    table = candidates(planar, cfg.grasp, cfg)
+    if table.empty:
+        raise ValueError(f"object {planar.name!r} has no feasible grip to simulate")
+    return render_trial_strip(planar, table.iloc[0], cfg, seed, out)
+
+
+def register(app: typer.Typer) -> None:
+    """Add the command to the CLI."""
+    app.command("show")(show)
