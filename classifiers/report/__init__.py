@@ -1,0 +1,1 @@
+"""The study report: the paper's analyses, figures and the document writer."""

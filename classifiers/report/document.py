@@ -1,0 +1,116 @@
+"""A small report document: headings, text, tables and figures, written as Markdown and HTML."""
+
+from __future__ import annotations
+
+import html
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pandas as pd
+
+
+@dataclass(frozen=True)
+class _Block:
+    kind: str  # "heading", "text", "table", "figure"
+    content: object
+    level: int = 2
+    caption: str = ""
+
+
+@dataclass
+class Report:
+    """An ordered list of blocks; figures are PNG paths relative to the report's folder."""
+
+    title: str
+    blocks: list[_Block] = field(default_factory=list)
+
+    def heading(self, text: str, level: int = 2) -> None:
+        """A section heading (level 2) or sub-heading (3)."""
+        self.blocks.append(_Block("heading", text, level))
+
+    def text(self, paragraph: str) -> None:
+        """A paragraph; Markdown inline markup is kept as is in Markdown, escaped in HTML."""
+        self.blocks.append(_Block("text", paragraph))
+
+    def table(self, frame: pd.DataFrame, caption: str = "", float_format: str = "{:.3g}") -> None:
+        """A table from a DataFrame (its index is shown when it is named or not a RangeIndex)."""
+        shown = frame if isinstance(frame.index, pd.RangeIndex) else frame.reset_index()
+        formatted = shown.map(lambda v: float_format.format(v) if isinstance(v, float) else str(v))
+        self.blocks.append(_Block("table", formatted, caption=caption))
+
+    def figure(self, path: str, caption: str) -> None:
+        """A PNG figure beside the report."""
+        self.blocks.append(_Block("figure", path, caption=caption))
+
+    # ------------------------------------------------------------------ writers
+    def to_markdown(self) -> str:
+        """The report as Markdown."""
+        lines = [f"# {self.title}", ""]
+        for block in self.blocks:
+            lines += _MARKDOWN[block.kind](block)
+            lines.append("")
+        return "\n".join(lines)
+
+    def to_html(self) -> str:
+        """The report as a standalone HTML page."""
+        body = "\n".join(_HTML[block.kind](block) for block in self.blocks)
+        return (
+            "<!doctype html><html><head><meta charset='utf-8'>"
+            f"<title>{html.escape(self.title)}</title><style>{_CSS}</style></head>"
+            f"<body><h1>{html.escape(self.title)}</h1>\n{body}\n</body></html>\n"
+        )
+
+    def write(self, folder: str | Path, stem: str = "report") -> tuple[Path, Path]:
+        """Write ``report.md`` and ``report.html`` into ``folder``."""
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        md, page = folder / f"{stem}.md", folder / f"{stem}.html"
+        md.write_text(self.to_markdown())
+        page.write_text(self.to_html())
+        return md, page
+
+
+def _md_table(block: _Block) -> list[str]:
+    frame: pd.DataFrame = block.content  # type: ignore[assignment]
+    header = "| " + " | ".join(str(c) for c in frame.columns) + " |"
+    rule = "|" + "|".join(" --- " for _ in frame.columns) + "|"
+    rows = ["| " + " | ".join(row) + " |" for row in frame.astype(str).to_numpy().tolist()]
+    caption = [f"*{block.caption}*", ""] if block.caption else []
+    return [*caption, header, rule, *rows]
+
+
+def _html_table(block: _Block) -> str:
+    frame: pd.DataFrame = block.content  # type: ignore[assignment]
+    head = "".join(f"<th>{html.escape(str(c))}</th>" for c in frame.columns)
+    rows = "".join(
+        "<tr>" + "".join(f"<td>{html.escape(v)}</td>" for v in row) + "</tr>"
+        for row in frame.astype(str).to_numpy().tolist()
+    )
+    caption = f"<caption>{html.escape(block.caption)}</caption>" if block.caption else ""
+    return f"<table>{caption}<thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table>"
+
+
+_MARKDOWN = {
+    "heading": lambda b: [f"{'#' * b.level} {b.content}"],
+    "text": lambda b: [str(b.content)],
+    "table": _md_table,
+    "figure": lambda b: [f"![{b.caption}]({b.content})", "", f"*{b.caption}*"],
+}
+
+_HTML = {
+    "heading": lambda b: f"<h{b.level}>{html.escape(str(b.content))}</h{b.level}>",
+    "text": lambda b: f"<p>{html.escape(str(b.content))}</p>",
+    "table": _html_table,
+    "figure": lambda b: (
+        f"<figure><img src='{html.escape(str(b.content))}' alt='{html.escape(b.caption)}'>"
+        f"<figcaption>{html.escape(b.caption)}</figcaption></figure>"
+    ),
+}
+
+_CSS = (
+    "body{font-family:sans-serif;max-width:1000px;margin:2em auto;line-height:1.45}"
+    "table{border-collapse:collapse;margin:1em 0;font-size:0.9em}"
+    "td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}"
+    "caption{font-style:italic;text-align:left}img{max-width:100%}"
+    "figcaption{font-style:italic;color:#444}"
+)
