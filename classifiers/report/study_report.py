@@ -1,0 +1,232 @@
+"""Assembling ``report.md`` / ``report.html`` of a study folder from its stages' results."""
+
+from __future__ import annotations
+
+import json
+import platform
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from classifiers.report import analysis, figures
+from classifiers.report.document import Report
+from grip_env.config import Config
+from grip_env.objects import PlanarObject, load_object_set, procedural_objects
+
+_PACKAGES = ("numpy", "pandas", "scikit-learn", "torch", "pybullet", "gymnasium",
+             "stable-baselines3", "sb3-contrib")
+
+
+def write_report(out: Path, config: Config, table: pd.DataFrame) -> Path:
+    """Write the report of the study in ``out`` and return the Markdown path."""
+    fig_dir = out / "figures"
+    report = Report("grip-env study")
+    report.text(
+        "Candidate Barrett BH8-280 grips of planar objects, characterised by the paper's twelve "
+        "visual quality measures and labelled by simulated execution in PyBullet under "
+        "positioning, friction and mass uncertainty. Everything below was produced by "
+        "`grip-env study` from the configuration listed at the end."
+    )
+    objects = _study_objects(config)
+    _dataset_section(report, table, objects, fig_dir)
+    _feature_section(report, table, fig_dir)
+    _rank_section(report, objects, config)
+    _classifier_section(report, out)
+    _ablation_section(report, out)
+    _selector_section(report, out)
+    _provenance_section(report, out, config)
+    md, _ = report.write(out)
+    return md
+
+
+# ---------------------------------------------------------------------------------- sections
+def _dataset_section(report: Report, table: pd.DataFrame, objects: list[PlanarObject],
+                     fig_dir: Path) -> None:
+    report.heading("Dataset")
+    per_object = table.groupby("object_id").size()
+    summary = pd.DataFrame(
+        {
+            "value": [
+                table["object_id"].nunique(), len(table), f"{per_object.mean():.1f}",
+                f"{per_object.min()}–{per_object.max()}", int(table["trials"].sum()),
+                f"{table['success_rate'].mean():.3f}", f"{table['success'].mean():.3f}",
+                f"{table['two_finger'].mean():.3f}",
+            ]
+        },
+        index=["objects", "grips (configurations)", "grips per object (mean)",
+               "grips per object (range)", "simulated trials", "mean success rate",
+               "fraction labelled success (rate ≥ 0.5)", "fraction two-finger grips"],
+    ).rename_axis("quantity")
+    report.table(summary)
+    named = [o for o in objects if o.name in set(table["object_id"])][:16]
+    path = figures.grip_gallery(named, table, fig_dir / "gallery.png")
+    report.figure(_rel(path, report_root=fig_dir.parent),
+                  "Objects with their best grip by Q_C (solid) and worst (faint); simulated "
+                  "outcome in brackets. Dots: contacts; arrows: real finger forces; dashed: "
+                  "finger lines to their spread axes; square: palm centre; × C_G, * C_C "
+                  "(paper's Fig. 15).")
+
+
+def _feature_section(report: Report, table: pd.DataFrame, fig_dir: Path) -> None:
+    report.heading("Features and outcomes")
+    root = fig_dir.parent
+    path = figures.feature_distributions(table, fig_dir / "feature_distributions.png")
+    report.figure(_rel(path, root), "Distribution of each feature for grips that held and slipped.")
+    correlations = analysis.feature_correlations(table)
+    path = figures.correlation_heatmap(correlations, fig_dir / "correlations.png")
+    report.figure(_rel(path, root), "Correlation matrix of the features and Q_C over all grips.")
+    report.table(correlations.round(2), caption="Feature correlations (compare the paper's "
+                 "table in section VI-B, where Q_C correlated most with C4 (.86) and C1 (.68)).")
+    for column in ("Q_C", "Q_G"):
+        bins = analysis.success_by_decile(table, column)
+        path = figures.success_by_bin(bins, fig_dir / f"success_by_{column}.png", column)
+        report.figure(_rel(path, root), f"Simulated success rate per {column} decile.")
+    bins = analysis.success_by_decile(table, "Q_C")
+    trend = bins["success_rate"].iloc[:3].mean() - bins["success_rate"].iloc[-3:].mean()
+    report.text(
+        f"The best three Q_C deciles hold {bins['success_rate'].iloc[:3].mean():.1%} of the time, "
+        f"the worst three {bins['success_rate'].iloc[-3:].mean():.1%} (difference {trend:+.1%}); "
+        "the paper expects lower Q_C to hold more often."
+    )
+
+
+def _rank_section(report: Report, objects: list[PlanarObject], config: Config) -> None:
+    from grip_env.pipeline import candidates
+
+    report.heading("Grasp ranks against configuration ranks (paper, section VII-A)")
+    comparisons = []
+    for obj in objects:
+        table = candidates(obj, config.grasp, config)
+        if table["grasp_id"].nunique() >= 3:
+            comparisons.append(analysis.compare_ranks(table))
+    if not comparisons:
+        report.text("No object had three or more grasps; nothing to compare.")
+        return
+    summary = analysis.rank_summary(comparisons)
+    example = max(comparisons, key=lambda c: len(c.table))
+    shown = example.table.head(10).assign(
+        config_ranks=lambda t: t["config_ranks"].map(lambda r: ", ".join(map(str, r)))
+    )[["grasp_rank", "Q_G", "config_ranks"]]
+    report.table(shown, caption=f"Table I for {example.object_id}: the ten best grasps by Q_G and "
+                 "the Q_C ranks of the configurations each generates.")
+    report.table(summary.round(2), caption="Per object: Spearman correlation of the grasp rank "
+                 "with its best configuration's rank and with its configurations' mean rank.")
+    top3 = int(summary["best_config_from_top3_grasp"].sum())
+    top6 = int(summary["best_grasp_config_in_top6"].sum())
+    report.text(
+        f"Rank correlations: best-configuration {summary['rho_best_config'].median():.2f} (median; "
+        f"range {summary['rho_best_config'].min():.2f}–{summary['rho_best_config'].max():.2f}), "
+        f"mean-configuration {summary['rho_mean_config'].median():.2f} (range "
+        f"{summary['rho_mean_config'].min():.2f}–{summary['rho_mean_config'].max():.2f}); the "
+        f"paper found 0.6–0.8. The best configuration comes from one of the three best grasps "
+        f"for {top3} of {len(summary)} objects (paper: 7 of 8), and the best grasp's best "
+        f"configuration is among the six best for {top6} of {len(summary)} (paper: 7 of 8)."
+    )
+
+
+def _classifier_section(report: Report, out: Path) -> None:
+    from classifiers.study import frame_of_intervals
+
+    report.heading("Classifiers (grouped cross-validation by object)")
+    metrics = _json(out / "classifiers" / "metrics.json")
+    if metrics is None:
+        report.text("Not run.")
+        return
+    models = metrics["models"]
+    names = ["roc_auc", "balanced_accuracy", "accuracy", "f1", "brier", "top1_success"]
+    report.table(frame_of_intervals(models, names),
+                 caption="Mean and 95% interval over folds × repeats.")
+    best = _best(models, "roc_auc")
+    if best:
+        report.text(f"Best ROC-AUC: **{best}** ({_fmt(models[best]['roc_auc'])}).")
+    for png in sorted((out / "classifiers").glob("*.png")):
+        report.figure(_rel(png, out), png.stem.replace("_", " "))
+
+
+def _ablation_section(report: Report, out: Path) -> None:
+    from classifiers.study import frame_of_intervals
+
+    report.heading("Ablation: what the hand features add")
+    ablation = _json(out / "ablation" / "ablation.json")
+    if ablation is None:
+        report.text("Not run.")
+        return
+    for key, block in ablation.items():
+        if isinstance(block, dict) and block and all(isinstance(v, dict) for v in block.values()):
+            flat = {name: _first_model(v) for name, v in block.items()}
+            flat = {k: v for k, v in flat.items() if v}
+            if flat:
+                metrics = sorted({m for v in flat.values() for m in v})
+                report.table(frame_of_intervals(flat, metrics), caption=f"{key}")
+    for png in sorted((out / "ablation").glob("*.png")):
+        report.figure(_rel(png, out), png.stem.replace("_", " "))
+
+
+def _selector_section(report: Report, out: Path) -> None:
+    from classifiers.study import frame_of_intervals
+
+    report.heading("RL selector on held-out objects")
+    selector = _json(out / "selector" / "selector.json")
+    if selector is None:
+        report.text("Not run.")
+        return
+    policies = selector["policies"]
+    metrics = sorted({m for v in policies.values() for m in v if isinstance(v.get(m), dict)})
+    report.table(frame_of_intervals(policies, metrics),
+                 caption="First-pick success rate on the held-out objects, mean and 95% interval.")
+    for png in sorted((out / "selector").glob("*.png")):
+        report.figure(_rel(png, out), png.stem.replace("_", " "))
+
+
+def _provenance_section(report: Report, out: Path, config: Config) -> None:
+    report.heading("Parameters and versions")
+    params = pd.DataFrame({"value": config.grasp.model_dump()}).rename_axis("parameter")
+    report.table(params, caption="Grasping parameters (GraspParams).")
+    versions = {"python": platform.python_version(), "machine": platform.platform()}
+    for name in ("grip-env", *_PACKAGES):
+        try:
+            versions[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            versions[name] = "not installed"
+    report.table(pd.DataFrame({"version": versions}).rename_axis("package"))
+    timings = _json(out / "timings.json") or {}
+    if timings:
+        report.table(pd.DataFrame({"seconds": timings}).rename_axis("stage"),
+                     caption="Wall time of the stages computed in the latest run.")
+    report.text("Configuration (YAML sections):")
+    report.text(json.dumps(config.model_dump(mode="json"), indent=1))
+
+
+# ---------------------------------------------------------------------------------- helpers
+def _study_objects(config: Config) -> list[PlanarObject]:
+    objects = load_object_set(config.objects.set)
+    if config.objects.procedural_count:
+        objects += procedural_objects(
+            config.objects.procedural_count, config.dataset.seed, config.objects.procedural_size_mm
+        )
+    return objects
+
+
+def _json(path: Path) -> dict[str, Any] | None:
+    return json.loads(path.read_text()) if path.exists() else None
+
+
+def _best(models: dict[str, dict[str, Any]], metric: str) -> str | None:
+    scored = {k: v[metric]["mean"] for k, v in models.items() if metric in v}
+    return max(scored, key=scored.get) if scored else None  # type: ignore[arg-type]
+
+
+def _first_model(block: dict[str, Any]) -> dict[str, Any]:
+    if "models" in block and isinstance(block["models"], dict) and block["models"]:
+        return next(iter(block["models"].values()))
+    return {k: v for k, v in block.items() if isinstance(v, dict) and "mean" in v}
+
+
+def _fmt(value: dict[str, Any]) -> str:
+    return f"{value['mean']:.3f} [{value['ci'][0]:.3f}, {value['ci'][1]:.3f}]"
+
+
+def _rel(path: Path, report_root: Path) -> str:
+    return str(Path(path).relative_to(report_root))

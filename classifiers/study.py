@@ -1,0 +1,95 @@
+"""The main job: dataset, classifiers, ablation, RL selector, report.
+
+Every stage reuses what an earlier run already produced in ``out``, so an interrupted study resumes.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from grip_env.config import Config
+
+QUICK_OVERRIDES: dict[str, dict[str, Any]] = {
+    "objects": {"set": "basic", "procedural_count": 2},
+    "dataset": {"trials": 2, "max_grips_per_object": 8},
+    "learning": {"folds": 2, "repeats": 1, "models": ("logreg", "knn", "rank_qc", "random")},
+    "selector": {"timesteps": 512, "max_candidates": 16},
+}
+
+
+def study_config(config: Config, quick: bool = False) -> Config:
+    """The configuration a study runs on (``quick`` shrinks every stage for tests)."""
+    return config.override(**QUICK_OVERRIDES) if quick else config
+
+
+def run_study(
+    config: Config, out: str | Path, quick: bool = False, log: Callable[[str], None] = print
+) -> Path:
+    """Run every stage into ``out`` and return the path of ``report.md``."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    config = study_config(config, quick)
+    timings: dict[str, float] = {}
+
+    def stage(name: str, done: Path, run: Callable[[], object]) -> None:
+        if done.exists():
+            log(f"[study] {name}: reusing {done}")
+            return
+        log(f"[study] {name} ...")
+        start = time.perf_counter()
+        run()
+        timings[name] = time.perf_counter() - start
+        log(f"[study] {name} done in {timings[name]:.1f} s")
+
+    from classifiers.ablation import run_ablation
+    from classifiers.selector import run_selector
+    from classifiers.training import train_and_save
+    from grip_env.dataset import generate, load
+
+    data_dir = out / "dataset"
+    stage("dataset", data_dir / "COMPLETE", lambda: _generate(generate, config, data_dir))
+    table = load(data_dir)
+    stage("classifiers", out / "classifiers" / "metrics.json",
+          lambda: train_and_save(table, out / "classifiers", config))
+    stage("ablation", out / "ablation" / "ablation.json",
+          lambda: run_ablation(table, out / "ablation", config))
+    stage("selector", out / "selector" / "selector.json",
+          lambda: run_selector(table, out / "selector", config))
+    _merge_timings(out / "timings.json", timings)
+    log("[study] report ...")
+    from classifiers.report.study_report import write_report
+
+    return write_report(out, config, table)
+
+
+def _generate(generate: Callable[..., Path], config: Config, data_dir: Path) -> None:
+    generate(config, data_dir)
+    (data_dir / "COMPLETE").write_text("dataset generation finished\n")
+
+
+def _merge_timings(path: Path, timings: dict[str, float]) -> None:
+    previous = json.loads(path.read_text()) if path.exists() else {}
+    previous.update({k: round(v, 2) for k, v in timings.items()})
+    path.write_text(json.dumps(previous, indent=2))
+
+
+def load_json(path: Path) -> dict[str, Any]:
+    """A stage's JSON result."""
+    return json.loads(Path(path).read_text())
+
+
+def frame_of_intervals(results: dict[str, dict[str, Any]], metrics: list[str]) -> pd.DataFrame:
+    """``{name: {metric: {"mean", "ci"}}}`` as a table of ``mean [lo, hi]`` strings."""
+    rows = {}
+    for name, values in results.items():
+        rows[name] = {
+            m: f"{values[m]['mean']:.3f} [{values[m]['ci'][0]:.3f}, {values[m]['ci'][1]:.3f}]"
+            for m in metrics if m in values
+        }
+    return pd.DataFrame(rows).T.rename_axis("name")
