@@ -24,7 +24,7 @@ def _root() -> None:
     """Learn which Barrett BH8-280 grips hold: generate, train, ablate, select, study, show."""
 
 
-_COMMAND_MODULES = ("show",)
+_COMMAND_MODULES = ("show", "study", "generate", "validate")
 
 
 def _register_commands() -> None:

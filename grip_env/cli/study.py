@@ -1,0 +1,30 @@
+"""``grip-env study``: the whole main job on one config, ending in a report."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from grip_env.cli.errors import user_errors
+
+
+def study(
+    config: Annotated[Path | None, typer.Option(help="YAML config (default: embedded)")] = None,
+    out: Annotated[Path, typer.Option("--out", "-o", help="study folder")] = Path("runs/default"),
+    quick: Annotated[bool, typer.Option("--quick", help="tiny profile for tests")] = False,
+) -> None:
+    """Generate the dataset, train and evaluate classifiers, ablate, train the RL selector and
+    write OUT/report.md (and report.html). Rerunning reuses every finished stage."""
+    with user_errors():
+        from classifiers.study import run_study
+        from grip_env.config import load_config
+
+        report = run_study(load_config(config), out, quick=quick, log=typer.echo)
+    typer.echo(f"report: {report}")
+
+
+def register(app: typer.Typer) -> None:
+    """Add the command to the CLI."""
+    app.command("study")(study)
