@@ -156,7 +156,9 @@ class World:
         n = resolution_px
         half_extent_m = n * mm_per_px * MM / 2
         eye_height = height_mm * MM
-        cx, cy = center_mm[0] * MM, center_mm[1] * MM
+        # The tiny renderer samples pixel corners, half a pixel towards -x, -y of the centres:
+        # shift the camera by half a pixel so that the pixel-centre convention above holds.
+        cx, cy = (center_mm[0] + mm_per_px / 2) * MM, (center_mm[1] + mm_per_px / 2) * MM
         plane_z = plane_z_mm * MM
         view = c.computeViewMatrix([cx, cy, plane_z + eye_height], [cx, cy, plane_z], [0, 1, 0])
         fov = 2 * np.degrees(np.arctan(half_extent_m / eye_height))
