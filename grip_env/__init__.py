@@ -7,3 +7,7 @@ from grip_env.params import GraspParams
 
 __version__ = "0.1.0"
 __all__ = ["GraspParams", "__version__"]
+
+from grip_env.envs.registration import register_envs
+
+register_envs()

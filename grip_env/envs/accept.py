@@ -1,0 +1,121 @@
+"""``GripAccept-v0``: candidates shown one at a time, each skipped or executed."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+
+from grip_env.envs.core import GripEnvBase, action_index
+from grip_env.envs.observation import CandidateSet
+
+Observation = dict[str, NDArray[np.float32]]
+SKIP, EXECUTE = 0, 1
+PROGRESS = ("position", "attempts", "pool")
+
+
+class GripAcceptEnv(GripEnvBase):
+    """Decide, candidate after candidate, whether to execute it (1) or skip it (0).
+
+    Each episode draws one object of the split; its best ``max_candidates`` candidates by ``Q_C``
+    are shown best first (``candidate_order="q_c"``) or in a random order per episode
+    (``"shuffled"``). Executing earns ``success_reward`` or ``failure_reward``; skipping earns 0,
+    except that skipping the last candidate ends the episode with ``failure_reward`` (the object
+    was never lifted). The episode terminates on success, after ``max_attempts`` executions, or
+    when the candidates run out. Every action is valid; :meth:`action_masks` is all True.
+
+    Observation: ``Dict(features=Box(F), progress=Box(0, 1, (3,)))``: the current candidate's
+    normalised features, and ``progress`` = (candidates already shown / K, executions used /
+    max_attempts, the object's candidate count / K). Action: ``Discrete(2)``.
+
+    ``info`` holds ``object_id``, ``grip_id``, ``Q_C``, ``success_rate`` (recorded rate, NaN
+    live) of the candidate acted on, ``attempts``, ``executed``, ``success`` and
+    ``invalid_action`` (always False). Options are those of
+    :class:`~grip_env.envs.select.GripSelectEnv`.
+    """
+
+    def __init__(self, data: Any = None, objects: Any = None, **options: Any) -> None:
+        super().__init__(data, objects, **options)
+        low, high = self.scaler.bounds()
+        self.observation_space = spaces.Dict({
+            "features": spaces.Box(low, high, dtype=np.float32),
+            "progress": spaces.Box(0.0, 1.0, (len(PROGRESS),), dtype=np.float32),
+        })
+        self.action_space = spaces.Discrete(2)
+        self._found: CandidateSet | None = None
+        self._slots = np.arange(self.max_candidates)
+        self._position = 0
+        self._attempts = 0
+        self._shown: int | None = None
+        self._outcome: bool | None = None
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Observation, dict[str, Any]]:
+        """Start an episode on a new object and show its first candidate."""
+        super().reset(seed=seed)
+        found = self._found = self._sample_candidates()
+        self._slots = self._shuffled_slots(found.count)
+        self._position, self._attempts, self._outcome = 0, 0, None
+        self._shown = int(self._slots[0])
+        if self.render_mode == "human":
+            self.render()
+        info = {"object_id": found.object_id, "candidates": found.count, "attempts": 0}
+        return self._observation(), info
+
+    def step(self, action: Any) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
+        """Skip (0) or execute (1) the current candidate."""
+        execute = action_index(action, 2) == EXECUTE
+        found = self._found
+        if found is None:
+            raise RuntimeError("call reset() before step()")
+        row = int(self._slots[min(self._position, found.count - 1)])
+        info = self._grip_info(found, row)
+        success, reward = False, 0.0
+        if execute:
+            success = self.backend.execute(found, row, self.np_random)
+            self._attempts += 1
+            reward = self.success_reward if success else self.failure_reward
+        self._position += 1
+        exhausted = self._position >= found.count
+        if exhausted and not execute:
+            reward = self.failure_reward
+        terminated = success or self._attempts >= self.max_attempts or exhausted
+        self._shown = row if terminated else int(self._slots[self._position])
+        self._outcome = success if execute and terminated else None
+        info.update(
+            attempts=self._attempts, executed=execute, success=success, invalid_action=False
+        )
+        if self.render_mode == "human":
+            self.render()
+        return self._observation(), reward, terminated, False, info
+
+    def action_masks(self) -> NDArray[np.bool_]:
+        """Both actions are always valid."""
+        return np.ones(2, dtype=bool)
+
+    def _observation(self) -> Observation:
+        found = self._found
+        assert found is not None
+        row = int(self._slots[min(self._position, found.count - 1)])
+        progress = np.array(
+            [
+                min(self._position, found.count) / self.max_candidates,
+                self._attempts / self.max_attempts,
+                found.count / self.max_candidates,
+            ],
+            dtype=np.float32,
+        )
+        return {"features": found.features[row].copy(), "progress": progress}
+
+    def _draw(self) -> NDArray[np.uint8]:
+        found = self._found
+        if found is None:
+            return self._frame(None, None, None, "")
+        title = (
+            f"{found.object_id}: candidate {min(self._position + 1, found.count)}/{found.count},"
+            f" attempts {self._attempts}"
+        )
+        return self._frame(found, self._shown, self._outcome, title)

@@ -1,0 +1,204 @@
+"""Where a grip's outcome comes from: a recorded dataset (replay) or PyBullet (live).
+
+Both backends give the same three things to an environment: the object ids, each object's
+candidate rows (the candidate/dataset column contract) and the outcome of executing one candidate,
+drawn with the environment's random generator so that ``reset(seed=...)`` fixes everything.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+import pandas as pd
+from numpy.typing import NDArray
+
+from grip_env.config import Config
+from grip_env.envs.observation import CandidateSet
+from grip_env.objects import SHAPE_NAMES, PlanarObject, load_object_set, make_shape
+
+ObjectsArg = str | Sequence[str | PlanarObject] | None
+_REPLAY_COLUMNS = ("object_id", "grip_id", "Q_C")
+_AREA_TOLERANCE = 0.01  # relative; a named shape's contour is trusted for drawing within this
+
+
+class OutcomeBackend(Protocol):
+    """What an environment needs from a source of grip outcomes."""
+
+    object_ids: tuple[str, ...]
+    feature_cap: float | None  # the cap the features were computed with, when known
+
+    def candidates(self, object_id: str) -> pd.DataFrame:
+        """All candidate rows of one object (any order)."""
+
+    def contour(self, object_id: str) -> NDArray[np.float64] | None:
+        """The object's contour (N, 2) in mm, or None when unknown (drawing only)."""
+
+    def execute(self, candidates: CandidateSet, slot: int, rng: np.random.Generator) -> bool:
+        """Whether executing candidate ``slot`` of ``candidates`` lifts the object."""
+
+    def close(self) -> None:
+        """Release resources (idempotent)."""
+
+
+class ReplayBackend:
+    """Outcomes replayed from recorded trials.
+
+    Executing a grip draws ``success ~ Bernoulli(successes / trials)`` from the grip's recorded
+    trials (or its ``success_rate`` when the counts are absent) with the environment's generator:
+    one step costs one uniform draw.
+
+    Args:
+        data: a dataset directory or file (read with ``grip_env.dataset.load``) or a DataFrame with
+            the dataset columns (at least ``object_id``, ``grip_id``, ``Q_C``, the contact points,
+            the features, and ``trials``/``successes`` or ``success_rate``).
+        objects: restrict to these object ids (names, or objects whose ``name`` is the id);
+            objects also give the contours used for drawing.
+    """
+
+    def __init__(self, data: str | Path | pd.DataFrame, objects: ObjectsArg = None) -> None:
+        frame = data if isinstance(data, pd.DataFrame) else _load_dataset(data)
+        missing = [name for name in _REPLAY_COLUMNS if name not in frame.columns]
+        if missing:
+            raise ValueError(f"replay data lacks columns {missing}")
+        if not {"trials", "successes"} <= set(frame.columns) and "success_rate" not in frame:
+            raise ValueError("replay data needs 'trials' and 'successes' or 'success_rate'")
+        self._frames = {str(key): rows for key, rows in frame.groupby("object_id", sort=True)}
+        given = _given_objects(objects)
+        if given is not None:
+            unknown = sorted(set(given) - set(self._frames))
+            if unknown:
+                raise ValueError(f"objects {unknown} are not in the replay data")
+            self._frames = {key: self._frames[key] for key in sorted(given)}
+        if not self._frames:
+            raise ValueError("replay data holds no grip")
+        self.object_ids = tuple(self._frames)
+        stored = {} if isinstance(data, pd.DataFrame) else _stored_contours(data)
+        given_contours = {k: obj.contour for k, obj in (given or {}).items() if obj is not None}
+        self._contours = {**stored, **given_contours}
+        params = frame.attrs.get("params") or {}
+        self.feature_cap: float | None = params.get("feature_cap")
+
+    def candidates(self, object_id: str) -> pd.DataFrame:
+        return self._frames[object_id]
+
+    def contour(self, object_id: str) -> NDArray[np.float64] | None:
+        if object_id not in self._contours:
+            self._contours[object_id] = _named_shape_contour(object_id, self._frames[object_id])
+        return self._contours[object_id]
+
+    def execute(self, candidates: CandidateSet, slot: int, rng: np.random.Generator) -> bool:
+        return bool(rng.random() < candidates.success_rate[slot])
+
+    def close(self) -> None:
+        return None
+
+
+class LiveBackend:
+    """Outcomes from executing the grip in PyBullet: one trial per execution, with the noise.
+
+    Candidates come from ``grip_env.pipeline.candidates`` (computed once per object, on first
+    use); a trial's seed is drawn from the environment's generator.
+
+    Args:
+        objects: a named object set, or a list of shape names / ``PlanarObject``; None takes
+            ``config.objects.set``.
+        config: the grip-env configuration (grasp parameters, synthesis, simulation, noise).
+    """
+
+    def __init__(self, objects: ObjectsArg, config: Config) -> None:
+        self._objects = _live_objects(objects, config)
+        self.object_ids = tuple(self._objects)
+        self._config = config
+        self.feature_cap: float | None = config.grasp.feature_cap
+
+    def candidates(self, object_id: str) -> pd.DataFrame:
+        from grip_env.pipeline import candidates
+
+        return candidates(self._objects[object_id], self._config.grasp, self._config)
+
+    def contour(self, object_id: str) -> NDArray[np.float64] | None:
+        return self._objects[object_id].contour
+
+    def execute(self, candidates: CandidateSet, slot: int, rng: np.random.Generator) -> bool:
+        from grip_env.sim import run_trials
+
+        seed = int(rng.integers(2**31 - 1))
+        grip = candidates.rows.iloc[[slot]]
+        outcome = run_trials(self._objects[candidates.object_id], grip, self._config, 1, seed)
+        return bool(outcome["successes"].iloc[0] > 0)
+
+    def close(self) -> None:
+        return None
+
+
+def _load_dataset(path: str | Path) -> pd.DataFrame:
+    from grip_env.dataset import load
+
+    if not Path(path).exists():
+        raise ValueError(f"dataset not found: {path}")
+    return load(path)
+
+
+def _stored_contours(path: str | Path) -> dict[str, NDArray[np.float64]]:
+    """Contours stored beside a dataset (none when the dataset keeps no objects table)."""
+    from grip_env.dataset import load_objects
+
+    try:
+        return {obj.name: obj.contour for obj in load_objects(path)}
+    except (ValueError, OSError):
+        return {}
+
+
+def _given_objects(objects: ObjectsArg) -> dict[str, PlanarObject | None] | None:
+    """Object ids (with the object when one was given) from the ``objects`` argument."""
+    if objects is None:
+        return None
+    if isinstance(objects, str):
+        return {obj.name: obj for obj in load_object_set(objects)}
+    given: dict[str, PlanarObject | None] = {}
+    for item in objects:
+        if isinstance(item, PlanarObject):
+            given[item.name] = item
+        elif isinstance(item, str):
+            given[item] = None
+        else:
+            raise ValueError(f"objects must be names or PlanarObject, got {item!r}")
+    if not given:
+        raise ValueError("objects must not be empty")
+    return given
+
+
+def _live_objects(objects: ObjectsArg, config: Config) -> dict[str, PlanarObject]:
+    if objects is None or isinstance(objects, str):
+        found = load_object_set(objects if objects is not None else config.objects.set)
+    else:
+        found = [item if isinstance(item, PlanarObject) else _shape(item) for item in objects]
+    names = [obj.name for obj in found]
+    if not names:
+        raise ValueError("objects must not be empty")
+    if len(set(names)) != len(names):
+        raise ValueError(f"object names must be unique, got {names}")
+    return {obj.name: obj for obj in found}
+
+
+def _shape(item: Any) -> PlanarObject:
+    if not isinstance(item, str):
+        raise ValueError(f"objects must be names or PlanarObject, got {item!r}")
+    return make_shape(item)
+
+
+def _named_shape_contour(object_id: str, rows: pd.DataFrame) -> NDArray[np.float64] | None:
+    """A named shape's contour when its recorded area and centroid match (else unknown)."""
+    needed = {"area", "centroid_x", "centroid_y"}
+    if object_id not in SHAPE_NAMES or not needed <= set(rows.columns):
+        return None
+    shape = make_shape(object_id)
+    first = rows.iloc[0]
+    size = np.sqrt(shape.area)
+    offset = np.hypot(*(first[["centroid_x", "centroid_y"]].to_numpy(float) - shape.centroid))
+    if abs(shape.area - first["area"]) > _AREA_TOLERANCE * shape.area or offset > 0.01 * size:
+        return None
+    return shape.contour

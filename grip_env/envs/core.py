@@ -1,0 +1,205 @@
+"""``GripEnvBase``: what the grip environments share (objects, split, candidates, rewards, drawing).
+
+An episode is one object, drawn uniformly with the environment's ``np_random`` from the objects
+of its split that have at least one candidate. Subclasses define the spaces, ``reset`` and ``step``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+import pandas as pd
+from numpy.typing import NDArray
+
+from grip_env.config import Config, load_config
+from grip_env.envs.backends import LiveBackend, ObjectsArg, OutcomeBackend, ReplayBackend
+from grip_env.envs.observation import (
+    CandidateSet,
+    FeatureScaler,
+    candidate_set,
+    feature_subset,
+    raw_features,
+)
+from grip_env.envs.rendering import HumanWindow, draw_candidates
+from grip_env.envs.split import objects_in_split
+
+CANDIDATE_ORDERS: tuple[str, ...] = ("q_c", "shuffled")
+
+
+class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
+    """Shared construction of the grip environments; see ``GripSelectEnv`` for the options."""
+
+    metadata: ClassVar[dict[str, Any]] = {"render_modes": ["human", "rgb_array"], "render_fps": 2}
+
+    def __init__(
+        self,
+        data: str | Path | pd.DataFrame | None = None,
+        objects: ObjectsArg = None,
+        *,
+        config: Config | None = None,
+        max_candidates: int | None = None,
+        max_attempts: int | None = None,
+        success_reward: float = 1.0,
+        failure_reward: float = 0.0,
+        invalid_action_reward: float = -1.0,
+        features: tuple[str, ...] | list[str] | None = None,
+        split: str = "all",
+        test_fraction: float | None = None,
+        split_seed: int | None = None,
+        normalize: str = "log",
+        candidate_order: str = "q_c",
+        render_mode: str | None = None,
+    ) -> None:
+        self.config = config if config is not None else load_config()
+        selector = self.config.selector
+        self.max_candidates = _at_least(
+            "max_candidates", selector.max_candidates if max_candidates is None else max_candidates
+        )
+        self.max_attempts = _at_least(
+            "max_attempts", selector.max_attempts if max_attempts is None else max_attempts
+        )
+        self.success_reward = float(success_reward)
+        self.failure_reward = float(failure_reward)
+        self.invalid_action_reward = float(invalid_action_reward)
+        if candidate_order not in CANDIDATE_ORDERS:
+            raise ValueError(
+                f"candidate_order must be one of {CANDIDATE_ORDERS}, got {candidate_order!r}"
+            )
+        self.candidate_order = candidate_order
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}"
+            )
+        self.render_mode = render_mode
+        self.feature_names = feature_subset(features)
+        self.backend: OutcomeBackend = (
+            LiveBackend(objects, self.config) if data is None else ReplayBackend(data, objects)
+        )
+        self.object_ids = objects_in_split(
+            self.backend.object_ids,
+            split,
+            self.config.learning.test_fraction if test_fraction is None else test_fraction,
+            self.config.learning.seed if split_seed is None else split_seed,
+        )
+        self.split = split
+        self._sets: list[CandidateSet | None] = [None] * len(self.object_ids)
+        self.scaler = self._fit_scaler(normalize)
+        if isinstance(self.backend, ReplayBackend):
+            for index in range(len(self.object_ids)):
+                self._candidate_set(index)
+        self._window: HumanWindow | None = None
+
+    # ------------------------------------------------------------------ candidates
+    def _fit_scaler(self, normalize: str) -> FeatureScaler:
+        raw = None
+        if normalize == "standard":
+            frames = [self.backend.candidates(object_id) for object_id in self.object_ids]
+            raw = raw_features(pd.concat(frames, ignore_index=True), self.feature_names)
+        cap = self.backend.feature_cap or self.config.grasp.feature_cap
+        return FeatureScaler.fit(normalize, self.feature_names, cap, raw)
+
+    def _candidate_set(self, index: int) -> CandidateSet:
+        """The padded candidates of object ``index`` (computed once)."""
+        found = self._sets[index]
+        if found is None:
+            object_id = self.object_ids[index]
+            frame = self.backend.candidates(object_id)
+            found = candidate_set(object_id, frame, self.scaler, self.max_candidates)
+            self._sets[index] = found
+        return found
+
+    def _sample_candidates(self) -> CandidateSet:
+        """An object with at least one candidate, uniformly from the split.
+
+        Objects without a candidate are rejected and redrawn, so the draw sequence does not depend
+        on which objects were already computed.
+        """
+        rng, total = self.np_random, len(self.object_ids)
+        while True:
+            found = self._candidate_set(int(rng.integers(total)))
+            if found.count:
+                return found
+            if all(s is not None and not s.count for s in self._sets):
+                raise ValueError(f"no object of split {self.split!r} has a feasible grip")
+
+    def _shuffled_slots(self, count: int) -> NDArray[np.intp]:
+        """Slot order for an episode: identity, or the real candidates permuted."""
+        slots = np.arange(self.max_candidates)
+        if self.candidate_order == "shuffled":
+            slots[:count] = self.np_random.permutation(count)
+        return slots
+
+    # ------------------------------------------------------------------ info and drawing
+    @staticmethod
+    def _grip_info(found: CandidateSet, row: int) -> dict[str, Any]:
+        """object_id, grip_id, Q_C and success_rate of candidate ``row`` (padding: sentinels)."""
+        if row < found.count:
+            grip_id = found.grip_ids[row]
+        else:
+            grip_id = -1 if found.grip_ids and isinstance(found.grip_ids[0], int) else ""
+        return {
+            "object_id": found.object_id,
+            "grip_id": grip_id,
+            "Q_C": float(found.q_c[row]),
+            "success_rate": float(found.success_rate[row]),
+        }
+
+    def render(self) -> NDArray[np.uint8] | None:
+        """The episode drawn as an RGB array (``"rgb_array"``) or in a window (``"human"``).
+
+        The object's contour (when known), its candidates' contact triangles, and the chosen or
+        current candidate highlighted: green held, red dropped, blue not executed yet.
+        """
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; pass render_mode= to make()")
+            return None
+        frame = self._draw()
+        if self.render_mode == "rgb_array":
+            return frame
+        if self._window is None:
+            self._window = HumanWindow(self.metadata["render_fps"])
+        self._window.show(frame)
+        return None
+
+    def _draw(self) -> NDArray[np.uint8]:
+        raise NotImplementedError
+
+    def _frame(
+        self, found: CandidateSet | None, chosen: int | None, outcome: bool | None, title: str
+    ) -> NDArray[np.uint8]:
+        """Draw ``found``'s real candidates, slot ``chosen`` highlighted."""
+        if found is None:  # before the first reset
+            return draw_candidates(None, np.zeros((0, 3, 2)), title="no episode yet")
+        contacts = found.contacts[: found.count]
+        contour = self.backend.contour(found.object_id)
+        return draw_candidates(contour, contacts, chosen, outcome, title)
+
+    def close(self) -> None:
+        """Close the window and the backend (idempotent)."""
+        if self._window is not None:
+            self._window.close()
+            self._window = None
+        self.backend.close()
+
+
+def _at_least(name: str, value: int, low: int = 1) -> int:
+    if int(value) != value or value < low:
+        raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
+    return int(value)
+
+
+def action_index(action: Any, size: int) -> int:
+    """The integer action, checked against ``Discrete(size)``."""
+    if isinstance(action, int | np.integer):
+        slot = int(action)
+    else:
+        value = np.asarray(action)
+        if value.size != 1 or not np.issubdtype(value.dtype, np.integer):
+            raise ValueError(f"action must be one integer in [0, {size}), got {action!r}")
+        slot = int(value.reshape(()))
+    if not 0 <= slot < size:
+        raise ValueError(f"action must be in [0, {size}), got {slot}")
+    return slot
