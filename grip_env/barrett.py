@@ -1,0 +1,354 @@
+"""Barrett BH8-280 planar kinematics and the configuration search (paper section III-B).
+
+Hand frame (DESIGN): ``hand_yaw`` psi is the direction of the thumb force F3 = (cos psi, sin psi);
+hand y = F3, hand x = F3 turned 90 degrees clockwise = (sin psi, -cos psi). Finger 1's spread axis
+is at S1 = O + 25 x, finger 2's at S2 = O - 25 x, F1 = -sin(theta) x - cos(theta) y and
+F2 = +sin(theta) x - cos(theta) y. The thumb's force line passes through the palm centre O with its
+contact before O: P3 = O - e3 F3. Finger i's contact lies on the line through its spread axis
+along F_i, and e_i = |P_i - O|. Lines 1 and 2 meet on the thumb line at C_C = O - 25 cot(theta) y.
+
+Search: for each grasp and each choice of thumb contact, thumb directions psi are tried on a grid
+of ``thumb_search_steps`` values within ``search_half_width(params)`` of the thumb's normal. For a
+given psi the thumb line is fixed; C_C = P3 + c y lies on it, and the lines from C_C to P1 and to
+P2 must be mirror images about the thumb line, so C_C is where the line through P1 and P2's mirror
+image crosses the thumb line. Then theta follows from the direction C_C -> P1 and
+O = C_C + 25 cot(theta) y. When P1 and P2 are already mirror images (any C_C works), C_C is taken
+as the foot of the grasp focus C_G on the thumb line. The psi with the best force-line value C1 =
+(4k/3) sum(delta_i^2) / arctan(mu)^2 among the reachable ones is kept.
+
+Two-finger grasps: theta = 0, fingers on the lines 25 mm beside the thumb line, re-intersected with
+their shared region for every psi. The palm centre's position along the thumb line is then free;
+it is placed where e3 equals the finger extension at the fingers' mean depth d ahead of the thumb,
+e3 = (25^2 + d^2) / (2 d).
+
+Rejected: theta outside [0, max_spread_rad]; any e_i outside [min_extension_mm, max_extension_mm];
+e3 <= 0; C_C behind the thumb; a force not pointing into the object (delta_i >= pi/2); a finger or
+the thumb whose approach (its force line from 1 mm to 60 mm behind the contact) enters the object.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from grip_env.config import SynthesisConfig
+from grip_env.grasps import Grasps
+from grip_env.objects import PlanarObject
+from grip_env.params import GraspParams
+
+# Hand geometry (barrett-bh8-280.md; link lengths are the manufacturer's figures).
+SPREAD_AXIS_OFFSET_MM = 25.0  #: spread axes of fingers 1 and 2 at (+-25, 0) in the palm
+KNUCKLE_RADIAL_MM = 50.0  #: joint 2 from its spread axis, radially
+THUMB_KNUCKLE_MM = 50.0  #: thumb joint 2 from the palm centre
+PROXIMAL_LINK_MM = 70.0  #: joint 2 to joint 3
+DISTAL_LINK_MM = 50.0  #: joint 3 to fingertip
+PALM_HEIGHT_MM = 84.0  #: palm base to finger plane
+FINGER_WIDTH_MM = 25.0
+MAX_SPREAD_RAD = np.pi  #: mechanical spread range is [0, pi]
+JOINT2_RANGE_RAD = (0.0, 2.44)
+JOINT3_RANGE_RAD = (0.0, 0.84)
+
+#: The approach of a finger: its force line from APPROACH_START_MM to APPROACH_LENGTH_MM behind
+#: its contact, sampled at APPROACH_SAMPLES points, must stay outside the object.
+APPROACH_START_MM = 1.0
+APPROACH_LENGTH_MM = 60.0
+APPROACH_SAMPLES = 12
+
+Array = NDArray[np.float64]
+DEFAULT_PARAMS = GraspParams()
+DEFAULT_SYNTHESIS = SynthesisConfig()
+
+
+@dataclass(frozen=True)
+class Configurations:
+    """C hand configurations; finger order 1, 2 (spreading), 3 (thumb).
+
+    Attributes:
+        grasp: (C,) index of the generating grasp.
+        thumb: (C,) which of the grasp's contacts (0, 1, 2) the thumb takes.
+        two_finger: (C,) whether the configuration is a two-finger one.
+        contact_index: (C, 3) which grasp contact fingers 1, 2 and the thumb sit on.
+        contacts: (C, 3, 2) contacts P1, P2, P3 (mm).
+        normals: (C, 3, 2) ideal force directions N1, N2, N3.
+        region: (C, 3) region index of each finger's contact.
+        region_a, region_b: (C, 3, 2) endpoints of each finger's region.
+        rho: (C, 3) curvature of each finger's region.
+        grasp_focus: (C, 2) the grasp's force focus C_G (NaN for two-finger).
+        forces: (C, 3, 2) real unit force directions F1, F2, F3.
+        focus: (C, 2) real focus C_C (NaN for two-finger).
+        extensions: (C, 3) finger extensions e_i (mm).
+        spread: (C,) spread angle theta (rad).
+        palm: (C, 2) palm centre O (mm).
+        yaw: (C,) hand yaw psi, the direction of F3 (rad, in (-pi, pi]).
+        force_line: (C,) the force-line value C1 the search minimised.
+    """
+
+    grasp: NDArray[np.int_]
+    thumb: NDArray[np.int_]
+    two_finger: NDArray[np.bool_]
+    contact_index: NDArray[np.int_]
+    contacts: Array
+    normals: Array
+    region: NDArray[np.int_]
+    region_a: Array
+    region_b: Array
+    rho: Array
+    grasp_focus: Array
+    forces: Array
+    focus: Array
+    extensions: Array
+    spread: Array
+    palm: Array
+    yaw: Array
+    force_line: Array
+
+    def __len__(self) -> int:
+        return len(self.grasp)
+
+    @classmethod
+    def concatenate(cls, parts: list[Configurations]) -> Configurations:
+        """All configurations of ``parts``, in order."""
+        names = cls.__dataclass_fields__
+        return cls(**{name: np.concatenate([getattr(p, name) for p in parts]) for name in names})
+
+
+def hand_axes(yaw: Array) -> tuple[Array, Array]:
+    """Hand x and y axes (..., 2) for hand yaw ``psi``."""
+    yaw = np.asarray(yaw, dtype=float)
+    return np.stack([np.sin(yaw), -np.cos(yaw)], axis=-1), np.stack([np.cos(yaw), np.sin(yaw)], -1)
+
+
+def finger_forces(yaw: Array, spread: Array) -> Array:
+    """Real force directions (..., 3, 2) F1, F2, F3 of the hand at ``yaw`` and ``spread``."""
+    x, y = hand_axes(yaw)
+    s, c = np.sin(spread)[..., None], np.cos(spread)[..., None]
+    return np.stack([-s * x - c * y, s * x - c * y, y], axis=-2)
+
+
+def spread_axes(palm: Array, yaw: Array) -> Array:
+    """Spread axes (..., 2, 2) of fingers 1 and 2 for palm centre ``palm`` and ``yaw``."""
+    x, _ = hand_axes(yaw)
+    offset = SPREAD_AXIS_OFFSET_MM * x
+    return np.stack([palm + offset, palm - offset], axis=-2)
+
+
+def search_half_width(params: GraspParams) -> float:
+    """Half-width of the thumb-direction search around the thumb's normal: 2 arctan(mu) (rad)."""
+    return min(2.0 * params.friction_angle, np.pi / 2 - 0.05)
+
+
+def force_line_value(forces: Array, normals: Array, friction_angle: float) -> Array:
+    """C1 = (4k/3) sum(delta_i^2) / arctan(mu)^2 for (..., 3, 2) forces and normals."""
+    return _force_line_from_cos(np.sum(forces * normals, axis=-1), friction_angle)
+
+
+def configurations(
+    grasps: Grasps,
+    obj: PlanarObject,
+    params: GraspParams = DEFAULT_PARAMS,
+    config: SynthesisConfig = DEFAULT_SYNTHESIS,
+) -> Configurations:
+    """The best reachable Barrett configuration for each grasp and thumb choice.
+
+    Three-finger grasps give up to three configurations (one per thumb contact), two-finger
+    grasps at most one.
+    """
+    if config.min_extension_mm >= config.max_extension_mm:
+        raise ValueError(
+            f"min_extension_mm ({config.min_extension_mm}) must be below max_extension_mm "
+            f"({config.max_extension_mm})")
+    offsets = np.linspace(-1.0, 1.0, config.thumb_search_steps) * search_half_width(params)
+    three = np.nonzero(~grasps.two_finger)[0]
+    two = np.nonzero(grasps.two_finger)[0]
+    return Configurations.concatenate([
+        _three_finger(grasps, three, obj, params, config, offsets),
+        _two_finger(grasps, two, obj, params, config, offsets),
+    ])
+
+
+# ----------------------------------------------------------------------------- three fingers
+def _three_finger(grasps, index, obj, params, config, offsets) -> Configurations:
+    # one row per (grasp, thumb choice), one column per thumb direction; hand-frame components
+    grasp, thumb = np.repeat(index, 3), np.tile(np.arange(3), len(index))
+    others = np.stack([(thumb + 1) % 3, (thumb + 2) % 3], axis=1)
+    p3, n3 = grasps.contacts[grasp, thumb], grasps.normals[grasp, thumb]
+    yaw = np.arctan2(n3[:, 1], n3[:, 0])[:, None] + offsets[None, :]
+    frame = _HandFrame(yaw)
+    ax, ay = frame.coordinates(grasps.contacts[grasp, others[:, 0]] - p3)
+    bx, by = frame.coordinates(grasps.contacts[grasp, others[:, 1]] - p3)
+    a_is_one = ax > 0
+    finger_of = np.stack([np.where(a_is_one, others[:, :1], others[:, 1:]),
+                          np.where(a_is_one, others[:, 1:], others[:, :1]),
+                          np.broadcast_to(thumb[:, None], yaw.shape)], axis=-1)  # (K, S, 3)
+    x1, y1 = np.where(a_is_one, ax, bx), np.where(a_is_one, ay, by)
+    x2, y2 = np.where(a_is_one, bx, ax), np.where(a_is_one, by, ay)
+    n1x, n1y = frame.coordinates(grasps.normals[grasp[:, None], finger_of[..., 0]])
+    n2x, n2y = frame.coordinates(grasps.normals[grasp[:, None], finger_of[..., 1]])
+    # C_C = P3 + c y lies on the line through P1 and P2's mirror image (-x2, y2)
+    _, focus_y = frame.coordinates(grasps.focus[grasp] - p3)
+    dx, dy = x1 + x2, y1 - y2
+    mirrored = np.hypot(dx, dy) <= 1e-9 * (np.abs(x1) + np.abs(x2) + 1.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        c = np.where(mirrored, focus_y, (x1 * y2 + x2 * y1) / dx)
+        reach = np.hypot(x1, y1 - c)
+        sin_t, cos_t = x1 / reach, (y1 - c) / reach
+        palm_y = c + SPREAD_AXIS_OFFSET_MM * cos_t / sin_t
+    extensions = np.stack([np.hypot(x1, y1 - palm_y), np.hypot(x2, y2 - palm_y), palm_y], -1)
+    cos_delta = np.stack([-sin_t * n1x - cos_t * n1y, sin_t * n2x - cos_t * n2y,
+                          np.broadcast_to(np.cos(offsets), yaw.shape)], axis=-1)
+    feasible = (x1 > 0) & (x2 < 0) & (c > 0) & (sin_t > 0)
+    feasible &= cos_t >= np.cos(config.max_spread_rad)
+    feasible &= _reachable(extensions, cos_delta, config)
+    cost = _force_line_from_cos(cos_delta, params.friction_angle)
+    spread = np.arctan2(sin_t, cos_t)
+
+    def assemble(rows, cols):
+        y_axis = frame.y[rows, cols]
+        palm = p3[rows] + palm_y[rows, cols, None] * y_axis
+        contacts = grasps.contacts[grasp[rows, None], finger_of[rows, cols]]
+        return contacts, finger_forces(yaw[rows, cols], spread[rows, cols]), palm
+
+    rows, cols, contacts, forces, palm = _best_clear(cost, feasible, obj, assemble)
+    pick = (rows, cols)
+    return _configurations(
+        grasps, grasp[rows], finger_of[pick], contacts=contacts, forces=forces,
+        focus=p3[rows] + c[pick][:, None] * frame.y[pick], extensions=extensions[pick],
+        spread=spread[pick], palm=palm, yaw=_wrapped(yaw[pick]), force_line=cost[pick])
+
+
+# ------------------------------------------------------------------------------- two fingers
+def _two_finger(grasps, index, obj, params, config, offsets) -> Configurations:
+    p3, n3 = grasps.contacts[index, 2], grasps.normals[index, 2]
+    yaw = np.arctan2(n3[:, 1], n3[:, 0])[:, None] + offsets[None, :]
+    frame = _HandFrame(yaw)
+    a, b = grasps.region_a[index, 0], grasps.region_b[index, 0]  # the fingers' shared region
+    ax, ay = frame.coordinates(a - p3)
+    bx, by = frame.coordinates(b - p3)
+    length = np.linalg.norm(b - a, axis=1)[:, None]
+    fractions, depths = [], []
+    feasible = np.ones(yaw.shape, dtype=bool)
+    for side in (1.0, -1.0):  # finger 1 on the line x = +25, finger 2 on x = -25
+        with np.errstate(divide="ignore", invalid="ignore"):
+            u = (side * SPREAD_AXIS_OFFSET_MM - ax) / (bx - ax)
+        feasible &= (u * length >= params.lam) & ((1.0 - u) * length >= params.lam)
+        fractions.append(u)
+        depths.append(ay + u * (by - ay))
+    feasible &= (depths[0] > 0) & (depths[1] > 0)
+    palm_y = _two_finger_palm(0.5 * (depths[0] + depths[1]), config.min_extension_mm)
+    extensions = np.stack([np.hypot(SPREAD_AXIS_OFFSET_MM, depths[0] - palm_y),
+                           np.hypot(SPREAD_AXIS_OFFSET_MM, depths[1] - palm_y), palm_y], -1)
+    _, nfy = frame.coordinates(grasps.normals[index, 0])
+    cos_delta = np.stack([-nfy, -nfy, np.broadcast_to(np.cos(offsets), yaw.shape)], axis=-1)
+    feasible &= _reachable(extensions, cos_delta, config)
+    cost = _force_line_from_cos(cos_delta, params.friction_angle)
+
+    def assemble(rows, cols):
+        ends = a[rows], b[rows]
+        fingers = [ends[0] + u[rows, cols, None] * (ends[1] - ends[0]) for u in fractions]
+        contacts = np.stack([*fingers, p3[rows]], axis=1)
+        palm = p3[rows] + palm_y[rows, cols, None] * frame.y[rows, cols]
+        return contacts, finger_forces(yaw[rows, cols], np.zeros(len(rows))), palm
+
+    rows, cols, contacts, forces, palm = _best_clear(cost, feasible, obj, assemble)
+    pick = (rows, cols)
+    return _configurations(
+        grasps, index[rows], np.tile(np.arange(3), (len(rows), 1)), contacts=contacts,
+        forces=forces, focus=np.full((len(rows), 2), np.nan), extensions=extensions[pick],
+        spread=np.zeros(len(rows)), palm=palm, yaw=_wrapped(yaw[pick]), force_line=cost[pick])
+
+
+def _configurations(
+    grasps: Grasps, grasp: NDArray[np.int_], contact_index: NDArray[np.int_], **solved: Array
+) -> Configurations:
+    """Configurations of ``grasp`` with fingers on ``contact_index``; grasp data in finger order."""
+    rows = grasp[:, None]
+    return Configurations(
+        grasp=grasp, thumb=contact_index[:, 2], two_finger=grasps.two_finger[grasp],
+        contact_index=contact_index, normals=grasps.normals[rows, contact_index],
+        region=grasps.region[rows, contact_index], region_a=grasps.region_a[rows, contact_index],
+        region_b=grasps.region_b[rows, contact_index], rho=grasps.rho[rows, contact_index],
+        grasp_focus=grasps.focus[grasp], **solved)
+
+
+def _two_finger_palm(depth: Array, min_extension: float) -> Array:
+    """Palm centre's distance ahead of the thumb contact for fingers ``depth`` ahead of it.
+
+    The thumb's extension e3 = u is made equal to the fingers' sqrt(25^2 + (depth - u)^2), i.e.
+    u = (25^2 + depth^2) / (2 depth); when that leaves an extension below ``min_extension``, u is
+    moved to the nearest value where all extensions reach it.
+    """
+    with np.errstate(divide="ignore", invalid="ignore"):
+        balanced = (SPREAD_AXIS_OFFSET_MM**2 + depth**2) / (2.0 * depth)
+    lateral = np.sqrt(max(min_extension**2 - SPREAD_AXIS_OFFSET_MM**2, 0.0))
+    behind = depth - lateral  # largest u with the fingers' extension still >= min_extension
+    beyond = np.maximum(min_extension, depth + lateral)
+    ok = (balanced >= min_extension) & (np.abs(depth - balanced) >= lateral)
+    behind_ok = behind >= min_extension
+    use_behind = behind_ok & (np.abs(balanced - behind) < np.abs(beyond - balanced))
+    return np.where(ok, balanced, np.where(use_behind, behind, beyond))
+
+
+# ---------------------------------------------------------------------------------- helpers
+class _HandFrame:
+    """Hand axes for a (K, S) grid of yaws, and hand coordinates of (K, 2) world vectors."""
+
+    def __init__(self, yaw: Array) -> None:
+        self.cos, self.sin = np.cos(yaw), np.sin(yaw)
+        self.y = np.stack([self.cos, self.sin], axis=-1)
+
+    def coordinates(self, vectors: Array) -> tuple[Array, Array]:
+        vx, vy = vectors[..., 0], vectors[..., 1]
+        if vx.ndim == 1:  # one vector per row, the same for every column
+            vx, vy = vx[:, None], vy[:, None]
+        return vx * self.sin - vy * self.cos, vx * self.cos + vy * self.sin
+
+
+def _reachable(extensions: Array, cos_delta: Array, config: SynthesisConfig) -> Array:
+    into_object = (cos_delta > 0).all(axis=-1)
+    in_range = ((extensions >= config.min_extension_mm)
+                & (extensions <= config.max_extension_mm)).all(axis=-1)
+    return into_object & in_range & (extensions[..., 2] > 0)
+
+
+def _force_line_from_cos(cos_delta: Array, friction_angle: float) -> Array:
+    delta = np.arccos(np.clip(cos_delta, -1.0, 1.0))
+    k = np.where((delta > friction_angle).any(axis=-1), 3.0, 1.0)
+    return (4.0 * k / 3.0) * np.sum(delta**2, axis=-1) / friction_angle**2
+
+
+def _best_clear(cost, feasible, obj, assemble):
+    """Per row, the cheapest feasible column whose finger approaches are clear of the object.
+
+    Approaches are checked lazily: the cheapest column of every open row at once, then the next
+    cheapest for the rows whose candidate collided, and so on. Returns the rows that found one,
+    their columns, and ``assemble(rows, cols)`` (contacts, forces, palm) for them.
+    """
+    cost = np.where(feasible, cost, np.inf)
+    best = np.full(len(cost), -1)
+    open_rows = np.nonzero(np.isfinite(cost).any(axis=1))[0]
+    while len(open_rows):
+        column = np.argmin(cost[open_rows], axis=1)
+        contacts, forces, _ = assemble(open_rows, column)
+        clear = approach_clear(obj, contacts, forces)
+        best[open_rows[clear]] = column[clear]
+        cost[open_rows[~clear], column[~clear]] = np.inf
+        open_rows = open_rows[~clear]
+        open_rows = open_rows[np.isfinite(cost[open_rows]).any(axis=1)]
+    rows = np.nonzero(best >= 0)[0]
+    return rows, best[rows], *assemble(rows, best[rows])
+
+
+def approach_clear(obj: PlanarObject, contacts: Array, forces: Array) -> NDArray[np.bool_]:
+    """Whether every finger's approach path behind its contact stays outside the object.
+
+    ``contacts`` and ``forces`` are (..., 3, 2); returns (...,) booleans.
+    """
+    behind = np.linspace(APPROACH_START_MM, APPROACH_LENGTH_MM, APPROACH_SAMPLES)
+    samples = contacts[..., None, :] - behind[:, None] * forces[..., None, :]
+    return ~obj.contains(samples).any(axis=(-1, -2))
+
+
+def _wrapped(angle: Array) -> Array:
+    return np.arctan2(np.sin(angle), np.cos(angle))

@@ -1,0 +1,273 @@
+"""Grasp synthesis: force-closure contact triplets on grasping regions (paper section III-A, III-C).
+
+A *grasp* is three contacts with ideal force directions N_i (the regions' inward normals).
+
+Three-finger grasps: the three normal lines must meet in one point, the force focus C_G. For each
+triplet of regions and each choice of the region that is solved last, contacts P_a, P_b are taken
+on a grid along the first two regions, their normal lines are intersected to give C_G, and P_c is
+the foot of the perpendicular from C_G onto the third region's line, so that its normal passes
+through C_G by construction. A candidate is kept when P_c lies inside its region away from the
+ends, C_G lies in front of every contact and inside the object, and the normals positively span
+the plane (every gap between consecutive normal directions is below pi). With the lines exactly
+concurrent and the focus in front of all contacts this is planar force closure for any mu > 0.
+
+Two-finger (virtual) grasps: the thumb on one region, fingers 1 and 2 together on another region
+that is nearly antiparallel to it (angle between N_thumb and -N_fingers at most arctan(mu)) and
+long enough for two fingers 50 mm apart, each at least lambda from the region's ends. The fingers
+lie on the lines at +-25 mm beside the thumb's normal line, as the hand fixes the triangle base at
+50 mm; ``contacts_per_region`` thumb positions are spread over the stretch of the thumb's region
+where both fingers fit. Contact index 2 is the thumb; index 0
+is the finger on the hand's +x side (hand x = thumb direction turned 90 degrees clockwise).
+
+Grasps are ranked by a cheap centring score (lower is better): distance of the grasp centre
+(C_G, or the contact triangle's centroid for two-finger grasps) from the object's centroid over
+M_L + m_L, plus, for three-finger grasps, how far the largest gap between normal directions exceeds
+2*pi/3, over pi/3. The best ``config.max_grasps`` are kept.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import combinations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from grip_env.config import SynthesisConfig
+from grip_env.objects import PlanarObject
+from grip_env.params import GraspParams
+from grip_env.perception.regions import Regions
+
+#: Contacts sit at fractions of their region in [END_FRACTION, 1 - END_FRACTION].
+END_FRACTION = 0.15
+#: Lateral offset of fingers 1 and 2 from the thumb line in a two-finger grasp (mm).
+HALF_FINGER_BASE_MM = 25.0
+#: Contacts closer than this (mm) on the same regions count as the same grasp.
+DEDUP_RESOLUTION_MM = 0.5
+
+Array = NDArray[np.float64]
+DEFAULT_PARAMS = GraspParams()
+DEFAULT_SYNTHESIS = SynthesisConfig()
+
+
+@dataclass(frozen=True)
+class Grasps:
+    """G grasps of one object.
+
+    Attributes:
+        contacts: (G, 3, 2) contact points (mm). Two-finger grasps: index 2 is the thumb.
+        normals: (G, 3, 2) unit inward region normals, the ideal force directions N_i.
+        region: (G, 3) index of each contact's region.
+        region_a, region_b: (G, 3, 2) endpoints of each contact's region (mm).
+        rho: (G, 3) curvature of each contact's region.
+        focus: (G, 2) force focus C_G (NaN for two-finger grasps).
+        two_finger: (G,) whether the grasp is a virtual two-finger grasp.
+    """
+
+    contacts: Array
+    normals: Array
+    region: NDArray[np.int_]
+    region_a: Array
+    region_b: Array
+    rho: Array
+    focus: Array
+    two_finger: NDArray[np.bool_]
+
+    def __len__(self) -> int:
+        return len(self.contacts)
+
+    @classmethod
+    def empty(cls) -> Grasps:
+        """No grasps."""
+        z = np.zeros((0, 3, 2))
+        return cls(z, z, np.zeros((0, 3), dtype=int), z, z, np.zeros((0, 3)), np.zeros((0, 2)),
+                   np.zeros(0, dtype=bool))
+
+    def take(self, index: NDArray[np.int_]) -> Grasps:
+        """The grasps at ``index``, in that order."""
+        return Grasps(**{name: getattr(self, name)[index] for name in _FIELDS})
+
+    @classmethod
+    def concatenate(cls, parts: list[Grasps]) -> Grasps:
+        """All grasps of ``parts``, in order."""
+        return cls(**{name: np.concatenate([getattr(p, name) for p in parts]) for name in _FIELDS})
+
+
+_FIELDS = tuple(Grasps.__dataclass_fields__)
+
+
+def _grasps_on(regions: Regions, contacts: Array, region: NDArray[np.int_], focus: Array,
+               two_finger: bool) -> Grasps:
+    return Grasps(contacts, regions.normal[region], region, regions.a[region], regions.b[region],
+                  regions.rho[region], focus, np.full(len(region), two_finger))
+
+
+def synthesize_grasps(
+    regions: Regions,
+    obj: PlanarObject,
+    params: GraspParams = DEFAULT_PARAMS,
+    config: SynthesisConfig = DEFAULT_SYNTHESIS,
+) -> Grasps:
+    """Force-closure three-finger grasps and virtual two-finger grasps on ``regions``.
+
+    Returns at most ``config.max_grasps`` grasps, best cheap centring score first.
+    """
+    if not isinstance(regions, Regions):
+        raise ValueError(f"regions must be a Regions instance, got {type(regions).__name__}")
+    if len(regions) and not np.all(regions.length > 0):
+        raise ValueError("regions must have positive lengths")
+    t = np.linspace(END_FRACTION, 1.0 - END_FRACTION, config.contacts_per_region)
+    if config.contacts_per_region == 1:
+        t = np.array([0.5])
+    grasps = Grasps.concatenate([
+        _three_finger(regions, obj, t),
+        _two_finger(regions, obj, config.contacts_per_region, params),
+    ])
+    if len(grasps) == 0:
+        return grasps
+    order = np.argsort(_score(grasps, obj), kind="stable")[: config.max_grasps]
+    return grasps.take(order)
+
+
+# ----------------------------------------------------------------------------- three fingers
+def _three_finger(regions: Regions, obj: PlanarObject, t: Array) -> Grasps:
+    if len(regions) < 3:
+        return Grasps.empty()
+    triplets = np.array(list(combinations(range(len(regions)), 3)))
+    # every region of a triplet takes a turn at being the one solved last (index 2)
+    ordered = np.concatenate([np.roll(triplets, shift, axis=1) for shift in range(3)])
+    n = len(t)
+    ia, ib, ic = ordered[:, 0], ordered[:, 1], ordered[:, 2]
+    pa = np.broadcast_to(regions.point(ia[:, None], t[None, :])[:, :, None, :],
+                         (len(ordered), n, n, 2))
+    pb = np.broadcast_to(regions.point(ib[:, None], t[None, :])[:, None, :, :],
+                         (len(ordered), n, n, 2))
+    na = regions.normal[ia][:, None, None, :]
+    nb = regions.normal[ib][:, None, None, :]
+    denom = _cross(na, nb)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sa = _cross(pb - pa, nb) / denom
+        sb = _cross(pb - pa, na) / denom
+        focus = pa + sa[..., None] * na
+        a_c, d_c = regions.a[ic][:, None, None, :], regions.direction[ic][:, None, None, :]
+        tc = np.sum((focus - a_c) * d_c, axis=-1) / regions.length[ic][:, None, None]
+        pc = a_c + tc[..., None] * (regions.b[ic] - regions.a[ic])[:, None, None, :]
+    nc = regions.normal[ic][:, None, None, :]
+    normals = np.stack(np.broadcast_arrays(na, nb, nc), axis=-2)
+    keep = (
+        (np.abs(denom) > 1e-9)
+        & (sa > 0) & (sb > 0)
+        & (np.sum((focus - pc) * nc, axis=-1) > 0)
+        & (tc >= END_FRACTION - 1e-12) & (tc <= 1.0 - END_FRACTION + 1e-12)
+        & (_largest_gap(normals) < np.pi - 1e-9)
+    )
+    cand = np.nonzero(keep)
+    if len(cand[0]) == 0:
+        return Grasps.empty()
+    focus = focus[cand]
+    inside = obj.contains(focus)
+    rows = tuple(c[inside] for c in cand)
+    contacts = np.stack([pa[rows], pb[rows], pc[rows]], axis=1)
+    region = ordered[rows[0]]
+    # canonical order by region index, so the three solving orders de-duplicate against each other
+    order = np.argsort(region, axis=1)
+    region = np.take_along_axis(region, order, axis=1)
+    contacts = np.take_along_axis(contacts, order[..., None], axis=1)
+    grasps = _grasps_on(regions, contacts, region, focus[inside], two_finger=False)
+    return _deduplicated(grasps)
+
+
+# ------------------------------------------------------------------------------- two fingers
+def _two_finger(regions: Regions, obj: PlanarObject, count: int, params: GraspParams) -> Grasps:
+    if len(regions) < 2:
+        return Grasps.empty()
+    margin = params.lam
+    length = regions.length
+    fingers, thumbs = np.nonzero(~np.eye(len(regions), dtype=bool))
+    facing = np.sum(regions.normal[thumbs] * -regions.normal[fingers], axis=1)
+    long_enough = length[fingers] >= 2 * (HALF_FINGER_BASE_MM + margin)
+    pick = (facing >= np.cos(params.friction_angle) - 1e-12) & long_enough
+    fingers, thumbs = fingers[pick], thumbs[pick]
+    # thumb positions (along its region) whose +-25 mm neighbours project inside the finger region
+    a_h, d_h = regions.a[thumbs], regions.direction[thumbs]
+    u_a = np.sum((regions.a[fingers] - a_h) * d_h, axis=1)
+    u_b = np.sum((regions.b[fingers] - a_h) * d_h, axis=1)
+    reach = HALF_FINGER_BASE_MM + margin
+    low = np.maximum(END_FRACTION * length[thumbs], np.minimum(u_a, u_b) + reach)
+    high = np.minimum((1 - END_FRACTION) * length[thumbs], np.maximum(u_a, u_b) - reach)
+    keep = low <= high
+    fingers, thumbs, low, high = fingers[keep], thumbs[keep], low[keep], high[keep]
+    if len(fingers) == 0:
+        return Grasps.empty()
+    fraction = np.linspace(0.0, 1.0, count) if count > 1 else np.array([0.5])
+    u = low[:, None] + fraction[None, :] * (high - low)[:, None]  # (K, n)
+    thumb_points = regions.a[thumbs][:, None, :] + u[..., None] * regions.direction[thumbs][:, None]
+    thumb_normal = np.broadcast_to(regions.normal[thumbs][:, None, :], thumb_points.shape)
+    fingers = np.broadcast_to(fingers[:, None], u.shape)
+    thumbs = np.broadcast_to(thumbs[:, None], u.shape)
+    p1, p2, ok = two_finger_contacts(regions.a[fingers], regions.b[fingers], thumb_points,
+                                     thumb_normal, margin)
+    flat = np.nonzero(ok)
+    contacts = np.stack([p1[flat], p2[flat], thumb_points[flat]], axis=1)
+    # the triangle between the thumb and the fingers must lie inside the object
+    middles = (contacts[:, :2] + contacts[:, 2:]) / 2.0
+    inside = obj.contains(middles).all(axis=1)
+    region = np.stack([fingers[flat], fingers[flat], thumbs[flat]], axis=1)[inside]
+    grasps = _grasps_on(regions, contacts[inside], region, np.full((len(region), 2), np.nan),
+                        two_finger=True)
+    return _deduplicated(grasps)
+
+
+def two_finger_contacts(
+    a: Array, b: Array, thumb_point: Array, thumb_direction: Array, margin: float
+) -> tuple[Array, Array, NDArray[np.bool_]]:
+    """Contacts of fingers 1 and 2 for a thumb at ``thumb_point`` pushing along ``thumb_direction``.
+
+    Fingers 1 and 2 lie on the lines parallel to the thumb's, 25 mm to its hand +x and -x sides,
+    where these lines cross the fingers' region from ``a`` to ``b`` (all arrays (..., 2)).
+    Returns P1, P2 (..., 2) and whether both lie on the region at least ``margin`` (mm) from its
+    ends and in front of the thumb.
+    """
+    hand_x = np.stack([thumb_direction[..., 1], -thumb_direction[..., 0]], axis=-1)
+    length = np.linalg.norm(b - a, axis=-1)
+    d = (b - a) / length[..., None]
+    denom = _cross(d, thumb_direction)
+    points, ok = [], np.abs(denom) > 1e-9
+    for side in (1.0, -1.0):
+        base = thumb_point + side * HALF_FINGER_BASE_MM * hand_x
+        with np.errstate(divide="ignore", invalid="ignore"):
+            u = _cross(base - a, thumb_direction) / denom
+        point = a + u[..., None] * d
+        ahead = np.sum((point - thumb_point) * thumb_direction, axis=-1)
+        ok &= (u >= margin) & (u <= length - margin) & (ahead > 0)
+        points.append(point)
+    return points[0], points[1], ok
+
+
+# ---------------------------------------------------------------------------------- helpers
+def _score(grasps: Grasps, obj: PlanarObject) -> Array:
+    centre = np.where(grasps.two_finger[:, None], grasps.contacts.mean(axis=1), grasps.focus)
+    size = sum(obj.inertia_semi_axes)
+    centring = np.linalg.norm(centre - obj.centroid, axis=1) / size
+    excess_gap = np.maximum(_largest_gap(grasps.normals) - 2 * np.pi / 3, 0.0) / (np.pi / 3)
+    return centring + np.where(grasps.two_finger, 0.0, excess_gap)
+
+
+def _largest_gap(normals: Array) -> Array:
+    """Largest angle between consecutive directions of (..., 3, 2) unit vectors."""
+    angles = np.sort(np.arctan2(normals[..., 1], normals[..., 0]), axis=-1)
+    gaps = np.diff(angles, axis=-1, append=angles[..., :1] + 2 * np.pi)
+    return gaps.max(axis=-1)
+
+
+def _deduplicated(grasps: Grasps) -> Grasps:
+    if len(grasps) == 0:
+        return grasps
+    cells = np.round(grasps.contacts.reshape(len(grasps), 6) / DEDUP_RESOLUTION_MM)
+    keys = np.concatenate([grasps.region, cells], axis=1)
+    _, first = np.unique(keys, axis=0, return_index=True)
+    return grasps.take(np.sort(first))
+
+
+def _cross(u: Array, v: Array) -> Array:
+    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]

@@ -1,0 +1,101 @@
+"""From a planar object to its candidate grips: regions, grasps, configurations, features.
+
+``candidates(obj)`` returns one row per Barrett configuration with DESIGN's candidate columns
+(``grip_env.columns.CANDIDATE_COLUMNS``), best first by Q_C. The features come from
+``grip_env.features`` (its array form, so the table is built in one go).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from grip_env.barrett import Configurations, configurations
+from grip_env.columns import CANDIDATE_COLUMNS
+from grip_env.config import Config
+from grip_env.features import OUTPUT_NAMES, features_from_arrays
+from grip_env.grasps import synthesize_grasps
+from grip_env.objects import PlanarObject
+from grip_env.params import GraspParams
+from grip_env.perception.regions import Regions
+
+DEFAULT_PARAMS = GraspParams()
+_FINGERS = ("1", "2", "3")
+
+
+def candidates(
+    obj: PlanarObject,
+    params: GraspParams = DEFAULT_PARAMS,
+    config: Config | None = None,
+    regions: Regions | None = None,
+) -> pd.DataFrame:
+    """Every feasible Barrett grip of ``obj`` with its descriptors and twelve features.
+
+    Args:
+        obj: the object as the planner sees it (polygon, mask or perceived contour).
+        params: parameters of the quality measures (and of friction-dependent synthesis).
+        config: synthesis and perception settings (defaults when None); ``params`` is used
+            instead of ``config.grasp``.
+        regions: grasping regions to plan on; found from ``obj`` with ``config.perception`` when
+            None.
+
+    Returns:
+        A DataFrame with exactly ``CANDIDATE_COLUMNS``, one row per configuration, sorted by Q_C
+        ascending (best first), index 0..n-1. ``grip_id`` is ``"{object_id}/{grasp_id}/{thumb}"``
+        where ``thumb`` is the grasp contact (0-2) the thumb takes. No feasible grip gives an
+        empty table with the same columns.
+    """
+    if not isinstance(obj, PlanarObject):
+        raise ValueError(f"obj must be a PlanarObject, got {type(obj).__name__}")
+    if not isinstance(params, GraspParams):
+        raise ValueError(f"params must be GraspParams, got {type(params).__name__}")
+    config = config or Config()
+    if regions is None:
+        from grip_env.perception.regions import find_regions
+
+        regions = find_regions(obj, config.perception, params)
+    grasps = synthesize_grasps(regions, obj, params, config.synthesis)
+    confs = configurations(grasps, obj, params, config.synthesis)
+    columns = descriptor_columns(obj, confs)
+    if len(confs):
+        features = features_from_arrays(columns, params)
+    else:
+        features = np.zeros((0, len(OUTPUT_NAMES)))
+    columns.update(zip(OUTPUT_NAMES, features.T, strict=True))
+    order = np.argsort(columns["Q_C"], kind="stable")
+    return pd.DataFrame({name: columns[name][order] for name in CANDIDATE_COLUMNS})
+
+
+def descriptor_columns(obj: PlanarObject, confs: Configurations) -> dict[str, np.ndarray]:
+    """Identity and descriptor columns (no features) of ``confs`` as 1-D arrays."""
+    n = len(confs)
+    ends_a, ends_b = confs.region_a, confs.region_b
+    columns: dict[str, np.ndarray] = {
+        "object_id": np.full(n, obj.name, dtype=object),
+        "grasp_id": confs.grasp.astype(np.int64),
+        "grip_id": np.array([f"{obj.name}/{g}/{t}" for g, t in zip(confs.grasp, confs.thumb,
+                                                                    strict=True)], dtype=object),
+        "two_finger": confs.two_finger.astype(bool),
+    }
+    for prefix, values in (("p", confs.contacts), ("n", confs.normals), ("f", confs.forces)):
+        for i, finger in enumerate(_FINGERS):
+            columns[f"{prefix}{finger}_x"] = values[:, i, 0]
+            columns[f"{prefix}{finger}_y"] = values[:, i, 1]
+    for i, finger in enumerate(_FINGERS):
+        for end, values in (("a", ends_a), ("b", ends_b)):
+            columns[f"r{finger}{end}_x"] = values[:, i, 0]
+            columns[f"r{finger}{end}_y"] = values[:, i, 1]
+    for i, finger in enumerate(_FINGERS):
+        columns[f"rho{finger}"] = confs.rho[:, i]
+    grasp_focus = confs.grasp_focus
+    columns.update({
+        "cg_x": grasp_focus[:, 0], "cg_y": grasp_focus[:, 1],
+        "cc_x": confs.focus[:, 0], "cc_y": confs.focus[:, 1],
+        "e1": confs.extensions[:, 0], "e2": confs.extensions[:, 1], "e3": confs.extensions[:, 2],
+        "spread": confs.spread, "hand_x": confs.palm[:, 0], "hand_y": confs.palm[:, 1],
+        "hand_yaw": confs.yaw,
+    })
+    for name, value in obj.descriptors().items():
+        columns[name] = np.full(n, value)
+    return columns
+
