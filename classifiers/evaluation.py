@@ -1,0 +1,221 @@
+"""Grouped cross-validation of grip classifiers: folds by object, repeated over seeds.
+
+Every repetition ``r`` uses ``seed = config.seed + r`` both for the ``StratifiedGroupKFold`` split
+(all grips of one object fall in the same fold) and for the models' own randomness. Metrics per
+fold: accuracy, balanced accuracy, ROC-AUC, F1, Brier score, and two top-1 rates: for each test
+object the model's highest-ranked grip is looked up, ``top1_success`` is the share of objects whose
+pick holds (``success`` label), ``top1_rate`` the mean ``success_rate`` of the picks. The ranking
+score is ``decision_function`` when the model has one (SVM, logistic regression, baselines), else
+the positive-class probability.
+
+Intervals: the folds × repeats values are not independent (training sets overlap), so the 95%
+interval is the corrected resampled t-interval of Nadeau & Bengio (2003):
+``mean ± t(0.975, n-1) * sqrt((1/n + n_test/n_train) * var)``, with ``n_test/n_train = 1/(folds-1)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+from sklearn.base import BaseEstimator, clone
+from sklearn.metrics import (
+    accuracy_score,
+    balanced_accuracy_score,
+    brier_score_loss,
+    f1_score,
+    roc_auc_score,
+)
+from sklearn.model_selection import GridSearchCV, GroupKFold, StratifiedGroupKFold
+
+from classifiers.models import check_features, make_model
+from grip_env.columns import FEATURES
+from grip_env.config import LearningConfig
+
+METRICS = ("accuracy", "balanced_accuracy", "roc_auc", "f1", "brier", "top1_success", "top1_rate")
+GROUP_COLUMN = "object_id"
+LABEL_COLUMN = "success"
+
+
+def check_dataset(table: pd.DataFrame, features: Sequence[str], folds: int) -> None:
+    """ValueError unless ``table`` has outcomes, two classes, the features and ≥ ``folds`` objects."""
+    if not isinstance(table, pd.DataFrame):
+        raise ValueError(f"the dataset must be a DataFrame, got {type(table).__name__}")
+    needed = [GROUP_COLUMN, LABEL_COLUMN, "success_rate", *check_features(features)]
+    missing = [name for name in needed if name not in table.columns]
+    if missing:
+        raise ValueError(f"dataset lacks the columns {missing} (outcome columns come from simulation)")
+    classes = pd.unique(table[LABEL_COLUMN])
+    if len(classes) < 2:
+        raise ValueError(f"dataset has a single class ({LABEL_COLUMN}={classes.tolist()}); need both")
+    n_objects = table[GROUP_COLUMN].nunique()
+    if n_objects < folds:
+        raise ValueError(f"dataset has {n_objects} objects, fewer than the {folds} folds")
+
+
+def grouped_folds(table: pd.DataFrame, folds: int, seed: int) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+    """(train rows, test rows) of a stratified, object-grouped K-fold split."""
+    splitter = StratifiedGroupKFold(n_splits=folds, shuffle=True, random_state=seed)
+    groups = table[GROUP_COLUMN].to_numpy()
+    labels = table[LABEL_COLUMN].to_numpy().astype(int)
+    for train, test in splitter.split(np.zeros(len(table)), labels, groups):
+        shared = np.intersect1d(groups[train], groups[test])
+        if shared.size:
+            raise RuntimeError(f"objects {shared.tolist()} are in both train and test folds")
+        yield train, test
+
+
+def ranking_score(model: BaseEstimator, X: pd.DataFrame) -> np.ndarray:
+    """The score a model ranks grips by (higher = pick first)."""
+    if hasattr(model, "decision_function"):
+        try:
+            return np.asarray(model.decision_function(X), dtype=float)
+        except AttributeError:
+            pass
+    return positive_probability(model, X)
+
+
+def positive_probability(model: BaseEstimator, X: pd.DataFrame) -> np.ndarray:
+    """Predicted probability of ``success = True``."""
+    proba = model.predict_proba(X)
+    classes = list(model.classes_)
+    return proba[:, classes.index(True)] if True in classes else np.zeros(len(X))
+
+
+def fold_metrics(model: BaseEstimator, test: pd.DataFrame) -> dict[str, float]:
+    """All metrics of a fitted model on one test fold."""
+    label = test[LABEL_COLUMN].to_numpy().astype(bool)
+    probability = positive_probability(model, test)
+    predicted = np.asarray(model.predict(test)).astype(bool)
+    both = np.unique(label).size == 2
+    top1_success, top1_rate = top1(test, ranking_score(model, test))
+    return {
+        "accuracy": accuracy_score(label, predicted),
+        "balanced_accuracy": balanced_accuracy_score(label, predicted) if both else np.nan,
+        "roc_auc": roc_auc_score(label, probability) if both else np.nan,
+        "f1": f1_score(label, predicted, zero_division=0.0),
+        "brier": brier_score_loss(label, probability, pos_label=True),
+        "top1_success": top1_success,
+        "top1_rate": top1_rate,
+    }
+
+
+def top1(test: pd.DataFrame, score: np.ndarray) -> tuple[float, float]:
+    """Share of objects whose top-scored grip succeeds, and the picks' mean success rate."""
+    frame = pd.DataFrame(
+        {"group": test[GROUP_COLUMN].to_numpy(), "score": score,
+         "success": test[LABEL_COLUMN].to_numpy().astype(float),
+         "rate": test["success_rate"].to_numpy(float)}
+    )  # fmt: skip
+    picks = frame.loc[frame.groupby("group")["score"].idxmax()]
+    return float(picks["success"].mean()), float(picks["rate"].mean())
+
+
+def cross_validate_models(
+    table: pd.DataFrame,
+    models: Sequence[str] | Mapping[str, BaseEstimator],
+    features: Sequence[str] = FEATURES,
+    config: LearningConfig | None = None,
+) -> pd.DataFrame:
+    """Per-fold metrics: one row per (model, repeat, fold) with the columns of ``METRICS``.
+
+    ``models`` is a list of registry names (built with ``make_model(name, seed, features)`` for
+    each repeat's seed) or a mapping of name → estimator (cloned for each fold).
+    """
+    config = config or LearningConfig()
+    check_dataset(table, features, config.folds)
+    table = table.reset_index(drop=True)
+    labels = table[LABEL_COLUMN].to_numpy().astype(bool)
+    records = []
+    for repeat in range(config.repeats):
+        seed = config.seed + repeat
+        for fold, (train, test) in enumerate(grouped_folds(table, config.folds, seed)):
+            for name, model in _fresh_models(models, seed, features).items():
+                model.fit(table.iloc[train], labels[train])
+                metrics = fold_metrics(model, table.iloc[test])
+                records.append({"model": name, "repeat": repeat, "fold": fold, **metrics})
+    return pd.DataFrame.from_records(records)
+
+
+def evaluate_models(
+    table: pd.DataFrame,
+    models: Sequence[str] | Mapping[str, BaseEstimator],
+    features: Sequence[str] = FEATURES,
+    config: LearningConfig | None = None,
+) -> dict[str, Any]:
+    """Grouped, repeated CV summary in the ``metrics.json`` shape.
+
+    ``{"models": {name: {metric: {"mean": m, "ci": [lo, hi]}}}, "cv": {...}}``
+    """
+    config = config or LearningConfig()
+    per_fold = cross_validate_models(table, models, features, config)
+    return {
+        "models": summarise(per_fold, config.folds),
+        "cv": cv_description(table, features, config),
+    }
+
+
+def summarise(per_fold: pd.DataFrame, folds: int) -> dict[str, dict[str, dict[str, Any]]]:
+    """Mean and corrected 95% t-interval of each metric, per model."""
+    return {
+        str(name): {metric: interval(group[metric].to_numpy(float), folds) for metric in METRICS}
+        for name, group in per_fold.groupby("model", sort=False)
+    }
+
+
+def interval(values: np.ndarray, folds: int) -> dict[str, Any]:
+    """``{"mean", "ci", "n"}`` by the Nadeau–Bengio corrected resampled t-test; NaNs dropped."""
+    values = values[np.isfinite(values)]
+    n = values.size
+    if n == 0:
+        return {"mean": None, "ci": [None, None], "n": 0}
+    mean = float(values.mean())
+    if n == 1:
+        return {"mean": mean, "ci": [mean, mean], "n": 1}
+    spread = np.sqrt((1.0 / n + 1.0 / (folds - 1)) * values.var(ddof=1))
+    half = float(stats.t.ppf(0.975, n - 1) * spread)
+    return {"mean": mean, "ci": [mean - half, mean + half], "n": int(n)}
+
+
+def cv_description(
+    table: pd.DataFrame, features: Sequence[str], config: LearningConfig
+) -> dict[str, Any]:
+    """The ``"cv"`` block of ``metrics.json``."""
+    return {
+        "folds": config.folds,
+        "repeats": config.repeats,
+        "seeds": [config.seed + r for r in range(config.repeats)],
+        "groups": GROUP_COLUMN,
+        "splitter": "StratifiedGroupKFold(shuffle=True)",
+        "interval": "95% corrected resampled t (Nadeau-Bengio) over folds x repeats",
+        "features": list(features),
+        "n_grips": len(table),
+        "n_objects": int(table[GROUP_COLUMN].nunique()),
+        "positive_rate": float(table[LABEL_COLUMN].astype(bool).mean()),
+    }
+
+
+def grouped_search(
+    model: BaseEstimator,
+    grid: Mapping[str, Sequence[Any]],
+    table: pd.DataFrame,
+    folds: int = 5,
+    scoring: str = "roc_auc",
+) -> GridSearchCV:
+    """A fitted ``GridSearchCV`` whose inner folds are grouped by object (``GroupKFold``)."""
+    if table[GROUP_COLUMN].nunique() < folds:
+        raise ValueError(f"fewer objects than the {folds} search folds")
+    search = GridSearchCV(model, dict(grid), scoring=scoring, cv=GroupKFold(n_splits=folds))
+    labels = table[LABEL_COLUMN].to_numpy().astype(bool)
+    return search.fit(table, labels, groups=table[GROUP_COLUMN].to_numpy())
+
+
+def _fresh_models(
+    models: Sequence[str] | Mapping[str, BaseEstimator], seed: int, features: Sequence[str]
+) -> dict[str, BaseEstimator]:
+    if isinstance(models, Mapping):
+        return {name: clone(model) for name, model in models.items()}
+    return {name: make_model(name, seed, features) for name in models}

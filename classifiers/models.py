@@ -1,0 +1,86 @@
+"""The model registry: ``make_model(name, seed, features)`` → a scikit-learn ``Pipeline``.
+
+Each pipeline starts with a :class:`~classifiers.baselines.ColumnSelector` (models take the grip
+table and pick their columns) and ends with a step named ``"model"``, so hyper-parameters are set
+as ``pipeline.set_params(model__C=...)``. The baselines ignore ``features``: ``rank_qc`` reads
+``Q_C``, ``rank_qg`` reads ``Q_G`` and ``random`` reads nothing but the row count.
+
+"svm" is an RBF ``SVC`` with Platt (sigmoid) probabilities fitted by internal 5-fold CV:
+``CalibratedClassifierCV(SVC(), ensemble=False)``, the replacement scikit-learn 1.9 gives for the
+deprecated ``SVC(probability=True)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+
+from sklearn.base import BaseEstimator
+from sklearn.calibration import CalibratedClassifierCV
+from sklearn.linear_model import LogisticRegression
+from sklearn.neighbors import KNeighborsClassifier
+from sklearn.neural_network import MLPClassifier
+from sklearn.pipeline import Pipeline
+from sklearn.preprocessing import StandardScaler
+from sklearn.svm import SVC
+
+from classifiers.baselines import ColumnSelector, RandomClassifier, RankingClassifier
+from classifiers.torch_mlp import TorchMLPClassifier
+from grip_env.columns import FEATURES
+
+EXTRA_FEATURES = ("eps",)
+BASELINES = ("rank_qc", "rank_qg", "random")
+
+
+def _scaled(estimator: BaseEstimator) -> list[tuple[str, BaseEstimator]]:
+    return [("scale", StandardScaler()), ("model", estimator)]
+
+
+_LEARNERS: dict[str, Callable[[int], list[tuple[str, BaseEstimator]]]] = {
+    "svm": lambda seed: _scaled(
+        CalibratedClassifierCV(SVC(random_state=seed), method="sigmoid", ensemble=False)
+    ),
+    "mlp_torch": lambda seed: [("model", TorchMLPClassifier(random_state=seed))],
+    "mlp_sklearn": lambda seed: _scaled(
+        MLPClassifier((64, 64), early_stopping=True, max_iter=500, random_state=seed)
+    ),
+    "knn": lambda seed: _scaled(KNeighborsClassifier(n_neighbors=15, weights="distance")),
+    "logreg": lambda seed: _scaled(LogisticRegression(max_iter=1000)),
+}
+_BASELINE_STEPS: dict[str, Callable[[int], tuple[tuple[str, ...], BaseEstimator]]] = {
+    "rank_qc": lambda seed: (("Q_C",), RankingClassifier(sign=-1.0)),
+    "rank_qg": lambda seed: (("Q_G",), RankingClassifier(sign=-1.0)),
+    "random": lambda seed: (("Q_C",), RandomClassifier(random_state=seed)),
+}
+MODEL_NAMES = tuple(_LEARNERS) + tuple(_BASELINE_STEPS)
+
+
+def check_features(features: Sequence[str]) -> tuple[str, ...]:
+    """The feature list as a tuple; unknown names, duplicates or an empty list → ValueError."""
+    features = tuple(features)
+    allowed = FEATURES + EXTRA_FEATURES
+    unknown = [name for name in features if name not in allowed]
+    if unknown:
+        raise ValueError(f"unknown feature names {unknown}; known: {list(allowed)}")
+    if not features or len(set(features)) != len(features):
+        raise ValueError(f"feature list must be non-empty without duplicates, got {list(features)}")
+    return features
+
+
+def make_model(name: str, seed: int = 0, features: Sequence[str] = FEATURES) -> Pipeline:
+    """A fresh, unfitted model pipeline; unknown ``name`` → ValueError listing the known ones."""
+    features = check_features(features)
+    if name in _LEARNERS:
+        return Pipeline([("select", ColumnSelector(features)), *_LEARNERS[name](seed)])
+    if name in _BASELINE_STEPS:
+        columns, estimator = _BASELINE_STEPS[name](seed)
+        return Pipeline([("select", ColumnSelector(columns)), ("model", estimator)])
+    raise ValueError(f"unknown model name {name!r}; known: {list(MODEL_NAMES)}")
+
+
+def make_models(
+    names: Sequence[str], seed: int = 0, features: Sequence[str] = FEATURES
+) -> dict[str, Pipeline]:
+    """``{name: make_model(name, seed, features)}`` for each name."""
+    if not names:
+        raise ValueError("no model names given")
+    return {name: make_model(name, seed, features) for name in names}

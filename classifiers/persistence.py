@@ -1,0 +1,104 @@
+"""Saving and loading fitted models without arbitrary pickles.
+
+Each model ``name`` is saved as ``name.json`` (metadata: format, features, parameters, dataset
+checksum, anything the caller adds) plus either
+
+- ``name.skops`` for scikit-learn pipelines (``skops.io``; on load, only the types of
+  :data:`TRUSTED_TYPES` (this package's estimators) and scikit-learn's own internals
+  (``sklearn.*``: calibrators, KD-trees, optimisers) are accepted beyond skops' defaults), or
+- ``name.pt`` for the torch MLP: the network's ``state_dict`` (loaded with ``weights_only=True``),
+  rebuilt with its JSON parameters.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+import skops.io as sio
+import torch
+from sklearn.pipeline import Pipeline
+
+from classifiers.baselines import ColumnSelector
+from classifiers.torch_mlp import TorchMLPClassifier
+
+TRUSTED_TYPES = frozenset(
+    {
+        "classifiers.baselines.ColumnSelector",
+        "classifiers.baselines.RankingClassifier",
+        "classifiers.baselines.RandomClassifier",
+    }
+)
+
+TRUSTED_PREFIXES = ("sklearn.",)
+
+
+def dataset_checksum(table: pd.DataFrame) -> str:
+    """SHA-256 of the table's values and column names (row order matters)."""
+    digest = hashlib.sha256()
+    digest.update(json.dumps(list(map(str, table.columns))).encode())
+    digest.update(pd.util.hash_pandas_object(table, index=False).to_numpy().tobytes())
+    return digest.hexdigest()
+
+
+def save_model(
+    model: Pipeline, directory: str | Path, name: str, metadata: dict[str, Any] | None = None
+) -> Path:
+    """Write a fitted pipeline under ``directory``; returns the JSON metadata path."""
+    directory = Path(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    selector, estimator = model[0], model[-1]
+    if not isinstance(selector, ColumnSelector):
+        raise ValueError(f"model {name!r} must start with a ColumnSelector step")
+    info = {"name": name, "columns": list(selector.columns), **(metadata or {})}
+    if isinstance(estimator, TorchMLPClassifier) and len(model) == 2:
+        torch.save(estimator.state_dict(), directory / f"{name}.pt")
+        info |= {"format": "torch_state_dict", "params": _jsonable(estimator.get_params()),
+                 "fitted": estimator.fitted_metadata()}  # fmt: skip
+    else:
+        sio.dump(model, directory / f"{name}.skops")
+        info |= {"format": "skops", "params": _jsonable(estimator.get_params(deep=False))}
+    path = directory / f"{name}.json"
+    path.write_text(json.dumps(info, indent=2, sort_keys=True))
+    return path
+
+
+def load_model(directory: str | Path, name: str) -> tuple[Pipeline, dict[str, Any]]:
+    """Read back a model written by :func:`save_model`, with its metadata."""
+    directory = Path(directory)
+    meta_path = directory / f"{name}.json"
+    if not meta_path.is_file():
+        raise FileNotFoundError(f"no saved model metadata {meta_path}")
+    info = json.loads(meta_path.read_text())
+    if info.get("format") == "torch_state_dict":
+        state = torch.load(directory / f"{name}.pt", weights_only=True)
+        estimator = TorchMLPClassifier.from_state_dict(info["params"], info["fitted"], state)
+        selector = ColumnSelector(tuple(info["columns"]))
+        selector.n_features_out_ = len(selector.columns)
+        return Pipeline([("select", selector), ("model", estimator)]), info
+    if info.get("format") == "skops":
+        path = directory / f"{name}.skops"
+        untrusted = sio.get_untrusted_types(file=path)
+        unexpected = sorted(
+            kind for kind in untrusted
+            if kind not in TRUSTED_TYPES and not kind.startswith(TRUSTED_PREFIXES)
+        )  # fmt: skip
+        if unexpected:
+            raise ValueError(f"{path} holds types outside the trusted list: {unexpected}")
+        return sio.load(path, trusted=untrusted), info
+    raise ValueError(f"{meta_path}: unknown model format {info.get('format')!r}")
+
+
+def _jsonable(params: dict[str, Any]) -> dict[str, Any]:
+    """Parameters as JSON values (estimators and other objects by their repr)."""
+    def convert(value: Any) -> Any:
+        if value is None or isinstance(value, (bool, int, float, str)):
+            return value
+        if isinstance(value, (list, tuple)):
+            return [convert(item) for item in value]
+        return repr(value)
+
+    return {key: convert(value) for key, value in params.items()}

@@ -1,0 +1,207 @@
+"""A multilayer perceptron classifier in PyTorch with the scikit-learn estimator API.
+
+CPU only and single-threaded while fitting and predicting (for networks this small, intra-op
+threads cost far more than they save: 0.6 s vs 19 s for one fit measured on two busy cores),
+seeded, inputs standardised inside the network (mean and scale are buffers of the
+``state_dict``), cross-entropy over the classes, Adam, early stopping on a stratified validation
+split. ``state_dict()`` / ``from_state_dict()`` give a pickle-free save format.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
+
+import numpy as np
+import torch
+from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.model_selection import train_test_split
+from sklearn.utils.multiclass import check_classification_targets
+from sklearn.utils.validation import check_is_fitted, validate_data
+from torch import nn
+
+
+class _Network(nn.Module):
+    def __init__(self, n_inputs: int, hidden: tuple[int, ...], n_outputs: int, dropout: float):
+        super().__init__()
+        self.register_buffer("mean", torch.zeros(n_inputs))
+        self.register_buffer("scale", torch.ones(n_inputs))
+        layers: list[nn.Module] = []
+        width = n_inputs
+        for size in hidden:
+            layers += [nn.Linear(width, size), nn.ReLU(), nn.Dropout(dropout)]
+            width = size
+        layers.append(nn.Linear(width, n_outputs))
+        self.layers = nn.Sequential(*layers)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return self.layers((x - self.mean) / self.scale)
+
+
+class TorchMLPClassifier(ClassifierMixin, BaseEstimator):
+    """MLP classifier (PyTorch, CPU).
+
+    Parameters
+    ----------
+    hidden_layer_sizes : widths of the hidden ReLU layers.
+    learning_rate : Adam step size.
+    weight_decay : Adam L2 penalty.
+    dropout : dropout after each hidden layer.
+    batch_size : minibatch size.
+    max_epochs : upper bound on training epochs.
+    validation_fraction : share of the training rows held out for early stopping (stratified);
+        0 disables early stopping, and so does a split too small to hold every class.
+    patience : epochs without validation-loss improvement before stopping.
+    random_state : seed of weights, shuffling and the validation split.
+    """
+
+    def __init__(
+        self,
+        hidden_layer_sizes: tuple[int, ...] = (64, 64),
+        learning_rate: float = 1e-3,
+        weight_decay: float = 1e-4,
+        dropout: float = 0.0,
+        batch_size: int = 128,
+        max_epochs: int = 200,
+        validation_fraction: float = 0.15,
+        patience: int = 15,
+        random_state: int | None = None,
+    ):
+        self.hidden_layer_sizes = hidden_layer_sizes
+        self.learning_rate = learning_rate
+        self.weight_decay = weight_decay
+        self.dropout = dropout
+        self.batch_size = batch_size
+        self.max_epochs = max_epochs
+        self.validation_fraction = validation_fraction
+        self.patience = patience
+        self.random_state = random_state
+
+    def fit(self, X: Any, y: Any) -> TorchMLPClassifier:
+        """Train on ``X`` (n_samples, n_features) and labels ``y``."""
+        X, y = validate_data(self, X, y, dtype=np.float32)
+        check_classification_targets(y)
+        self.classes_, codes = np.unique(y, return_inverse=True)
+        seed = _seed(self.random_state)
+        with _single_thread():
+            torch.manual_seed(seed)
+            self.network_ = self._build(X.shape[1])
+            self.network_.mean.copy_(torch.from_numpy(X.mean(axis=0)))
+            spread = X.std(axis=0)
+            self.network_.scale.copy_(torch.from_numpy(np.where(spread > 1e-12, spread, 1.0)))
+            train_idx, valid_idx = self._split(codes, seed)
+            self.n_epochs_, self.best_validation_loss_ = self._train(
+                X, codes, train_idx, valid_idx, seed
+            )
+        return self
+
+    def predict_proba(self, X: Any) -> np.ndarray:
+        """Class probabilities, columns in the order of ``classes_``."""
+        check_is_fitted(self, "network_")
+        X = validate_data(self, X, dtype=np.float32, reset=False)
+        self.network_.eval()
+        with _single_thread(), torch.no_grad():
+            logits = self.network_(torch.from_numpy(X))
+        return torch.softmax(logits, dim=1).numpy().astype(np.float64)
+
+    def predict(self, X: Any) -> np.ndarray:
+        """Most probable class of each row."""
+        return self.classes_[np.argmax(self.predict_proba(X), axis=1)]
+
+    def state_dict(self) -> dict[str, torch.Tensor]:
+        """The fitted network's tensors (weights and input standardisation)."""
+        check_is_fitted(self, "network_")
+        return self.network_.state_dict()
+
+    def fitted_metadata(self) -> dict[str, Any]:
+        """JSON-able facts needed, with ``state_dict``, to rebuild the fitted estimator."""
+        check_is_fitted(self, "network_")
+        return {
+            "classes": self.classes_.tolist(),
+            "n_features_in": int(self.n_features_in_),
+            "n_epochs": int(self.n_epochs_),
+        }
+
+    @classmethod
+    def from_state_dict(
+        cls, params: dict[str, Any], metadata: dict[str, Any], state: dict[str, torch.Tensor]
+    ) -> TorchMLPClassifier:
+        """Rebuild a fitted estimator from ``get_params()``, ``fitted_metadata()`` and tensors."""
+        params = {**params, "hidden_layer_sizes": tuple(params["hidden_layer_sizes"])}
+        model = cls(**params)
+        model.classes_ = np.asarray(metadata["classes"])
+        model.n_features_in_ = int(metadata["n_features_in"])
+        model.n_epochs_ = int(metadata["n_epochs"])
+        model.best_validation_loss_ = float("nan")
+        model.network_ = model._build(model.n_features_in_)
+        model.network_.load_state_dict(state)
+        return model
+
+    def _build(self, n_inputs: int) -> _Network:
+        if any(int(size) < 1 for size in self.hidden_layer_sizes):
+            raise ValueError(f"hidden_layer_sizes must be positive, got {self.hidden_layer_sizes}")
+        hidden = tuple(int(size) for size in self.hidden_layer_sizes)
+        return _Network(n_inputs, hidden, len(self.classes_), self.dropout)
+
+    def _split(self, codes: np.ndarray, seed: int) -> tuple[np.ndarray, np.ndarray]:
+        rows = np.arange(codes.size)
+        n_valid = int(round(self.validation_fraction * codes.size))
+        n_classes = len(self.classes_)
+        smallest = np.bincount(codes).min()
+        if n_valid < n_classes or codes.size - n_valid < n_classes or smallest < 2:
+            return rows, rows[:0]
+        return train_test_split(rows, test_size=n_valid, stratify=codes, random_state=seed)
+
+    def _train(
+        self, X: np.ndarray, codes: np.ndarray, train_idx: np.ndarray, valid_idx: np.ndarray,
+        seed: int,
+    ) -> tuple[int, float]:  # fmt: skip
+        inputs, targets = torch.from_numpy(X), torch.from_numpy(codes.astype(np.int64))
+        optimiser = torch.optim.Adam(
+            self.network_.parameters(), lr=self.learning_rate, weight_decay=self.weight_decay
+        )
+        loss_fn = nn.CrossEntropyLoss()
+        generator = torch.Generator().manual_seed(seed)
+        best_loss, best_state, stale, epoch = np.inf, None, 0, 0
+        for epoch in range(1, self.max_epochs + 1):
+            self.network_.train()
+            order = torch.from_numpy(train_idx)[torch.randperm(train_idx.size, generator=generator)]
+            for batch in order.split(max(1, int(self.batch_size))):
+                optimiser.zero_grad()
+                loss_fn(self.network_(inputs[batch]), targets[batch]).backward()
+                optimiser.step()
+            if valid_idx.size == 0:
+                continue
+            self.network_.eval()
+            with torch.no_grad():
+                valid = torch.from_numpy(valid_idx)
+                loss = float(loss_fn(self.network_(inputs[valid]), targets[valid]))
+            if loss < best_loss - 1e-6:
+                best_loss, stale = loss, 0
+                best_state = {k: v.clone() for k, v in self.network_.state_dict().items()}
+            else:
+                stale += 1
+                if stale >= self.patience:
+                    break
+        if best_state is not None:
+            self.network_.load_state_dict(best_state)
+        return epoch, float(best_loss)
+
+
+@contextmanager
+def _single_thread() -> Iterator[None]:
+    previous = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(previous)
+
+
+def _seed(random_state: int | None) -> int:
+    if random_state is None:
+        return int(np.random.default_rng().integers(2**31 - 1))
+    if isinstance(random_state, (int, np.integer)):
+        return int(random_state)
+    raise ValueError(f"random_state must be an int or None, got {random_state!r}")
