@@ -3,9 +3,19 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
+from scipy.ndimage import maximum_filter1d, minimum_filter1d
+
+from grip_env.config import PerceptionConfig
+from grip_env.params import GraspParams
+from grip_env.perception.contour import resample_contour
+from grip_env.perception.curvature import contour_derivatives, signed_curvature
+
+if TYPE_CHECKING:
+    from grip_env.objects import PlanarObject
 
 MAX_ABS_RHO = 1.0 / 3.0  # DESIGN: regions with |rho| above this are not grasping regions
 
@@ -48,3 +58,120 @@ class Regions:
         """No regions."""
         z = np.zeros((0, 2))
         return cls(z, z.copy(), z.copy(), np.zeros(0))
+
+
+def find_regions(
+    obj_or_contour: PlanarObject | ArrayLike,
+    config: PerceptionConfig | None = None,
+    params: GraspParams | None = None,
+) -> Regions:
+    """Grasping regions of an object, cut from its curvature (paper sections III-IV, VIII-A S3).
+
+    The contour is resampled every ``config.contour_spacing_mm`` and its signed curvature kappa
+    (concave positive) estimated at scale ``sigma = config.curvature_sigma_mm``. Then:
+
+    1. Irregular points: where kappa varies by more than ``config.curvature_jump`` within one
+       smoothing footprint (+-sigma) — curvature steps and corner spikes. They belong to no region,
+       so regions stop about 2-3 sigma before a polygon corner.
+    2. Each run of regular points is cut where the tangent has turned by more than
+       ``config.max_turn_rad`` since the piece began.
+    3. Each piece becomes a straight segment: total-least-squares line through its points,
+       endpoints = projections of its first and last points (a -> b counter-clockwise, object on
+       the left), inward normal = left normal of a -> b, rho = mean kappa * ``params.rho_scale``.
+    4. Segments shorter than ``config.min_region_mm`` and those with ``|rho| > MAX_ABS_RHO`` go.
+
+    Args:
+        obj_or_contour: a ``PlanarObject`` or (N, 2) polygon vertices (mm).
+        config: perception settings (defaults when None).
+        params: grasp parameters, for ``rho_scale`` (defaults when None).
+    """
+    from grip_env.objects import PlanarObject
+
+    config = config or PerceptionConfig()
+    params = params or GraspParams()
+    obj = (
+        obj_or_contour if isinstance(obj_or_contour, PlanarObject)
+        else PlanarObject.from_polygon(obj_or_contour, name="contour")
+    )
+    points = resample_contour(obj.contour, config.contour_spacing_mm)
+    closed = np.vstack([points, points[:1]])
+    step = float(np.linalg.norm(np.diff(closed, axis=0), axis=1).sum()) / len(points)
+    kappa = signed_curvature(points, config.curvature_sigma_mm, step)
+    d1, _ = contour_derivatives(points, config.curvature_sigma_mm, step)
+    heading = np.arctan2(d1[:, 1], d1[:, 0])
+    regular = ~_irregular(kappa, round(config.curvature_sigma_mm / step), config.curvature_jump)
+    starts, stops = _pieces(regular, heading, config.max_turn_rad)
+    if len(starts) == 0:
+        return Regions.empty()
+    return _segments(points, kappa, starts, stops, config.min_region_mm, params.rho_scale)
+
+
+def _irregular(kappa: NDArray[np.float64], half_width: int, jump: float) -> NDArray[np.bool_]:
+    """Points whose curvature range within +-half_width samples exceeds ``jump``."""
+    size = 2 * max(half_width, 1) + 1
+    high = maximum_filter1d(kappa, size, mode="wrap")
+    low = minimum_filter1d(kappa, size, mode="wrap")
+    return (high - low) > jump
+
+
+def _pieces(
+    regular: NDArray[np.bool_], heading: NDArray[np.float64], max_turn: float
+) -> tuple[NDArray[np.int_], NDArray[np.int_]]:
+    """Start (inclusive) and stop (exclusive) sample indices of the pieces, unwrapped: indices
+    may exceed the sample count and are meant modulo it."""
+    count = len(regular)
+    if not regular.any():
+        return np.zeros(0, int), np.zeros(0, int)
+    origin = 0 if regular.all() else int(np.flatnonzero(~regular)[0])
+    order = (origin + np.arange(count)) % count  # start on an irregular point: no run wraps
+    flags = np.concatenate([[False], regular[order], [False]]).astype(np.int8)
+    edges = np.diff(flags)
+    run_starts, run_stops = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1)
+    angle = np.unwrap(heading[order])
+    starts, stops = [], []
+    for run_start, run_stop in zip(run_starts, run_stops, strict=True):
+        # as many pieces as greedy cutting at max_turn needs, but of even turn where the heading
+        # is monotone (a disc gives equal arcs, not a short leftover)
+        spread = np.ptp(angle[run_start:run_stop])
+        limit = spread / max(np.ceil(spread / max_turn), 1.0) * (1 + 1e-9) if spread else max_turn
+        begin = run_start
+        while True:  # consecutive pieces share their boundary point
+            turned = np.abs(angle[begin:run_stop] - angle[begin]) > limit
+            if not turned.any():
+                starts.append(begin)
+                stops.append(run_stop)
+                break
+            end = begin + int(np.argmax(turned))
+            starts.append(begin)
+            stops.append(end)
+            begin = max(end - 1, begin + 1)
+    return np.asarray(starts) + origin, np.asarray(stops) + origin
+
+
+def _segments(
+    points: NDArray[np.float64], kappa: NDArray[np.float64], starts: NDArray[np.int_],
+    stops: NDArray[np.int_], min_length: float, rho_scale: float,
+) -> Regions:
+    """Total-least-squares segments of the pieces, filtered by length and curvature."""
+    count = len(points)
+    sizes = stops - starts
+    offsets = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    index = (np.repeat(starts - offsets, sizes) + np.arange(sizes.sum())) % count
+    xy = points[index]
+    mean = np.add.reduceat(xy, offsets, axis=0) / sizes[:, None]
+    centred = xy - np.repeat(mean, sizes, axis=0)
+    sxx, syy, sxy = (
+        np.add.reduceat(centred[:, i] * centred[:, j], offsets) for i, j in ((0, 0), (1, 1), (0, 1))
+    )
+    angle = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)
+    direction = np.column_stack([np.cos(angle), np.sin(angle)])
+    first, last = points[starts % count], points[(stops - 1) % count]
+    backwards = np.einsum("ij,ij->i", last - first, direction) < 0
+    direction[backwards] *= -1.0
+    a = mean + np.einsum("ij,ij->i", first - mean, direction)[:, None] * direction
+    b = mean + np.einsum("ij,ij->i", last - mean, direction)[:, None] * direction
+    rho = np.add.reduceat(kappa[index], offsets) / sizes * rho_scale
+    normal = np.column_stack([-direction[:, 1], direction[:, 0]])
+    keep = (np.linalg.norm(b - a, axis=1) >= min_length) & (np.abs(rho) <= MAX_ABS_RHO)
+    order = np.argsort(starts[keep] % count, kind="stable")
+    return Regions(a[keep][order], b[keep][order], normal[keep][order], rho[keep][order])
