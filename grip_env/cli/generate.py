@@ -1,0 +1,74 @@
+"""``grip-env generate``: simulate grips of many objects into a resumable Parquet dataset."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from grip_env.cli.errors import user_errors
+
+
+def generate(
+    out: Annotated[Path, typer.Option("--out", "-o", help="dataset directory (created if needed)")],
+    config: Annotated[
+        Path | None, typer.Option(help="YAML config (default: the embedded configs/default.yaml)")
+    ] = None,
+    objects: Annotated[
+        str | None,
+        typer.Option(help="object set name (e.g. default) or a number of procedural objects "
+                          "[default: config objects.set + objects.procedural_count]"),
+    ] = None,
+    trials: Annotated[
+        int | None, typer.Option(help="simulated trials per grip [default: config dataset.trials]")
+    ] = None,
+    seed: Annotated[
+        int | None, typer.Option(help="run seed [default: config dataset.seed]")
+    ] = None,
+    workers: Annotated[
+        int | None,
+        typer.Option(help="parallel workers; the data do not depend on it "
+                          "[default: config dataset.workers]"),
+    ] = None,
+    backend: Annotated[
+        str | None,
+        typer.Option(help="process (local process pool) or ray [default: config dataset.backend]"),
+    ] = None,
+    address: Annotated[
+        str | None,
+        typer.Option(help="Ray cluster address, e.g. ray://host:10001 (default: local Ray)"),
+    ] = None,
+    overwrite: Annotated[
+        bool, typer.Option("--overwrite", help="replace a dataset made with other settings")
+    ] = False,
+    progress: Annotated[bool, typer.Option(help="show a progress bar")] = True,
+) -> None:
+    """Plan grips on every object, simulate the best ones and write a Parquet dataset to OUT.
+
+    Rerunning the same command after an interruption computes only the missing objects;
+    rerunning with other settings into the same OUT is refused unless --overwrite.
+    """
+    with user_errors():
+        from grip_env.config import load_config
+        from grip_env.dataset import generate as generate_dataset
+        from grip_env.dataset import load
+
+        cfg = load_config(config)
+        try:
+            path = generate_dataset(
+                cfg, out, objects=objects, trials=trials, seed=seed, workers=workers,
+                backend=backend, address=address, progress=progress, overwrite=overwrite,
+            )
+        except KeyboardInterrupt:
+            typer.echo(f"interrupted; rerun the same command to finish {out}", err=True)
+            raise typer.Exit(code=130) from None
+        except OSError as exc:
+            raise ValueError(f"cannot write the dataset in {out}: {exc}") from None
+        manifest = load(path, verify=False).attrs["manifest"]
+    typer.echo(f"wrote {path}: {manifest['rows']} grips of {len(manifest['objects'])} objects")
+
+
+def register(app: typer.Typer) -> None:
+    """Add the command to the CLI."""
+    app.command("generate")(generate)

@@ -1,0 +1,30 @@
+"""Grip datasets: Parquet shards per object, a manifest, parallel and resumable generation.
+
+>>> from grip_env.dataset import generate, load, validate      # doctest: +SKIP
+>>> path = generate(load_config(), "runs/data", objects=3)      # doctest: +SKIP
+>>> grips = load(path); problems = validate(path)               # doctest: +SKIP
+"""
+
+from grip_env.dataset.backends import BACKENDS
+from grip_env.dataset.catalog import load_objects, read_objects
+from grip_env.dataset.generation import DatasetMismatchError, generate
+from grip_env.dataset.jobs import ObjectJob, ObjectTask, simulate_object, with_outcomes
+from grip_env.dataset.loading import dataset_manifest, load
+from grip_env.dataset.manifest import FORMAT_VERSION
+from grip_env.dataset.validation import validate
+
+__all__ = [
+    "BACKENDS",
+    "FORMAT_VERSION",
+    "DatasetMismatchError",
+    "ObjectJob",
+    "ObjectTask",
+    "dataset_manifest",
+    "generate",
+    "load",
+    "load_objects",
+    "read_objects",
+    "simulate_object",
+    "validate",
+    "with_outcomes",
+]

@@ -1,0 +1,126 @@
+"""Running per-object jobs: in-process, on a local process pool, or as Ray tasks.
+
+Every backend yields ``(task, rows)`` pairs as jobs finish, keeping only a bounded number of
+jobs in flight, so the caller can store each result as soon as it arrives.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+from collections.abc import Iterable, Iterator
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+
+import pandas as pd
+
+from grip_env.dataset.jobs import ObjectJob, ObjectTask
+
+BACKENDS = ("process", "ray")
+_IN_FLIGHT_PER_WORKER = 2
+
+Results = Iterator[tuple[ObjectTask, pd.DataFrame]]
+
+
+def check_backend(backend: str, workers: int) -> None:
+    """Raise ``ValueError`` for an unknown backend or a worker count below 1."""
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown backend {backend!r}; choose from {', '.join(BACKENDS)}")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
+
+
+def run_jobs(
+    job: ObjectJob, tasks: Iterable[ObjectTask], workers: int, backend: str = "process",
+    address: str | None = None,
+) -> Results:
+    """Run ``job`` on every task; yields ``(task, rows)`` in completion order.
+
+    ``backend="process"`` with one worker runs in this process; with more it uses a pool of
+    'spawn' processes (each holds its own PyBullet client). ``backend="ray"`` submits Ray tasks to
+    the cluster at ``address`` (a local Ray instance with ``workers`` CPUs when None).
+    """
+    check_backend(backend, workers)
+    if backend == "ray":
+        return _ray_results(job, tasks, workers, address)
+    if workers == 1:
+        return ((task, job(task)) for task in tasks)
+    return _pool_results(job, tasks, workers)
+
+
+def _pool_results(job: ObjectJob, tasks: Iterable[ObjectTask], workers: int) -> Results:
+    context = multiprocessing.get_context("spawn")
+    queue = iter(tasks)
+    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+        running: dict[Future[pd.DataFrame], ObjectTask] = {}
+        try:
+            while True:
+                for task in _take(queue, workers * _IN_FLIGHT_PER_WORKER - len(running)):
+                    running[pool.submit(job, task)] = task
+                if not running:
+                    return
+                done, _ = wait(running, return_when=FIRST_COMPLETED)
+                for future in sorted(done, key=lambda f: running[f].index):
+                    yield running.pop(future), future.result()
+        finally:
+            for future in running:
+                future.cancel()
+
+
+def _ray_results(
+    job: ObjectJob, tasks: Iterable[ObjectTask], workers: int, address: str | None
+) -> Results:
+    ray = _import_ray()
+    started_here = not ray.is_initialized()
+    if started_here:
+        _start_ray(ray, workers, address)
+    try:
+        capacity = max(workers, int(ray.cluster_resources().get("CPU", workers)))
+        remote_job = ray.remote(num_cpus=1, max_retries=2)(_call)
+        queue = iter(tasks)
+        running: dict[object, ObjectTask] = {}
+        while True:
+            for task in _take(queue, capacity * _IN_FLIGHT_PER_WORKER - len(running)):
+                running[remote_job.remote(job, task)] = task
+            if not running:
+                return
+            done, _ = ray.wait(list(running), num_returns=1)
+            for ref in done:
+                yield running.pop(ref), ray.get(ref)
+    finally:
+        if started_here:
+            ray.shutdown()
+
+
+def _call(job: ObjectJob, task: ObjectTask) -> pd.DataFrame:
+    return job(task)
+
+
+def _take(queue: Iterator[ObjectTask], count: int) -> list[ObjectTask]:
+    taken = []
+    for _ in range(max(count, 0)):
+        task = next(queue, None)
+        if task is None:
+            break
+        taken.append(task)
+    return taken
+
+
+def _import_ray():  # type: ignore[no-untyped-def]
+    try:
+        import ray
+    except ImportError:
+        raise ValueError(
+            "backend 'ray' needs Ray: pip install 'grip-env[cluster]'"
+        ) from None
+    return ray
+
+
+def _start_ray(ray, workers: int, address: str | None) -> None:  # type: ignore[no-untyped-def]
+    options = {"include_dashboard": False, "log_to_driver": False, "configure_logging": False}
+    try:
+        if address is None:
+            ray.init(num_cpus=workers, **options)
+        else:
+            ray.init(address=address, **options)
+    except (ConnectionError, RuntimeError, ValueError) as exc:
+        where = address or "a local instance"
+        raise ValueError(f"cannot start Ray on {where}: {exc}") from None

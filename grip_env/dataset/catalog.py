@@ -1,0 +1,113 @@
+"""The objects of a dataset: which objects a run covers, and their table ``objects.parquet``."""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from grip_env.config import Config
+from grip_env.dataset.files import write_atomically
+from grip_env.objects import PlanarObject, load_object_set, procedural_objects
+
+OBJECTS_FILE = "objects.parquet"
+
+
+@dataclass(frozen=True, eq=False)
+class DatasetObject:
+    """One object of a dataset: its position in the run, unique id and polygon."""
+
+    index: int
+    object_id: str
+    obj: PlanarObject
+
+
+def resolve_objects(config: Config, objects: str | int | None, seed: int) -> list[DatasetObject]:
+    """The objects a run covers, with unique ids.
+
+    Args:
+        config: supplies ``objects.set``, ``procedural_count`` and ``procedural_size_mm``
+            when ``objects`` is None.
+        objects: a named object set (or shape name), a number of procedural objects (an int or
+            a string of digits), or None for the config's set plus its procedural objects.
+        seed: the run seed; procedural objects are drawn from it.
+
+    Raises:
+        ValueError: unknown object set, negative count, or no object at all.
+    """
+    size = config.objects.procedural_size_mm
+    if isinstance(objects, str) and objects.strip().lstrip("-").isdigit():
+        objects = int(objects)
+    if isinstance(objects, bool):
+        raise ValueError(f"objects must be a set name or a count, got {objects!r}")
+    if isinstance(objects, int):
+        if objects < 1:
+            raise ValueError(f"number of objects must be >= 1, got {objects}")
+        shapes = procedural_objects(objects, seed, size)
+    elif objects is not None:
+        shapes = load_object_set(objects)
+    else:
+        named = config.objects.set
+        shapes = [] if named == "procedural" else load_object_set(named)
+        shapes += procedural_objects(config.objects.procedural_count, seed, size)
+    if not shapes:
+        raise ValueError("the run has no objects: choose an object set or a count >= 1")
+    return [DatasetObject(i, object_id, obj) for i, (object_id, obj) in
+            enumerate(zip(_unique_ids([s.name for s in shapes]), shapes, strict=True))]
+
+
+def _unique_ids(names: list[str]) -> list[str]:
+    """Object names, with ``-<n>`` appended to repeated ones."""
+    repeated = {name for name, count in Counter(names).items() if count > 1}
+    seen: Counter[str] = Counter()
+    ids = []
+    for name in names:
+        seen[name] += 1
+        ids.append(f"{name}-{seen[name]}" if name in repeated else name)
+    return ids
+
+
+def objects_table(entries: list[DatasetObject]) -> pa.Table:
+    """One row per object: id, name, source, contour (list of [x, y] mm) and descriptors."""
+    rows = [{
+        "object_index": entry.index,
+        "object_id": entry.object_id,
+        "name": entry.obj.name,
+        "source": entry.obj.source,
+        "vertices": len(entry.obj.contour),
+        "contour": entry.obj.contour.tolist(),
+        **entry.obj.descriptors(),
+    } for entry in entries]
+    return pa.Table.from_pylist(rows)
+
+
+def write_objects(directory: Path, entries: list[DatasetObject]) -> str:
+    """Write ``objects.parquet`` atomically; returns its SHA-256."""
+    table = objects_table(entries)
+    return write_atomically(directory / OBJECTS_FILE, lambda temp: pq.write_table(table, temp))
+
+
+def read_objects(directory: Path) -> pd.DataFrame:
+    """The objects table of a dataset directory."""
+    path = Path(directory) / OBJECTS_FILE
+    if not path.is_file():
+        raise ValueError(f"{path} is missing")
+    try:
+        return pq.read_table(path).to_pandas()
+    except (OSError, pa.ArrowException) as exc:
+        raise ValueError(f"{path} is corrupt: {exc}") from None
+
+
+def load_objects(directory: str | Path) -> list[PlanarObject]:
+    """The dataset's objects as ``PlanarObject`` (name = object_id), in run order."""
+    table = read_objects(Path(directory)).sort_values("object_index")
+    return [
+        PlanarObject(np.array([list(p) for p in contour]), name=object_id, source=source)
+        for object_id, source, contour in zip(
+            table["object_id"], table["source"], table["contour"], strict=True)
+    ]

@@ -1,0 +1,176 @@
+"""``generate``: build a dataset directory, resumably, with any backend.
+
+Each finished object is written as its own shard (temp file + atomic rename) and only then
+entered in the manifest, so an interrupted run loses at most the objects in flight; running the
+same call again computes only what is missing.
+"""
+
+from __future__ import annotations
+
+import shutil
+import time
+from pathlib import Path
+
+from tqdm.auto import tqdm
+
+from grip_env.config import Config
+from grip_env.dataset.backends import check_backend, run_jobs
+from grip_env.dataset.catalog import OBJECTS_FILE, DatasetObject, resolve_objects, write_objects
+from grip_env.dataset.files import check_writable, sha256_of
+from grip_env.dataset.jobs import ObjectJob, ObjectTask, object_seeds, simulate_object
+from grip_env.dataset.manifest import (
+    MANIFEST_FILE,
+    Manifest,
+    identity_differences,
+    new_manifest,
+    read_manifest,
+    run_identity,
+    shard_records,
+    write_manifest,
+)
+from grip_env.dataset.shards import GRIPS_DIR, shard_path, write_shard
+
+_MANIFEST_FLUSH_SECONDS = 1.0
+
+
+class DatasetMismatchError(ValueError):
+    """The output directory holds a dataset made with another config, seed or object list."""
+
+
+def generate(
+    config: Config,
+    out_dir: str | Path,
+    objects: str | int | None = None,
+    trials: int | None = None,
+    seed: int | None = None,
+    workers: int | None = None,
+    backend: str | None = None,
+    address: str | None = None,
+    progress: bool = True,
+    overwrite: bool = False,
+    job: ObjectJob = simulate_object,
+) -> Path:
+    """Generate (or finish) a grip dataset in ``out_dir``.
+
+    Args:
+        config: the run configuration; ``trials``, ``seed``, ``workers`` and ``backend`` default
+            to its ``dataset`` section.
+        out_dir: dataset directory (created if needed).
+        objects: a named object set, a number of procedural objects, or None for ``config.objects``.
+        trials: simulated trials per grip (>= 1).
+        seed: run seed; object ``i`` gets a seed derived from (seed, i).
+        workers: parallel workers (>= 1); the dataset does not depend on it.
+        backend: ``"process"`` (local process pool) or ``"ray"``.
+        address: Ray cluster address (``backend="ray"`` only; local instance when None).
+        progress: show a progress bar on stderr.
+        overwrite: replace a dataset made with another config, seed or object list.
+        job: the per-object function (default: plan, simulate, label).
+
+    Returns:
+        The dataset directory.
+
+    Raises:
+        DatasetMismatchError: ``out_dir`` holds another run's dataset and ``overwrite`` is False.
+        ValueError: bad argument, unknown object set, unwritable directory.
+    """
+    config = _effective_config(config, trials, seed)
+    workers = config.dataset.workers if workers is None else workers
+    backend = config.dataset.backend if backend is None else backend
+    check_backend(backend, workers)
+    directory = Path(out_dir)
+    entries = resolve_objects(config, objects, config.dataset.seed)
+    check_writable(directory)
+    manifest = _open_run(directory, config, entries, overwrite)
+    seeds = [record["seed"] for record in manifest["objects"]]
+    pending = [
+        ObjectTask(e.index, e.object_id, e.obj, config, seeds[e.index])
+        for e in entries if not _is_done(directory, manifest, e)
+    ]
+    _run(directory, manifest, job, pending, len(entries), workers, backend, address, progress)
+    return directory
+
+
+def _effective_config(config: Config, trials: int | None, seed: int | None) -> Config:
+    overrides = {"trials": trials, "seed": seed}
+    for name, value in overrides.items():
+        if value is not None and (isinstance(value, bool) or not isinstance(value, int)):
+            raise ValueError(f"{name} must be an integer, got {value!r}")
+    if trials is not None and trials < 1:
+        raise ValueError(f"trials must be >= 1, got {trials}")
+    if seed is not None and seed < 0:
+        raise ValueError(f"seed must be >= 0, got {seed}")
+    changes = {name: value for name, value in overrides.items() if value is not None}
+    return config.override(dataset=changes) if changes else config
+
+
+def _open_run(
+    directory: Path, config: Config, entries: list[DatasetObject], overwrite: bool
+) -> Manifest:
+    """The manifest to continue: the existing one if it is the same run, else a fresh one."""
+    if (directory / MANIFEST_FILE).exists():
+        old = read_manifest(directory)
+        differences = identity_differences(old["identity"], run_identity(config, entries))
+        if not differences:
+            return old
+        if not overwrite:
+            raise DatasetMismatchError(
+                f"{directory} holds a dataset made with other settings ({'; '.join(differences)}"
+                "); use --overwrite to replace it, or choose another directory"
+            )
+        _remove_dataset(directory)
+    elif overwrite:
+        _remove_dataset(directory)
+    objects_sha = write_objects(directory, entries)
+    manifest = new_manifest(config, entries, object_seeds(config.dataset.seed, len(entries)),
+                            objects_sha)
+    write_manifest(directory, manifest)
+    return manifest
+
+
+def _remove_dataset(directory: Path) -> None:
+    """Delete the files of a dataset (and nothing else in the directory)."""
+    (directory / MANIFEST_FILE).unlink(missing_ok=True)
+    (directory / OBJECTS_FILE).unlink(missing_ok=True)
+    shutil.rmtree(directory / GRIPS_DIR, ignore_errors=True)
+
+
+def _is_done(directory: Path, manifest: Manifest, entry: DatasetObject) -> bool:
+    """Whether the object's shard is in the manifest and intact on disk."""
+    record = shard_records(manifest).get(entry.object_id)
+    if record is None:
+        return False
+    path = directory / record.file
+    if path.is_file() and sha256_of(path) == record.sha256:
+        return True
+    del manifest["shards"][entry.object_id]
+    return False
+
+
+def _run(
+    directory: Path, manifest: Manifest, job: ObjectJob, pending: list[ObjectTask], total: int,
+    workers: int, backend: str, address: str | None, progress: bool,
+) -> None:
+    started, rows, last_flush = time.perf_counter(), 0, 0.0
+    feature_cap = manifest["feature_cap"]
+    with tqdm(total=total, initial=total - len(pending), unit="obj", desc="generate",
+              disable=not progress, dynamic_ncols=True) as bar:
+        try:
+            for task, grips in run_jobs(job, pending, workers, backend, address):
+                path = shard_path(directory, task.index, task.object_id)
+                metadata = {"object_id": task.object_id, "object_index": task.index,
+                            "feature_cap": feature_cap, "params": manifest["params"]}
+                record = write_shard(path, grips, metadata)
+                manifest["shards"][task.object_id] = record.as_dict()
+                rows += record.rows
+                if time.perf_counter() - last_flush >= _MANIFEST_FLUSH_SECONDS:
+                    write_manifest(directory, manifest)
+                    last_flush = time.perf_counter()
+                bar.update(1)
+                bar.set_postfix(grips=rows, grips_per_s=f"{rows / _elapsed(started):.1f}")
+        finally:
+            manifest["complete"] = len(manifest["shards"]) == total
+            write_manifest(directory, manifest)
+
+
+def _elapsed(started: float) -> float:
+    return max(time.perf_counter() - started, 1e-9)

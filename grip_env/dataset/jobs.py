@@ -1,0 +1,86 @@
+"""The per-object job: plan grips on an object, simulate the best ones, label the outcomes.
+
+A job is a plain function ``job(task) -> DataFrame`` of dataset rows. It depends only on its task
+(object, config, seed), so a dataset is the same whatever runs the jobs and in what order.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from grip_env.columns import DATASET_COLUMNS
+from grip_env.config import Config
+from grip_env.objects import PlanarObject
+
+SUCCESS_THRESHOLD = 0.5
+
+
+@dataclass(frozen=True, eq=False)
+class ObjectTask:
+    """Everything one object's job needs: the true object, the run config and its own seed."""
+
+    index: int
+    object_id: str
+    obj: PlanarObject
+    config: Config
+    seed: int
+
+    def child_seeds(self) -> tuple[int, int]:
+        """Independent (perception, trials) seeds derived from the object's seed."""
+        perception, trials = np.random.SeedSequence(self.seed).spawn(2)
+        return int(perception.generate_state(1)[0]), int(trials.generate_state(1)[0])
+
+
+ObjectJob = Callable[[ObjectTask], pd.DataFrame]
+
+
+def object_seeds(run_seed: int, count: int) -> list[int]:
+    """Seed of object ``i``: a function of (run seed, i) only, via ``numpy.random.SeedSequence``."""
+    return [
+        int(np.random.SeedSequence(run_seed, spawn_key=(index,)).generate_state(1)[0])
+        for index in range(count)
+    ]
+
+
+def simulate_object(task: ObjectTask) -> pd.DataFrame:
+    """The real job: candidates on the (perceived) contour, best by Q_C, trials on the true one."""
+    from grip_env.pipeline import candidates
+    from grip_env.sim import run_trials
+
+    config = task.config
+    perception_seed, trials_seed = task.child_seeds()
+    planned_on = task.obj
+    if config.uncertainty.perceived_contour:
+        from grip_env.perception.render import perceive
+
+        planned_on = perceive(
+            task.obj, config.perception, config.objects.thickness_mm, seed=perception_seed
+        )
+    table = candidates(planned_on, config.grasp, config)
+    best = table.sort_values("Q_C", ascending=False, kind="stable")
+    best = best.head(config.dataset.max_grips_per_object)
+    outcome = run_trials(task.obj, best, config, config.dataset.trials, trials_seed)
+    return with_outcomes(best, outcome["trials"], outcome["successes"], task.object_id)
+
+
+def with_outcomes(
+    grips: pd.DataFrame, trials: pd.Series | np.ndarray, successes: pd.Series | np.ndarray,
+    object_id: str,
+) -> pd.DataFrame:
+    """Dataset rows: candidates with the object's id, unique grip ids and the outcome columns.
+
+    ``grip_id`` becomes ``"<object_id>/<candidate grip_id>"``, unique across a dataset.
+    """
+    rows = grips.reset_index(drop=True).copy()
+    rows["object_id"] = object_id
+    rows["grip_id"] = [f"{object_id}/{grip}" for grip in rows["grip_id"]]
+    rows["trials"] = np.asarray(trials, dtype=np.int64)
+    rows["successes"] = np.asarray(successes, dtype=np.int64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rows["success_rate"] = rows["successes"] / rows["trials"]
+    rows["success"] = rows["success_rate"] >= SUCCESS_THRESHOLD
+    return rows.loc[:, list(DATASET_COLUMNS)]

@@ -1,0 +1,56 @@
+"""``load``: a dataset directory back into one grip table."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+
+from grip_env.columns import DATASET_COLUMNS
+from grip_env.dataset.manifest import Manifest, read_manifest, shard_records
+from grip_env.dataset.shards import GRIP_SCHEMA, read_shard
+
+
+def load(path: str | Path, verify: bool = True, allow_partial: bool = False) -> pd.DataFrame:
+    """All grips of a dataset, in run order (object by object, best Q_C first within an object).
+
+    Args:
+        path: dataset directory written by :func:`grip_env.dataset.generate`.
+        verify: check every shard's SHA-256 and row count against the manifest.
+        allow_partial: load an unfinished dataset instead of raising.
+
+    Returns:
+        A DataFrame with :data:`~grip_env.columns.DATASET_COLUMNS` and a fresh RangeIndex;
+        ``attrs["params"]`` holds the GraspParams as a dict and ``attrs["manifest"]`` the manifest.
+
+    Raises:
+        ValueError: not a dataset, other format version, missing or corrupt shard, unfinished run.
+    """
+    directory = Path(path)
+    manifest = read_manifest(directory)
+    records = shard_records(manifest)
+    order = [entry["object_id"] for entry in manifest["objects"]]
+    missing = [object_id for object_id in order if object_id not in records]
+    if missing and not allow_partial:
+        raise ValueError(
+            f"dataset {directory} is unfinished: {len(missing)} of {len(order)} objects missing "
+            f"(first: {missing[0]}); rerun the same generate command to complete it"
+        )
+    parts = [
+        read_shard(directory / records[object_id].file, records[object_id] if verify else None)
+        for object_id in order if object_id in records
+    ]
+    grips = pd.concat(parts, ignore_index=True) if parts else _empty_grips()
+    grips = grips.loc[:, list(DATASET_COLUMNS)]
+    grips.attrs["params"] = dict(manifest["params"])
+    grips.attrs["manifest"] = manifest
+    return grips
+
+
+def dataset_manifest(path: str | Path) -> Manifest:
+    """The checked manifest of a dataset directory."""
+    return read_manifest(Path(path))
+
+
+def _empty_grips() -> pd.DataFrame:
+    return GRIP_SCHEMA.empty_table().to_pandas()

@@ -1,0 +1,144 @@
+"""``manifest.json``: what a dataset is (config, seed, objects), where it came from, what is done.
+
+The manifest is rewritten atomically, and a shard enters it only once the shard file is complete,
+so the manifest never lists anything that is not on disk.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import platform
+import subprocess
+from datetime import UTC, datetime
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import grip_env
+from grip_env.config import Config
+from grip_env.dataset.catalog import DatasetObject
+from grip_env.dataset.files import write_text_atomically
+from grip_env.dataset.shards import ShardRecord
+
+FORMAT = "grip-env-dataset"
+FORMAT_VERSION = 1
+MANIFEST_FILE = "manifest.json"
+#: Config fields that change how a dataset is computed, not what it holds.
+EXECUTION_FIELDS = ("workers", "backend")
+_VERSIONED_PACKAGES = ("numpy", "pandas", "pyarrow", "pybullet", "scipy", "shapely", "pydantic")
+
+Manifest = dict[str, Any]
+
+
+def run_identity(config: Config, entries: list[DatasetObject]) -> dict[str, Any]:
+    """Everything that determines a dataset's rows: config (minus execution fields) and objects."""
+    settings = config.model_dump(mode="json")
+    for name in EXECUTION_FIELDS:
+        settings["dataset"].pop(name, None)
+    return {"config": settings, "object_ids": [entry.object_id for entry in entries]}
+
+
+def fingerprint(identity: dict[str, Any]) -> str:
+    """SHA-256 of the canonical JSON of a run identity."""
+    return hashlib.sha256(json.dumps(identity, sort_keys=True).encode()).hexdigest()
+
+
+def new_manifest(
+    config: Config, entries: list[DatasetObject], object_seeds: list[int], objects_sha256: str
+) -> Manifest:
+    """The manifest of a run that has no shard yet."""
+    identity = run_identity(config, entries)
+    return {
+        "format": FORMAT,
+        "format_version": FORMAT_VERSION,
+        "package_version": grip_env.__version__,
+        "git_commit": _git_commit(),
+        "created": datetime.now(UTC).isoformat(timespec="seconds"),
+        "versions": _versions(),
+        "seed": config.dataset.seed,
+        "trials": config.dataset.trials,
+        "params": config.grasp.model_dump(mode="json"),
+        "feature_cap": config.grasp.feature_cap,
+        "config": config.model_dump(mode="json"),
+        "identity": identity,
+        "fingerprint": fingerprint(identity),
+        "objects": [
+            {"index": e.index, "object_id": e.object_id, "name": e.obj.name,
+             "source": e.obj.source, "seed": seed}
+            for e, seed in zip(entries, object_seeds, strict=True)
+        ],
+        "objects_file": {"file": "objects.parquet", "sha256": objects_sha256},
+        "shards": {},
+        "rows": 0,
+        "complete": False,
+    }
+
+
+def read_manifest(directory: Path) -> Manifest:
+    """Read and check the manifest of a dataset directory.
+
+    Raises:
+        ValueError: no manifest, not JSON, not a grip-env dataset, or another format version.
+    """
+    path = Path(directory) / MANIFEST_FILE
+    if not path.is_file():
+        raise ValueError(f"{directory} is not a grip-env dataset: {MANIFEST_FILE} is missing")
+    try:
+        manifest = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ValueError(f"{path} is corrupt: {exc}") from None
+    if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
+        raise ValueError(f"{path} is not a grip-env dataset manifest")
+    version = manifest.get("format_version")
+    if version != FORMAT_VERSION:
+        raise ValueError(
+            f"{path} has format version {version!r}; this grip-env reads version {FORMAT_VERSION}"
+        )
+    return manifest
+
+
+def write_manifest(directory: Path, manifest: Manifest) -> None:
+    """Atomically (re)write the manifest, with its row total updated."""
+    manifest["rows"] = sum(record["rows"] for record in manifest["shards"].values())
+    write_text_atomically(Path(directory) / MANIFEST_FILE, json.dumps(manifest, indent=1) + "\n")
+
+
+def shard_records(manifest: Manifest) -> dict[str, ShardRecord]:
+    """Completed shards by object id."""
+    return {object_id: ShardRecord(**record) for object_id, record in manifest["shards"].items()}
+
+
+def identity_differences(old: dict[str, Any], new: dict[str, Any], prefix: str = "") -> list[str]:
+    """Human-readable ``key: old -> new`` lines where two run identities differ."""
+    if isinstance(old, dict) and isinstance(new, dict):
+        lines = []
+        for key in sorted(set(old) | set(new)):
+            lines += identity_differences(old.get(key), new.get(key), f"{prefix}{key}.")
+        return lines
+    if old == new:
+        return []
+    if isinstance(old, list) and isinstance(new, list) and len(old) + len(new) > 6:
+        return [f"{prefix.rstrip('.')}: {len(old)} entries -> {len(new)} entries (differ)"]
+    return [f"{prefix.rstrip('.')}: {old!r} -> {new!r}"]
+
+
+def _versions() -> dict[str, str]:
+    found = {"python": platform.python_version()}
+    for name in _VERSIONED_PACKAGES:
+        try:
+            found[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            continue
+    return found
+
+
+def _git_commit() -> str | None:
+    try:
+        result = subprocess.run(
+            ["git", "rev-parse", "HEAD"], cwd=Path(__file__).parent, capture_output=True,
+            text=True, timeout=5, check=False,
+        )
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return result.stdout.strip() or None if result.returncode == 0 else None

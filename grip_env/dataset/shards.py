@@ -1,0 +1,102 @@
+"""Parquet shards: one file of grips per object, with a fixed Arrow schema and run metadata."""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from grip_env.columns import DATASET_COLUMNS, IDENTITY, OUTCOMES
+from grip_env.dataset.files import sha256_of, write_atomically
+
+GRIPS_DIR = "grips"
+METADATA_KEY = b"grip_env"
+
+_TYPES: dict[str, pa.DataType] = {
+    "object_id": pa.string(),
+    "grasp_id": pa.int64(),
+    "grip_id": pa.string(),
+    "two_finger": pa.bool_(),
+    "trials": pa.int64(),
+    "successes": pa.int64(),
+    "success_rate": pa.float64(),
+    "success": pa.bool_(),
+}
+#: Arrow schema of every grip shard: DATASET_COLUMNS in order; descriptors and features float64.
+GRIP_SCHEMA = pa.schema([(name, _TYPES.get(name, pa.float64())) for name in DATASET_COLUMNS])
+NON_FLOAT_COLUMNS = tuple(name for name in IDENTITY + OUTCOMES if name != "success_rate")
+
+
+@dataclass(frozen=True)
+class ShardRecord:
+    """A completed shard as the manifest lists it."""
+
+    file: str
+    rows: int
+    sha256: str
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"file": self.file, "rows": self.rows, "sha256": self.sha256}
+
+
+def shard_path(directory: Path, index: int, object_id: str) -> Path:
+    """``DIR/grips/part-<index>-<object_id>.parquet`` (object id made file-name safe)."""
+    safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", object_id)
+    return directory / GRIPS_DIR / f"part-{index:06d}-{safe}.parquet"
+
+
+def grips_to_arrow(grips: pd.DataFrame, metadata: dict[str, Any]) -> pa.Table:
+    """The grip table in the shard schema; ``metadata`` is stored as JSON in the file.
+
+    Raises:
+        ValueError: a dataset column is missing or cannot be cast to its type.
+    """
+    missing = [name for name in DATASET_COLUMNS if name not in grips.columns]
+    if missing:
+        raise ValueError(f"grip table is missing dataset column(s): {', '.join(missing)}")
+    try:
+        table = pa.Table.from_pandas(
+            grips.loc[:, list(DATASET_COLUMNS)], schema=GRIP_SCHEMA, preserve_index=False
+        )
+    except (pa.ArrowInvalid, pa.ArrowTypeError) as exc:
+        raise ValueError(f"grip table does not fit the dataset schema: {exc}") from None
+    return table.replace_schema_metadata({METADATA_KEY: json.dumps(metadata).encode()})
+
+
+def write_shard(path: Path, grips: pd.DataFrame, metadata: dict[str, Any]) -> ShardRecord:
+    """Write one shard atomically; returns its manifest record (file relative to the dataset)."""
+    table = grips_to_arrow(grips, metadata)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    checksum = write_atomically(path, lambda temp: pq.write_table(table, temp))
+    return ShardRecord(f"{GRIPS_DIR}/{path.name}", table.num_rows, checksum)
+
+
+def read_shard(path: Path, expected: ShardRecord | None = None) -> pd.DataFrame:
+    """Read a shard, checking it against its manifest record when given.
+
+    Raises:
+        ValueError: the file is missing, unreadable, or differs from ``expected``.
+    """
+    if not path.is_file():
+        raise ValueError(f"shard {path} is missing")
+    if expected is not None and sha256_of(path) != expected.sha256:
+        raise ValueError(f"shard {path} is corrupt: its SHA-256 differs from the manifest")
+    try:
+        table = pq.read_table(path)
+    except (OSError, pa.ArrowException) as exc:
+        raise ValueError(f"shard {path} is corrupt: {exc}") from None
+    if expected is not None and table.num_rows != expected.rows:
+        raise ValueError(f"shard {path} has {table.num_rows} rows, manifest says {expected.rows}")
+    return table.to_pandas()
+
+
+def shard_metadata(path: Path) -> dict[str, Any]:
+    """The JSON metadata stored in a shard's schema (empty when absent)."""
+    raw = (pq.read_schema(path).metadata or {}).get(METADATA_KEY)
+    return json.loads(raw) if raw else {}

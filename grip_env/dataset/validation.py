@@ -1,0 +1,148 @@
+"""``validate``: check a dataset directory end to end and list every problem found."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from grip_env.columns import FEATURES, INDEXES
+from grip_env.dataset.files import sha256_of
+from grip_env.dataset.jobs import SUCCESS_THRESHOLD
+from grip_env.dataset.manifest import Manifest, read_manifest, shard_records
+from grip_env.dataset.shards import GRIP_SCHEMA, ShardRecord
+from grip_env.params import GraspParams
+
+FEATURE_RTOL = 1e-7
+FEATURE_ATOL = 1e-9
+
+
+def validate(path: str | Path) -> list[str]:
+    """Every problem in a dataset: one line each; an empty list means the dataset is sound.
+
+    Checks the objects table and each shard against the manifest (presence, SHA-256, row count),
+    the schema (columns and types), every feature and index recomputed from its row's descriptors,
+    outcome consistency (1 <= trials, 0 <= successes <= trials, rates and labels) and that grip ids
+    are unique.
+
+    Raises:
+        ValueError: ``path`` is not a grip-env dataset of this format version.
+    """
+    directory = Path(path)
+    manifest = read_manifest(directory)
+    problems = _objects_file_problems(directory, manifest)
+    records = shard_records(manifest)
+    params = GraspParams(**manifest["params"])
+    grip_ids: list[pd.Series] = []
+    for entry in manifest["objects"]:
+        record = records.get(entry["object_id"])
+        if record is None:
+            problems.append(f"object {entry['object_id']}: no shard (run unfinished)")
+            continue
+        found, grips = _shard_problems(directory, record)
+        problems += found
+        if grips is not None:
+            problems += _row_problems(record.file, grips, params, entry["object_id"])
+            grip_ids.append(grips["grip_id"])
+    if grip_ids:
+        ids = pd.concat(grip_ids, ignore_index=True)
+        if ids.duplicated().any():
+            problems.append(f"grip_id not unique: {ids[ids.duplicated()].iloc[0]!r} repeats")
+    return problems
+
+
+def _objects_file_problems(directory: Path, manifest: Manifest) -> list[str]:
+    listed = manifest.get("objects_file", {})
+    path = directory / listed.get("file", "objects.parquet")
+    if not path.is_file():
+        return [f"{path.name}: missing"]
+    if sha256_of(path) != listed.get("sha256"):
+        return [f"{path.name}: SHA-256 differs from the manifest (file changed or corrupt)"]
+    return []
+
+
+def _shard_problems(directory: Path, record: ShardRecord) -> tuple[list[str], pd.DataFrame | None]:
+    """Problems of one shard file, and its rows when it could be read."""
+    path = directory / record.file
+    if not path.is_file():
+        return [f"{record.file}: missing"], None
+    problems = []
+    if sha256_of(path) != record.sha256:
+        problems.append(f"{record.file}: SHA-256 differs from the manifest (changed or corrupt)")
+    try:
+        table = pq.read_table(path)
+    except (OSError, pa.ArrowException) as exc:
+        return [*problems, f"{record.file}: unreadable Parquet ({exc})"], None
+    if table.num_rows != record.rows:
+        problems.append(f"{record.file}: {table.num_rows} rows, manifest says {record.rows}")
+    schema_problems = _schema_problems(record.file, table.schema)
+    if schema_problems:
+        return problems + schema_problems, None
+    return problems, table.to_pandas()
+
+
+def _schema_problems(name: str, schema: pa.Schema) -> list[str]:
+    problems = []
+    for field in GRIP_SCHEMA:
+        if field.name not in schema.names:
+            problems.append(f"{name}: column {field.name} missing")
+        elif schema.field(field.name).type != field.type:
+            problems.append(
+                f"{name}: column {field.name} has type {schema.field(field.name).type}, "
+                f"expected {field.type}"
+            )
+    return problems
+
+
+def _row_problems(
+    name: str, grips: pd.DataFrame, params: GraspParams, object_id: str
+) -> list[str]:
+    if grips.empty:
+        return []
+    problems = []
+    if (grips["object_id"] != object_id).any():
+        problems.append(f"{name}: rows with an object_id other than {object_id!r}")
+    problems += _feature_problems(name, grips, params)
+    problems += _outcome_problems(name, grips)
+    return problems
+
+
+def _feature_problems(name: str, grips: pd.DataFrame, params: GraspParams) -> list[str]:
+    from grip_env.features import compute_features
+
+    try:
+        expected = compute_features(grips, params)
+    except ValueError as exc:
+        return [f"{name}: features cannot be recomputed: {exc}"]
+    problems = []
+    for column in FEATURES + INDEXES:
+        stored, recomputed = grips[column].to_numpy(), expected[column].to_numpy()
+        wrong = ~np.isclose(stored, recomputed, rtol=FEATURE_RTOL, atol=FEATURE_ATOL)
+        if wrong.any():
+            first = int(np.argmax(wrong))
+            problems.append(
+                f"{name}: {column} differs from its recomputed value in {int(wrong.sum())} row(s), "
+                f"e.g. grip {grips['grip_id'].iloc[first]}: stored {stored[first]!r}, "
+                f"recomputed {recomputed[first]!r}"
+            )
+    return problems
+
+
+def _outcome_problems(name: str, grips: pd.DataFrame) -> list[str]:
+    trials, successes = grips["trials"].to_numpy(), grips["successes"].to_numpy()
+    rate = grips["success_rate"].to_numpy()
+    checks = {
+        "trials < 1": trials < 1,
+        "successes outside [0, trials]": (successes < 0) | (successes > trials),
+        "success_rate != successes / trials": ~np.isclose(rate, successes / np.maximum(trials, 1)),
+        f"success != (success_rate >= {SUCCESS_THRESHOLD})":
+            grips["success"].to_numpy() != (rate >= SUCCESS_THRESHOLD),
+    }
+    ids = grips["grip_id"]
+    return [
+        f"{name}: {what} in {int(bad.sum())} row(s), e.g. grip {ids.iloc[int(np.argmax(bad))]}"
+        for what, bad in checks.items() if bad.any()
+    ]

@@ -1,0 +1,278 @@
+"""Dataset storage, manifest, resume, parallel backends and validation.
+
+Most tests inject ``toy_job``, a cheap deterministic per-object job whose rows have consistent
+features, so the machinery is tested in isolation; the end-to-end test uses the real job.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow.parquet as pq
+import pytest
+
+from grip_env.columns import DATASET_COLUMNS, DESCRIPTORS
+from grip_env.config import Config
+from grip_env.dataset import (
+    DatasetMismatchError,
+    ObjectTask,
+    generate,
+    load,
+    load_objects,
+    validate,
+    with_outcomes,
+)
+from grip_env.dataset.jobs import object_seeds
+from grip_env.features import compute_features
+from grip_env.objects import load_object_set
+
+CONFIG = Config().override(dataset={"trials": 4, "seed": 7, "max_grips_per_object": 5})
+TRIALS_SEEN: list[int] = []
+
+
+def toy_job(task: ObjectTask) -> pd.DataFrame:
+    """Rows drawn from the task seed only: valid descriptors, exact features, binomial outcomes."""
+    rng = np.random.default_rng(task.seed)
+    count = 1 + task.index % 3
+    angles = rng.uniform(0, 2 * np.pi, (count, 6))
+    columns = {name: rng.uniform(-50, 50, count) for name in DESCRIPTORS}
+    for k, prefix in enumerate(("n1", "n2", "n3", "f1", "f2", "f3")):
+        columns[f"{prefix}_x"], columns[f"{prefix}_y"] = np.cos(angles[:, k]), np.sin(angles[:, k])
+    columns |= {f"rho{i}": rng.uniform(-0.3, 0.3, count) for i in (1, 2, 3)}
+    columns |= {f"e{i}": rng.uniform(40, 150, count) for i in (1, 2, 3)}
+    columns["spread"] = rng.uniform(0, 1.4, count)
+    columns |= {name: np.full(count, value) for name, value in task.obj.descriptors().items()}
+    grips = pd.DataFrame(columns)
+    grips.insert(0, "object_id", "ignored")
+    grips.insert(1, "grasp_id", np.arange(count))
+    grips.insert(2, "grip_id", np.arange(count))
+    grips.insert(3, "two_finger", False)
+    grips = pd.concat([grips, compute_features(grips, task.config.grasp)], axis=1)
+    trials = np.full(count, task.config.dataset.trials)
+    return with_outcomes(grips, trials, rng.binomial(trials, 0.5), task.object_id)
+
+
+def empty_job(task: ObjectTask) -> pd.DataFrame:
+    """An object with no feasible grip."""
+    return toy_job(task).iloc[:0]
+
+
+def run(out: Path, **kwargs) -> Path:  # type: ignore[no-untyped-def]
+    options = {"objects": 5, "workers": 1, "progress": False, "job": toy_job} | kwargs
+    return generate(CONFIG, out, **options)
+
+
+# ----------------------------------------------------------------------------- layout, round trip
+def test_layout_manifest_and_load_round_trip(tmp_path: Path) -> None:
+    path = run(tmp_path / "d")
+    manifest = json.loads((path / "manifest.json").read_text())
+    shards = sorted(p.name for p in (path / "grips").iterdir())
+    assert shards[0].startswith("part-000000-proc_7_00000")
+    assert len(shards) == 5 and manifest["complete"]
+    assert manifest["seed"] == 7 and manifest["trials"] == 4
+    assert manifest["params"] == CONFIG.grasp.model_dump(mode="json")
+    assert {"numpy", "pandas", "pyarrow", "python"} <= set(manifest["versions"])
+    grips = load(path)
+    assert list(grips.columns) == list(DATASET_COLUMNS)
+    # objects have 1, 2, 3, 1, 2 rows in that order
+    assert len(grips) == manifest["rows"] == 9
+    object_ids = [entry["object_id"] for entry in manifest["objects"]]
+    assert list(grips["object_id"].drop_duplicates()) == object_ids
+    assert grips["grip_id"].is_unique
+    assert grips.attrs["params"]["feature_cap"] == CONFIG.grasp.feature_cap
+    assert pq.read_schema(path / "grips" / shards[0]).metadata[b"grip_env"]
+    expected = pd.concat([toy_job(_task(path, i)) for i in range(5)], ignore_index=True)
+    pd.testing.assert_frame_equal(grips, expected, check_dtype=False)
+    assert validate(path) == []
+
+
+def _task(path: Path, index: int) -> ObjectTask:
+    obj = load_objects(path)[index]
+    seed = object_seeds(7, 5)[index]
+    object_id = json.loads((path / "manifest.json").read_text())["objects"][index]["object_id"]
+    return ObjectTask(index, object_id, obj, CONFIG, seed)
+
+
+def test_objects_table_round_trip(tmp_path: Path) -> None:
+    path = run(tmp_path / "d", objects="default")
+    restored = load_objects(path)
+    originals = load_object_set("default")
+    assert [o.name for o in restored] == [o.name for o in originals]
+    for before, after in zip(originals, restored, strict=True):
+        np.testing.assert_allclose(after.contour, before.contour)
+
+
+def test_object_seeds_depend_on_run_seed_and_index_only() -> None:
+    assert object_seeds(3, 4)[:2] == object_seeds(3, 2)
+    assert object_seeds(3, 2) != object_seeds(4, 2)
+    assert len(set(object_seeds(0, 100))) == 100
+
+
+def test_empty_object_is_a_valid_empty_shard(tmp_path: Path) -> None:
+    path = run(tmp_path / "d", objects=2, job=empty_job)
+    grips = load(path)
+    assert grips.empty and list(grips.columns) == list(DATASET_COLUMNS)
+    assert grips["trials"].dtype == np.int64
+    assert validate(path) == []
+
+
+# ----------------------------------------------------------------------------- parallel, resume
+def test_same_dataset_from_one_and_two_workers(tmp_path: Path) -> None:
+    serial = load(run(tmp_path / "one", workers=1))
+    pooled = load(run(tmp_path / "two", workers=2))
+    pd.testing.assert_frame_equal(serial, pooled)
+
+
+@pytest.mark.slow
+def test_same_dataset_from_ray_backend(tmp_path: Path) -> None:
+    ray = pytest.importorskip("ray")
+    ray.cloudpickle.register_pickle_by_value(sys.modules[__name__])
+    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False)
+    try:
+        via_ray = load(run(tmp_path / "ray", workers=2, backend="ray"))
+    finally:
+        ray.shutdown()
+    pd.testing.assert_frame_equal(load(run(tmp_path / "local")), via_ray)
+
+
+def counting_job(task: ObjectTask) -> pd.DataFrame:
+    TRIALS_SEEN.append(task.index)
+    return toy_job(task)
+
+
+def failing_after_two(task: ObjectTask) -> pd.DataFrame:
+    if task.index >= 2:
+        raise RuntimeError("simulated crash")
+    return toy_job(task)
+
+
+def test_resume_after_crash_computes_only_missing_objects(tmp_path: Path) -> None:
+    out = tmp_path / "d"
+    with pytest.raises(RuntimeError, match="simulated crash"):
+        run(out, job=failing_after_two)
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert sorted(manifest["shards"]) == ["proc_7_00000", "proc_7_00001"]
+    assert not manifest["complete"]
+    with pytest.raises(ValueError, match="unfinished"):
+        load(out)
+    TRIALS_SEEN.clear()
+    run(out, job=counting_job)
+    assert TRIALS_SEEN == [2, 3, 4]
+    pd.testing.assert_frame_equal(load(out), load(run(tmp_path / "clean")))
+    TRIALS_SEEN.clear()
+    run(out, job=counting_job)
+    assert TRIALS_SEEN == []
+
+
+def test_resume_recomputes_a_deleted_shard(tmp_path: Path) -> None:
+    out = run(tmp_path / "d")
+    next((out / "grips").glob("part-000003-*")).unlink()
+    TRIALS_SEEN.clear()
+    run(out, job=counting_job)
+    assert TRIALS_SEEN == [3]
+    assert validate(out) == []
+
+
+def test_other_seed_into_same_dir_is_refused_unless_overwrite(tmp_path: Path) -> None:
+    out = run(tmp_path / "d")
+    with pytest.raises(DatasetMismatchError, match=r"dataset\.seed: 7 -> 8"):
+        generate(CONFIG, out, objects=5, seed=8, workers=1, progress=False, job=toy_job)
+    with pytest.raises(DatasetMismatchError, match="trials"):
+        run(out, trials=2)
+    run(out, trials=2, overwrite=True)
+    assert (load(out)["trials"] == 2).all()
+    # workers and backend do not change the data, so they may differ on resume
+    run(out, trials=2, workers=2)
+
+
+# ----------------------------------------------------------------------------- validation, errors
+def test_validate_catches_corrupted_shard(tmp_path: Path) -> None:
+    out = run(tmp_path / "d")
+    shard = next((out / "grips").glob("part-000001-*"))
+    data = bytearray(shard.read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    shard.write_bytes(bytes(data))
+    problems = validate(out)
+    assert any("part-000001" in p and "SHA-256" in p for p in problems)
+    with pytest.raises(ValueError, match="corrupt"):
+        load(out)
+
+
+def _rewrite_shard(out: Path, index: int, change) -> None:  # type: ignore[no-untyped-def]
+    """Tamper with a shard's rows while keeping its metadata (checksum will differ)."""
+    shard = next((out / "grips").glob(f"part-{index:06d}-*"))
+    table = pq.read_table(shard)
+    frame = table.to_pandas()
+    change(frame)
+    pq.write_table(table.from_pandas(frame, schema=table.schema, preserve_index=False), shard)
+
+
+def test_validate_catches_tampered_feature_and_outcome(tmp_path: Path) -> None:
+    out = run(tmp_path / "d")
+
+    def tamper(frame: pd.DataFrame) -> None:
+        frame.loc[0, "C3"] += 0.01
+        frame.loc[1, "successes"] = frame.loc[1, "trials"] + 1
+
+    _rewrite_shard(out, 2, tamper)
+    problems = validate(out)
+    assert any("C3 differs" in p and "1 row(s)" in p for p in problems)
+    assert any("successes outside" in p for p in problems)
+    assert any("SHA-256" in p for p in problems)
+    assert not any("part-000000" in p for p in problems)
+
+
+def test_validate_reports_unfinished_run(tmp_path: Path) -> None:
+    out = tmp_path / "d"
+    with pytest.raises(RuntimeError):
+        run(out, job=failing_after_two)
+    assert sum("no shard" in p for p in validate(out)) == 3
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"trials": 0}, "trials must be >= 1"),
+    ({"workers": 0}, "workers must be an integer >= 1"),
+    ({"backend": "dask"}, "unknown backend 'dask'"),
+    ({"objects": "no_such_set"}, "unknown object set 'no_such_set'"),
+    ({"objects": 0}, "number of objects must be >= 1"),
+    ({"seed": -1}, "seed must be >= 0"),
+])
+def test_bad_arguments_raise_value_error(tmp_path: Path, kwargs, message) -> None:  # type: ignore[no-untyped-def]
+    with pytest.raises(ValueError, match=message):
+        run(tmp_path / "d", **kwargs)
+    assert not (tmp_path / "d" / "manifest.json").exists()
+
+
+def test_unwritable_or_file_output_is_refused(tmp_path: Path) -> None:
+    blocker = tmp_path / "file"
+    blocker.write_text("x")
+    with pytest.raises(ValueError, match="not a directory"):
+        run(blocker)
+    with pytest.raises(ValueError, match="not writable"):
+        run(blocker / "sub")
+
+
+def test_other_format_version_and_non_dataset_are_refused(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="not a grip-env dataset"):
+        load(tmp_path)
+    out = run(tmp_path / "d")
+    manifest = json.loads((out / "manifest.json").read_text())
+    manifest["format_version"] = 999
+    (out / "manifest.json").write_text(json.dumps(manifest))
+    for call in (load, validate):
+        with pytest.raises(ValueError, match="format version 999"):
+            call(out)
+    with pytest.raises(ValueError, match="format version 999"):
+        run(out)
+
+
+def test_missing_shard_is_refused_by_load(tmp_path: Path) -> None:
+    out = run(tmp_path / "d")
+    next((out / "grips").glob("part-000004-*")).unlink()
+    with pytest.raises(ValueError, match="missing"):
+        load(out)
+    assert any("part-000004" in p and "missing" in p for p in validate(out))
