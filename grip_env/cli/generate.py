@@ -51,8 +51,8 @@ def generate(
     """
     with user_errors():
         from grip_env.config import load_config
+        from grip_env.dataset import dataset_manifest
         from grip_env.dataset import generate as generate_dataset
-        from grip_env.dataset import load
 
         cfg = load_config(config)
         try:
@@ -65,7 +65,7 @@ def generate(
             raise typer.Exit(code=130) from None
         except OSError as exc:
             raise ValueError(f"cannot write the dataset in {out}: {exc}") from None
-        manifest = load(path, verify=False).attrs["manifest"]
+        manifest = dataset_manifest(path)
     typer.echo(f"wrote {path}: {manifest['rows']} grips of {len(manifest['objects'])} objects")
 
 

@@ -73,11 +73,16 @@ def with_outcomes(
 ) -> pd.DataFrame:
     """Dataset rows: candidates with the object's id, unique grip ids and the outcome columns.
 
-    ``grip_id`` becomes ``"<object_id>/<candidate grip_id>"``, unique across a dataset.
+    ``grip_id`` becomes ``"<object_id>/<grip id within the object>"``, unique across a dataset
+    (a leading ``"<candidate object_id>/"`` in the candidate's grip id is replaced).
     """
     rows = grips.reset_index(drop=True).copy()
+    local_ids = [
+        str(grip).removeprefix(f"{owner}/")
+        for owner, grip in zip(rows["object_id"], rows["grip_id"], strict=True)
+    ]
     rows["object_id"] = object_id
-    rows["grip_id"] = [f"{object_id}/{grip}" for grip in rows["grip_id"]]
+    rows["grip_id"] = [f"{object_id}/{grip}" for grip in local_ids]
     rows["trials"] = np.asarray(trials, dtype=np.int64)
     rows["successes"] = np.asarray(successes, dtype=np.int64)
     with np.errstate(divide="ignore", invalid="ignore"):
