@@ -19,8 +19,8 @@ PROGRESS = ("position", "attempts", "pool")
 class GripAcceptEnv(GripEnvBase):
     """Decide, candidate after candidate, whether to execute it (1) or skip it (0).
 
-    Each episode draws one object of the split; its best ``max_candidates`` candidates by ``Q_C``
-    are shown best first (``candidate_order="q_c"``) or in a random order per episode
+    Each episode draws one object of the split; its best ``max_candidates`` candidates are shown
+    lowest ``Q_C`` first (``candidate_order="q_c"``) or in a new random order each episode
     (``"shuffled"``). Executing earns ``success_reward`` or ``failure_reward``; skipping earns 0,
     except that skipping the last candidate ends the episode with ``failure_reward`` (the object
     was never lifted). The episode terminates on success, after ``max_attempts`` executions, or

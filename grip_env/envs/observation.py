@@ -11,8 +11,8 @@ Normalisation (``normalize=``):
   own objects (its split), each feature on its own (std 0 counts as 1).
 - ``"none"``: the raw features.
 
-Truncation keeps the ``max_candidates`` best candidates by ``Q_C`` (ties keep table order);
-padded slots hold zeros and are masked out.
+Truncation keeps the ``max_candidates`` best candidates by ``Q_C``, i.e. the lowest values (the
+paper's features are 0 at best; ties keep table order); padded slots hold zeros and are masked out.
 """
 
 from __future__ import annotations
@@ -93,7 +93,7 @@ class FeatureScaler:
 
 @dataclass(frozen=True)
 class CandidateSet:
-    """One object's candidates as padded arrays; slot ``i < count`` is the i-th best by ``Q_C``.
+    """One object's candidates as padded arrays; row ``i < count`` has the i-th lowest ``Q_C``.
 
     Attributes:
         object_id: the object's id.
@@ -119,8 +119,8 @@ class CandidateSet:
 
 
 def best_candidates(frame: pd.DataFrame, max_candidates: int) -> pd.DataFrame:
-    """The ``max_candidates`` best rows by ``Q_C``, best first (stable for ties)."""
-    ordered = frame.sort_values("Q_C", ascending=False, kind="mergesort")
+    """The ``max_candidates`` best rows by ``Q_C`` (lowest first, stable for ties)."""
+    ordered = frame.sort_values("Q_C", ascending=True, kind="mergesort")
     return ordered.head(max_candidates).reset_index(drop=True)
 
 

@@ -25,8 +25,8 @@ class GripSelectEnv(GripEnvBase):
     sets ``info["invalid_action"] = True``.
 
     Observation: ``Dict(features=Box(-b, b, (K, F), float32), mask=MultiBinary(K))`` where
-    ``K = max_candidates`` and ``F = len(features)``. Slots hold the K best candidates by ``Q_C``,
-    best first (or shuffled with ``candidate_order="shuffled"``); padded slots are zero and masked.
+    ``K = max_candidates`` and ``F = len(features)``. Slots hold the K best candidates, lowest
+    ``Q_C`` first (or shuffled: ``candidate_order="shuffled"``); padded slots are zero and masked.
     Action: ``Discrete(K)``; :meth:`action_masks` gives the valid slots (sb3-contrib MaskablePPO).
 
     The episode terminates on success, when ``max_attempts`` grips were executed, after an invalid
