@@ -1,0 +1,193 @@
+"""Exact comparison of grip selectors on held-out objects.
+
+Every selector sees the same candidates of each test object (the ``max_candidates`` best by
+``Q_C``, as ``GripSelect-v0`` shows them) and orders them; the recorded ``success_rate`` of a grip
+is taken as its probability of holding, so each object's score is an expectation, with no
+sampling noise:
+
+- ``success_rate``: probability that the first pick holds;
+- ``success_within_attempts``: ``1 - prod(1 - p)`` over the first ``max_attempts`` picks;
+- ``expected_attempts``: expected number of grips executed, ``sum_j prod_{i<j}(1 - p_i)``, stopping
+  at the first hold or after ``max_attempts``.
+
+Selectors: ``rl`` (the trained policy, deterministic; after a failure the tried slot is masked and
+the policy asked again, as in the environment), ``random`` (exact expectation over uniformly
+random orders, by elementary symmetric polynomials), ``best_qc`` (lowest ``Q_C`` first),
+``best_qg`` (lowest ``Q_G`` first), ``classifier_<name>`` (each configured classifier among
+"logreg"/"svm", fitted on the training objects' grips, highest ranking score first; each is
+reported, so nothing is chosen on the test objects) and ``oracle`` (highest ``success_rate``
+first: it holds whenever a holding grip exists).
+
+Interval: 95% percentile bootstrap over test objects (the unit of generalisation), the same
+resampled objects for every selector; ``n_boot`` resamples from a generator seeded with
+``config.learning.seed``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from math import comb
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from numpy.typing import NDArray
+
+from grip_env.config import Config
+from grip_env.envs.observation import CandidateSet, candidate_set
+from grip_env.envs.select import GripSelectEnv
+from grip_env.envs.split import split_objects
+
+CLASSIFIER_CHOICES: tuple[str, ...] = ("logreg", "svm")
+METRICS: tuple[str, ...] = ("success_rate", "success_within_attempts", "expected_attempts")
+Ranker = Callable[[CandidateSet], NDArray[np.intp]]
+
+
+def attempt_metrics(p: NDArray[np.float64], max_attempts: int) -> tuple[float, float, float]:
+    """(first-pick success, success within attempts, expected attempts) of picks in order ``p``."""
+    picks = np.asarray(p, dtype=float)[:max_attempts]
+    survive = np.concatenate([[1.0], np.cumprod(1.0 - picks)])
+    return float(picks[0]), float(1.0 - survive[-1]), float(survive[:-1].sum())
+
+
+def random_metrics(p: NDArray[np.float64], max_attempts: int) -> tuple[float, float, float]:
+    """:func:`attempt_metrics` averaged exactly over all orders of ``p`` (random picks)."""
+    fail = 1.0 - np.asarray(p, dtype=float)
+    n, m = fail.size, min(max_attempts, fail.size)
+    # e_j: elementary symmetric polynomials of the failure probabilities (coefficients of
+    # prod(1 + q_i x)); a uniformly random j-subset all fails with probability e_j / C(n, j).
+    elementary = np.array([1.0])
+    for q in fail:
+        elementary = np.concatenate([elementary, [0.0]]) + np.concatenate([[0.0], q * elementary])
+    all_fail = np.array([elementary[j] / comb(n, j) for j in range(m + 1)])
+    return float(1.0 - all_fail[1]), float(1.0 - all_fail[m]), float(all_fail[:m].sum())
+
+
+def policy_order(model: Any, found: CandidateSet, max_attempts: int) -> NDArray[np.intp]:
+    """Slots the policy tries in turn, each failure masked as the environment does."""
+    mask = found.mask.copy()
+    order: list[int] = []
+    for _ in range(min(max_attempts, found.count)):
+        observation = {"features": found.features, "mask": mask.copy()}
+        action, _ = model.predict(observation, action_masks=mask.astype(bool), deterministic=True)
+        slot = int(action)
+        order.append(slot)
+        mask[slot] = 0
+    return np.asarray(order, dtype=np.intp)
+
+
+def _ascending(column: str) -> Ranker:
+    return lambda found: np.argsort(found.rows[column].to_numpy(float), kind="stable")
+
+
+def _oracle(found: CandidateSet) -> NDArray[np.intp]:
+    return np.argsort(-found.success_rate[: found.count], kind="stable")
+
+
+def _classifier_ranker(model: Any) -> Ranker:
+    from classifiers.evaluation import ranking_score
+
+    return lambda found: np.argsort(-ranking_score(model, found.rows), kind="stable")
+
+
+def fit_classifiers(
+    train: pd.DataFrame, config: Config, names: Sequence[str] | None = None
+) -> dict[str, Any]:
+    """Fit the configured classifiers (among "logreg", "svm") on the training grips.
+
+    Returns an empty dict when the ``classifiers`` models are not available or the training grips
+    hold a single class.
+    """
+    try:
+        from classifiers.models import make_model
+    except ImportError:
+        return {}
+    chosen = names if names is not None else [
+        name for name in config.learning.models if name in CLASSIFIER_CHOICES
+    ] or ["logreg"]
+    if train["success"].nunique() < 2:
+        return {}
+    return {name: make_model(name, config.learning.seed).fit(train, train["success"])
+            for name in chosen}  # fmt: skip
+
+
+def bootstrap_interval(
+    values: NDArray[np.float64], resamples: NDArray[np.intp]
+) -> dict[str, Any]:
+    """Mean and 95% percentile interval of ``values`` over object resamples."""
+    means = values[resamples].mean(axis=1)
+    low, high = np.percentile(means, [2.5, 97.5])
+    return {"mean": float(values.mean()), "ci": [float(low), float(high)]}
+
+
+def evaluate_selectors(
+    model: Any,
+    data: pd.DataFrame,
+    config: Config,
+    classifiers: Sequence[str] | None = None,
+    n_boot: int = 2000,
+) -> dict[str, Any]:
+    """Compare the RL selector with the baselines on the test objects (see the module docstring).
+
+    Returns:
+        ``{"policies": {name: {metric: {"mean", "ci"}, "per_object": [...]}}, "split": {...},
+        "max_attempts", "max_candidates", "interval"}``.
+    """
+    from classifiers.selector.training import check_grip_table
+
+    table = check_grip_table(data)
+    ids = table["object_id"].astype(str)
+    learning, selector = config.learning, config.selector
+    train_ids, test_ids = split_objects(ids, learning.test_fraction, learning.seed)
+    sets = _test_candidate_sets(table, config, test_ids)
+    if not sets:
+        raise ValueError("no test object has a candidate grip")
+    rankers: dict[str, Ranker] = {
+        "rl": lambda found: policy_order(model, found, selector.max_attempts),
+        "best_qc": _ascending("Q_C"),
+        "best_qg": _ascending("Q_G"),
+    }
+    fitted = fit_classifiers(table[ids.isin(train_ids).to_numpy()], config, classifiers)
+    rankers.update({f"classifier_{name}": _classifier_ranker(m) for name, m in fitted.items()})
+    rankers["oracle"] = _oracle
+    scores = {name: _score(sets, rank, selector.max_attempts) for name, rank in rankers.items()}
+    scores["random"] = np.array(
+        [random_metrics(s.success_rate[: s.count], selector.max_attempts) for s in sets]
+    )
+    resamples = np.random.default_rng(learning.seed).integers(
+        len(sets), size=(n_boot, len(sets))
+    )
+    policies = {
+        name: {
+            **{metric: bootstrap_interval(values[:, k], resamples)
+               for k, metric in enumerate(METRICS)},
+            "per_object": values[:, 0].round(6).tolist(),
+        }  # fmt: skip
+        for name, values in scores.items()
+    }
+    return {
+        "policies": policies,
+        "split": {"train": list(train_ids), "test": [s.object_id for s in sets],
+                  "test_fraction": learning.test_fraction, "seed": learning.seed},
+        "max_attempts": selector.max_attempts,
+        "max_candidates": selector.max_candidates,
+        "interval": f"95% percentile bootstrap over test objects, {n_boot} resamples",
+    }  # fmt: skip
+
+
+def _test_candidate_sets(
+    table: pd.DataFrame, config: Config, test_ids: Sequence[str]
+) -> list[CandidateSet]:
+    """The test objects' candidates, scaled exactly as the training environment scales them."""
+    train_env = GripSelectEnv(data=table, config=config, split="train")
+    scaler, k = train_env.scaler, train_env.max_candidates
+    train_env.close()
+    frames = dict(iter(table.groupby(table["object_id"].astype(str), sort=True)))
+    sets = [candidate_set(oid, frames[oid], scaler, k) for oid in test_ids if oid in frames]
+    return [found for found in sets if found.count]
+
+
+def _score(sets: list[CandidateSet], rank: Ranker, max_attempts: int) -> NDArray[np.float64]:
+    """(objects, metrics) array of :func:`attempt_metrics` for each object's order."""
+    rows = [attempt_metrics(found.success_rate[rank(found)], max_attempts) for found in sets]
+    return np.array(rows)

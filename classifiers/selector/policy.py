@@ -1,0 +1,184 @@
+"""Permutation-invariant actor-critic for picking one grip among K candidates.
+
+The observation is a set: ``{"features": (K, F), "mask": (K,)}``. :class:`CandidateSetPolicy`
+is a :class:`~sb3_contrib.common.maskable.policies.MaskableActorCriticPolicy` whose parts are
+swapped through SB3's own extension points:
+
+- ``features_extractor`` = :class:`CandidateSetExtractor`: packs the dict into one tensor
+  ``(B, K * (F + 1))`` (each candidate's features followed by its mask bit), no learning;
+- ``mlp_extractor`` = :class:`CandidateSetNetwork` (the ``_build_mlp_extractor`` hook):
+  ONE shared scorer MLP maps each candidate's own feature vector to a logit, so
+  ``latent_pi`` is the ``(B, K)`` vector of scores; a second shared encoder embeds each
+  candidate for the critic and pools over valid candidates (masked mean and max), so
+  ``latent_vf`` does not depend on candidate order;
+- ``action_net`` = identity, so the categorical's logits are the scores themselves.
+  MaskablePPO sets invalid slots to -inf: the action distribution is the masked softmax.
+
+Permuting the candidates (and the mask with them) permutes the action probabilities the same
+way and leaves the value unchanged; any number of valid candidates up to K works.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import torch as th
+from gymnasium import spaces
+from sb3_contrib.common.maskable.policies import MaskableActorCriticPolicy
+from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
+from stable_baselines3.common.type_aliases import Schedule
+from torch import nn
+
+
+def _candidate_shape(observation_space: spaces.Space) -> tuple[int, int]:
+    if not isinstance(observation_space, spaces.Dict) or {"features", "mask"} - set(
+        observation_space.spaces
+    ):
+        raise ValueError(
+            f"observation space must be a Dict with 'features' and 'mask', got {observation_space}"
+        )
+    shape = observation_space["features"].shape
+    if shape is None or len(shape) != 2:
+        raise ValueError(f"'features' must have shape (K, F), got {shape}")
+    return int(shape[0]), int(shape[1])
+
+
+class CandidateSetExtractor(BaseFeaturesExtractor):
+    """Pack ``{"features": (B, K, F), "mask": (B, K)}`` into ``(B, K * (F + 1))``.
+
+    Each candidate keeps its own row (features, then mask bit); nothing is learnt here.
+    """
+
+    def __init__(self, observation_space: spaces.Dict) -> None:
+        n_candidates, n_features = _candidate_shape(observation_space)
+        super().__init__(observation_space, features_dim=n_candidates * (n_features + 1))
+        self.n_candidates = n_candidates
+        self.n_features = n_features
+
+    def forward(self, observations: dict[str, th.Tensor]) -> th.Tensor:
+        features = observations["features"].float()
+        mask = observations["mask"].float().reshape(features.shape[0], self.n_candidates, 1)
+        return th.cat([features, mask], dim=-1).flatten(start_dim=1)
+
+
+def _mlp(sizes: list[int], activation_fn: type[nn.Module]) -> nn.Sequential:
+    layers: list[nn.Module] = []
+    for n_in, n_out in zip(sizes[:-1], sizes[1:], strict=True):
+        layers += [nn.Linear(n_in, n_out), activation_fn()]
+    return nn.Sequential(*layers)
+
+
+def masked_pool(embeddings: th.Tensor, mask: th.Tensor) -> th.Tensor:
+    """Concatenate the masked mean and masked max of ``(B, K, H)`` over valid slots → ``(B, 2H)``.
+
+    Rows with no valid candidate pool to zeros.
+    """
+    valid = mask.unsqueeze(-1) > 0.5
+    count = valid.sum(dim=1).clamp(min=1)
+    mean = th.where(valid, embeddings, 0.0).sum(dim=1) / count
+    lowest = th.finfo(embeddings.dtype).min
+    peak = th.where(valid, embeddings, lowest).amax(dim=1)
+    peak = th.where(valid.any(dim=1), peak, 0.0)
+    return th.cat([mean, peak], dim=-1)
+
+
+class CandidateSetNetwork(nn.Module):
+    """Shared per-candidate actor scorer and pooled critic encoder (SB3 ``mlp_extractor``).
+
+    :param n_candidates: K, slots in the observation.
+    :param n_features: F, features per candidate.
+    :param pi_arch: hidden sizes of the shared scorer (ends in one logit per candidate).
+    :param vf_arch: hidden sizes of the shared critic encoder (pooled mean and max).
+    """
+
+    def __init__(
+        self,
+        n_candidates: int,
+        n_features: int,
+        pi_arch: list[int],
+        vf_arch: list[int],
+        activation_fn: type[nn.Module] = nn.Tanh,
+    ) -> None:
+        super().__init__()
+        if not vf_arch:
+            raise ValueError("vf_arch needs at least one hidden layer to pool")
+        self.n_candidates = n_candidates
+        self.n_features = n_features
+        self.scorer_body = _mlp([n_features, *pi_arch], activation_fn)
+        self.score_head = nn.Linear(([n_features, *pi_arch])[-1], 1)
+        self.critic_encoder = _mlp([n_features, *vf_arch], activation_fn)
+        self.latent_dim_pi = n_candidates
+        self.latent_dim_vf = 2 * vf_arch[-1]
+
+    def _split(self, packed: th.Tensor) -> tuple[th.Tensor, th.Tensor]:
+        rows = packed.reshape(packed.shape[0], self.n_candidates, self.n_features + 1)
+        return rows[..., :-1], rows[..., -1]
+
+    def forward_actor(self, packed: th.Tensor) -> th.Tensor:
+        """Per-candidate scores ``(B, K)`` (the categorical's logits)."""
+        features, _ = self._split(packed)
+        return self.score_head(self.scorer_body(features)).squeeze(-1)
+
+    def forward_critic(self, packed: th.Tensor) -> th.Tensor:
+        """Order-free summary ``(B, 2H)`` of the valid candidates."""
+        features, mask = self._split(packed)
+        return masked_pool(self.critic_encoder(features), mask)
+
+    def forward(self, packed: th.Tensor) -> tuple[th.Tensor, th.Tensor]:
+        return self.forward_actor(packed), self.forward_critic(packed)
+
+
+class CandidateSetPolicy(MaskableActorCriticPolicy):
+    """MaskablePPO policy that scores every candidate with the same network.
+
+    ``net_arch`` is ``dict(pi=[...], vf=[...])`` (hidden sizes of the scorer and the critic
+    encoder) or a list used for both; default ``[64, 64]``.
+    """
+
+    def __init__(
+        self,
+        observation_space: spaces.Dict,
+        action_space: spaces.Space,
+        lr_schedule: Schedule,
+        net_arch: list[int] | dict[str, list[int]] | None = None,
+        activation_fn: type[nn.Module] = nn.Tanh,
+        **kwargs: Any,
+    ) -> None:
+        n_candidates, _ = _candidate_shape(observation_space)
+        if not isinstance(action_space, spaces.Discrete) or int(action_space.n) != n_candidates:
+            raise ValueError(f"action space must be Discrete({n_candidates}), got {action_space}")
+        kwargs.setdefault("features_extractor_class", CandidateSetExtractor)
+        super().__init__(
+            observation_space,
+            action_space,
+            lr_schedule,
+            net_arch=net_arch,
+            activation_fn=activation_fn,
+            **kwargs,
+        )
+
+    def _build_mlp_extractor(self) -> None:
+        arch = self.net_arch
+        pi_arch, vf_arch = (
+            (list(arch.get("pi", [])), list(arch.get("vf", [])))
+            if isinstance(arch, dict)
+            else (list(arch), list(arch))
+        )
+        extractor = self.features_extractor
+        self.mlp_extractor = CandidateSetNetwork(
+            extractor.n_candidates,
+            extractor.n_features,
+            pi_arch=pi_arch,
+            vf_arch=vf_arch or [64],
+            activation_fn=self.activation_fn,
+        ).to(self.device)
+
+    def _build(self, lr_schedule: Schedule) -> None:
+        super()._build(lr_schedule)
+        # The scores are already the logits: a Linear(K, K) would mix slots and break symmetry.
+        self.action_net = nn.Identity()
+        if self.ortho_init:
+            self.init_weights(self.mlp_extractor.score_head, gain=0.01)
+        self.optimizer = self.optimizer_class(
+            self.parameters(), lr=lr_schedule(1), **self.optimizer_kwargs
+        )

@@ -1,0 +1,176 @@
+"""Training the RL selector with sb3-contrib's MaskablePPO on ``GripSelect-v0``.
+
+``policy="set"`` uses :class:`~classifiers.selector.policy.CandidateSetPolicy` (one shared scorer
+per candidate, permutation-equivariant); ``policy="flat"`` is MaskablePPO's stock
+``"MultiInputPolicy"`` (the (K, F) features and the mask flattened into one MLP), for comparison.
+
+The replay backend trains on the training objects of the object-level split that the classifiers
+use (``config.learning.test_fraction`` and ``config.learning.seed``); ``live=True`` executes the
+grips in PyBullet instead (slow: one simulated trial per step).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+import gymnasium
+import numpy as np
+import pandas as pd
+import torch as th
+from sb3_contrib import MaskablePPO
+from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.monitor import Monitor
+from stable_baselines3.common.vec_env import DummyVecEnv
+
+import grip_env  # noqa: F401  (registers GripSelect-v0)
+from classifiers.selector.plots import plot_learning_curve
+from classifiers.selector.policy import CandidateSetPolicy
+from grip_env.config import Config
+
+POLICIES: tuple[str, ...] = ("set", "flat")
+ENV_ID = "GripSelect-v0"
+N_ENVS = 4
+MODEL_FILE = "model.zip"
+CURVE_FILE = "learning_curve.png"
+_OUTCOME_COLUMNS = ("success_rate", "successes")
+
+
+def check_policy(policy: str) -> str:
+    """``policy`` if it is one of :data:`POLICIES`, else ValueError."""
+    if policy not in POLICIES:
+        raise ValueError(f"policy must be one of {POLICIES}, got {policy!r}")
+    return policy
+
+
+def check_grip_table(data: Any) -> pd.DataFrame:
+    """Load a dataset directory/file or accept a DataFrame; it must hold recorded outcomes."""
+    if isinstance(data, str | Path):
+        from grip_env.dataset import load
+
+        if not Path(data).exists():
+            raise ValueError(f"dataset not found: {data}")
+        data = load(data)
+    if not isinstance(data, pd.DataFrame):
+        raise ValueError(f"data must be a dataset path or DataFrame, got {type(data).__name__}")
+    if not any(column in data.columns for column in _OUTCOME_COLUMNS):
+        raise ValueError(
+            "dataset has no outcome columns ('success_rate' or 'trials'/'successes'): "
+            "the selector learns from simulated outcomes (run grip-env generate first)"
+        )
+    if data.empty:
+        raise ValueError("dataset holds no grip")
+    return data
+
+
+def make_selector_env(
+    data: pd.DataFrame | None, config: Config, split: str = "train", n_envs: int = N_ENVS,
+    seed: int = 0,
+) -> DummyVecEnv:
+    """``n_envs`` monitored ``GripSelect-v0`` copies in a DummyVecEnv (replay, or live if None)."""
+
+    def factory(rank: int) -> Any:
+        def build() -> gymnasium.Env:
+            env = gymnasium.make(ENV_ID, data=data, config=config, split=split)
+            env.reset(seed=seed + rank)
+            return Monitor(env)
+
+        return build
+
+    return DummyVecEnv([factory(rank) for rank in range(n_envs)])
+
+
+def make_selector_model(
+    env: DummyVecEnv, policy: str, seed: int = 0, tensorboard_log: str | Path | None = None
+) -> MaskablePPO:
+    """A fresh MaskablePPO on ``env`` with the ``"set"`` or ``"flat"`` policy."""
+    check_policy(policy)
+    policy_class = CandidateSetPolicy if policy == "set" else "MultiInputPolicy"
+    n_steps = max(16, 512 // env.num_envs)
+    return MaskablePPO(
+        policy_class,
+        env,
+        learning_rate=1e-3,
+        n_steps=n_steps,
+        batch_size=128,
+        n_epochs=5,
+        gamma=0.99,
+        ent_coef=0.01,
+        seed=seed,
+        tensorboard_log=None if tensorboard_log is None else str(tensorboard_log),
+        verbose=0,
+    )
+
+
+class EpisodeRecorder(BaseCallback):
+    """Keeps every finished episode's reward and the timestep it ended at (from ``Monitor``)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.timesteps: list[int] = []
+        self.rewards: list[float] = []
+
+    def _on_step(self) -> bool:
+        for info in self.locals.get("infos", ()):
+            episode = info.get("episode")
+            if episode is not None:
+                self.timesteps.append(self.num_timesteps)
+                self.rewards.append(float(episode["r"]))
+        return True
+
+
+@contextmanager
+def torch_threads(count: int) -> Iterator[None]:
+    """Run torch on ``count`` threads (small networks are fastest single-threaded)."""
+    previous = th.get_num_threads()
+    th.set_num_threads(count)
+    try:
+        yield
+    finally:
+        th.set_num_threads(previous)
+
+
+def train_selector(
+    data: Any,
+    config: Config,
+    out_dir: str | Path,
+    policy: str = "set",
+    timesteps: int | None = None,
+    live: bool = False,
+    progress: bool = True,
+) -> MaskablePPO:
+    """Train a selector on the training objects; writes ``model.zip``, ``tb/`` and the curve PNG.
+
+    Args:
+        data: dataset directory/file or DataFrame (replay); ignored when ``live``.
+        config: grip-env configuration (``selector`` and ``learning`` sections).
+        out_dir: output directory.
+        policy: ``"set"`` (permutation-equivariant) or ``"flat"`` (stock MultiInputPolicy).
+        timesteps: environment steps (default ``config.selector.timesteps``).
+        live: execute grips in PyBullet instead of replaying recorded outcomes.
+        progress: show a progress bar.
+
+    Returns:
+        The trained model; ``model.episode_curve`` holds ``(timesteps, rewards)`` of the episodes.
+    """
+    check_policy(policy)
+    steps = config.selector.timesteps if timesteps is None else timesteps
+    if int(steps) != steps or steps < 1:
+        raise ValueError(f"timesteps must be a positive integer, got {timesteps!r}")
+    table = None if live else check_grip_table(data)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    seed = config.selector.seed
+    env = make_selector_env(table, config, "train", 1 if live else N_ENVS, seed)
+    recorder = EpisodeRecorder()
+    with torch_threads(1):
+        model = make_selector_model(env, policy, seed, tensorboard_log=out / "tb")
+        model.learn(int(steps), callback=recorder, progress_bar=progress,
+                    tb_log_name=f"selector_{policy}")  # fmt: skip
+    model.save(out / MODEL_FILE)
+    plot_learning_curve(recorder.timesteps, recorder.rewards, out / CURVE_FILE)
+    model.episode_curve = (np.asarray(recorder.timesteps), np.asarray(recorder.rewards))
+    env.close()
+    return model
