@@ -33,9 +33,10 @@ def run_selector(
 ) -> dict[str, Any]:
     """Train the selector on the training objects, evaluate it on the test objects.
 
-    Writes ``out_dir/selector.json`` (the :func:`~classifiers.selector.evaluation.evaluate_selectors`
-    result plus a ``training`` section), ``model.zip``, ``tb/`` and ``learning_curve.png``;
-    returns the report. Live training is still evaluated on the dataset's recorded outcomes.
+    Writes ``out_dir/selector.json`` (the result of
+    :func:`~classifiers.selector.evaluation.evaluate_selectors` plus a ``training`` section),
+    ``model.zip``, ``tb/`` and ``learning_curve.png``; returns the report. Live training
+    is still evaluated on the dataset's recorded outcomes.
     """
     from classifiers.selector.evaluation import evaluate_selectors
     from classifiers.selector.training import (
@@ -53,13 +54,13 @@ def run_selector(
     model = train_selector(table, config, out, policy, timesteps, live, progress)
     seconds = time.perf_counter() - start
     report = evaluate_selectors(model, table, config)
-    steps, rewards = model.episode_curve
+    _, rewards = model.episode_curve
     report["training"] = {
         "policy": policy,
         "timesteps": int(model.num_timesteps),
         "backend": "live" if live else "replay",
         "seconds": round(seconds, 2),
-        "episodes": int(len(rewards)),
+        "episodes": len(rewards),
         "final_mean_reward": float(rewards[-100:].mean()) if len(rewards) else None,
         "model": MODEL_FILE,
         "learning_curve": CURVE_FILE,

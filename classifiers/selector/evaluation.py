@@ -102,18 +102,18 @@ def fit_classifiers(
         from classifiers.models import make_model
     except ImportError:
         return {}
-    chosen = names if names is not None else [
-        name for name in config.learning.models if name in CLASSIFIER_CHOICES
-    ] or ["logreg"]
+    chosen = (
+        names
+        if names is not None
+        else [name for name in config.learning.models if name in CLASSIFIER_CHOICES] or ["logreg"]
+    )
     if train["success"].nunique() < 2:
         return {}
     return {name: make_model(name, config.learning.seed).fit(train, train["success"])
             for name in chosen}  # fmt: skip
 
 
-def bootstrap_interval(
-    values: NDArray[np.float64], resamples: NDArray[np.intp]
-) -> dict[str, Any]:
+def bootstrap_interval(values: NDArray[np.float64], resamples: NDArray[np.intp]) -> dict[str, Any]:
     """Mean and 95% percentile interval of ``values`` over object resamples."""
     means = values[resamples].mean(axis=1)
     low, high = np.percentile(means, [2.5, 97.5])
@@ -154,17 +154,8 @@ def evaluate_selectors(
     scores["random"] = np.array(
         [random_metrics(s.success_rate[: s.count], selector.max_attempts) for s in sets]
     )
-    resamples = np.random.default_rng(learning.seed).integers(
-        len(sets), size=(n_boot, len(sets))
-    )
-    policies = {
-        name: {
-            **{metric: bootstrap_interval(values[:, k], resamples)
-               for k, metric in enumerate(METRICS)},
-            "per_object": values[:, 0].round(6).tolist(),
-        }  # fmt: skip
-        for name, values in scores.items()
-    }
+    resamples = np.random.default_rng(learning.seed).integers(len(sets), size=(n_boot, len(sets)))
+    policies = {name: _summary(values, resamples) for name, values in scores.items()}
     return {
         "policies": policies,
         "split": {"train": list(train_ids), "test": [s.object_id for s in sets],
@@ -185,6 +176,15 @@ def _test_candidate_sets(
     frames = dict(iter(table.groupby(table["object_id"].astype(str), sort=True)))
     sets = [candidate_set(oid, frames[oid], scaler, k) for oid in test_ids if oid in frames]
     return [found for found in sets if found.count]
+
+
+def _summary(values: NDArray[np.float64], resamples: NDArray[np.intp]) -> dict[str, Any]:
+    """Each metric's mean and interval, and the per-object first-pick success."""
+    summary: dict[str, Any] = {
+        metric: bootstrap_interval(values[:, k], resamples) for k, metric in enumerate(METRICS)
+    }
+    summary["per_object"] = values[:, 0].round(6).tolist()
+    return summary
 
 
 def _score(sets: list[CandidateSet], rank: Ranker, max_attempts: int) -> NDArray[np.float64]:

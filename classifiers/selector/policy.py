@@ -20,6 +20,7 @@ way and leaves the value unchanged; any number of valid candidates up to K works
 
 from __future__ import annotations
 
+from itertools import pairwise
 from typing import Any
 
 import torch as th
@@ -63,7 +64,7 @@ class CandidateSetExtractor(BaseFeaturesExtractor):
 
 def _mlp(sizes: list[int], activation_fn: type[nn.Module]) -> nn.Sequential:
     layers: list[nn.Module] = []
-    for n_in, n_out in zip(sizes[:-1], sizes[1:], strict=True):
+    for n_in, n_out in pairwise(sizes):
         layers += [nn.Linear(n_in, n_out), activation_fn()]
     return nn.Sequential(*layers)
 

@@ -66,7 +66,10 @@ def check_grip_table(data: Any) -> pd.DataFrame:
 
 
 def make_selector_env(
-    data: pd.DataFrame | None, config: Config, split: str = "train", n_envs: int = N_ENVS,
+    data: pd.DataFrame | None,
+    config: Config,
+    split: str = "train",
+    n_envs: int = N_ENVS,
     seed: int = 0,
 ) -> DummyVecEnv:
     """``n_envs`` monitored ``GripSelect-v0`` copies in a DummyVecEnv (replay, or live if None)."""
