@@ -65,9 +65,17 @@ class SimConfig(_Section):
     finger_friction: float = Field(1.0, gt=0.0, le=3.0, description="finger pad lateral friction")
     lift_height_mm: float = Field(60.0, gt=0.0, le=1000.0, description="lift distance")
     shake_amplitude_mm: float = Field(10.0, ge=0.0, le=200.0, description="shake amplitude")
-    shake_frequency_hz: float = Field(2.0, ge=0.0, le=50.0, description="shake frequency")
+    shake_frequency_hz: float = Field(4.0, ge=0.0, le=50.0, description="shake frequency")
     hold_tolerance_mm: float = Field(20.0, gt=0.0, le=500.0, description="drift still held")
     mass_per_weight_kg: float = Field(0.3, gt=0.0, le=50.0, description="object mass for W = 1")
+    fingertip_clearance_mm: float = Field(
+        4.0, ge=0.0, le=100.0, description="lowest finger point above the table while closing"
+    )
+    preshape_gap_mm: float = Field(
+        12.0, ge=0.0, le=100.0, description="pre-shape opening beyond contact"
+    )
+    max_close_steps: int = Field(90, ge=1, le=10_000, description="step cap while closing")
+    lift_time_s: float = Field(0.25, gt=0.0, le=10.0, description="lift duration")
 
 
 class UncertaintyConfig(_Section):

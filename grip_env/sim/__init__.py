@@ -1,5 +1,23 @@
 """Simulation layer: the only package that calls pybullet."""
 
+from grip_env.sim.execution import run_trials
+from grip_env.sim.hand import HAND_URDF, Hand
+from grip_env.sim.trial import GripPlan, TrialResult, TrialScene, grip_plans, render_trial_strip
+from grip_env.sim.uncertainty import TrialNoise, sample_noise
 from grip_env.sim.world import MM, Body, World
 
-__all__ = ["MM", "Body", "World"]
+__all__ = [
+    "HAND_URDF",
+    "MM",
+    "Body",
+    "GripPlan",
+    "Hand",
+    "TrialNoise",
+    "TrialResult",
+    "TrialScene",
+    "World",
+    "grip_plans",
+    "render_trial_strip",
+    "run_trials",
+    "sample_noise",
+]

@@ -171,6 +171,27 @@ class World:
         return rgb.mean(axis=2).astype(np.uint8)
 
 
+    def render(
+        self, eye_mm: NDArray[np.float64], target_mm: NDArray[np.float64],
+        width: int = 320, height: int = 240, fov_deg: float = 50.0,
+    ) -> NDArray[np.uint8]:
+        """RGB image (height, width, 3) seen from ``eye_mm`` towards ``target_mm`` (z up)."""
+        if width < 1 or height < 1:
+            raise ValueError(f"image size must be positive, got {width} x {height}")
+        c = self.client
+        eye = (np.asarray(eye_mm, float) * MM).tolist()
+        target = (np.asarray(target_mm, float) * MM).tolist()
+        view = c.computeViewMatrix(eye, target, [0, 0, 1])
+        distance = float(np.linalg.norm(np.subtract(eye, target)))
+        projection = c.computeProjectionMatrixFOV(
+            fov_deg, width / height, distance * 0.05, distance * 10
+        )
+        _, _, rgba, _, _ = c.getCameraImage(
+            width, height, view, projection, renderer=pybullet.ER_TINY_RENDERER
+        )
+        return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[..., :3]
+
+
 def _prism(piece: NDArray[np.float64], thickness_mm: float) -> list[list[float]]:
     bottom = [[x * MM, y * MM, 0.0] for x, y in piece]
     top = [[x * MM, y * MM, thickness_mm * MM] for x, y in piece]
