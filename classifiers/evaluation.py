@@ -10,7 +10,7 @@ the positive-class probability.
 
 Intervals: the folds × repeats values are not independent (training sets overlap), so the 95%
 interval is the corrected resampled t-interval of Nadeau & Bengio (2003):
-``mean ± t(0.975, n-1) * sqrt((1/n + n_test/n_train) * var)``, with ``n_test/n_train = 1/(folds-1)``.
+``mean ± t(0.975, n-1) * sqrt((1/n + n_test/n_train) * var)``, ``n_test/n_train = 1/(folds-1)``.
 """
 
 from __future__ import annotations
@@ -41,22 +41,24 @@ LABEL_COLUMN = "success"
 
 
 def check_dataset(table: pd.DataFrame, features: Sequence[str], folds: int) -> None:
-    """ValueError unless ``table`` has outcomes, two classes, the features and ≥ ``folds`` objects."""
+    """ValueError unless ``table`` has outcomes, both classes, the features, ≥ ``folds`` objects."""
     if not isinstance(table, pd.DataFrame):
         raise ValueError(f"the dataset must be a DataFrame, got {type(table).__name__}")
     needed = [GROUP_COLUMN, LABEL_COLUMN, "success_rate", *check_features(features)]
     missing = [name for name in needed if name not in table.columns]
     if missing:
-        raise ValueError(f"dataset lacks the columns {missing} (outcome columns come from simulation)")
+        raise ValueError(f"dataset lacks the columns {missing} (outcomes come from simulation)")
     classes = pd.unique(table[LABEL_COLUMN])
     if len(classes) < 2:
-        raise ValueError(f"dataset has a single class ({LABEL_COLUMN}={classes.tolist()}); need both")
+        raise ValueError(f"dataset has one class ({LABEL_COLUMN}={classes.tolist()}); need both")
     n_objects = table[GROUP_COLUMN].nunique()
     if n_objects < folds:
         raise ValueError(f"dataset has {n_objects} objects, fewer than the {folds} folds")
 
 
-def grouped_folds(table: pd.DataFrame, folds: int, seed: int) -> Iterator[tuple[np.ndarray, np.ndarray]]:
+def grouped_folds(
+    table: pd.DataFrame, folds: int, seed: int
+) -> Iterator[tuple[np.ndarray, np.ndarray]]:
     """(train rows, test rows) of a stratified, object-grouped K-fold split."""
     splitter = StratifiedGroupKFold(n_splits=folds, shuffle=True, random_state=seed)
     groups = table[GROUP_COLUMN].to_numpy()

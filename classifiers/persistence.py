@@ -94,6 +94,7 @@ def load_model(directory: str | Path, name: str) -> tuple[Pipeline, dict[str, An
 
 def _jsonable(params: dict[str, Any]) -> dict[str, Any]:
     """Parameters as JSON values (estimators and other objects by their repr)."""
+
     def convert(value: Any) -> Any:
         if value is None or isinstance(value, (bool, int, float, str)):
             return value

@@ -19,7 +19,7 @@ def synthetic_grips(
 ) -> pd.DataFrame:
     """A grip table of ``n_objects`` objects with ``grips[0]..grips[1]`` grips each."""
     if n_objects < 1 or grips[0] < 1 or grips[1] < grips[0] or trials < 1:
-        raise ValueError(f"bad synthetic sizes: n_objects={n_objects}, grips={grips}, trials={trials}")
+        raise ValueError(f"bad sizes: n_objects={n_objects}, grips={grips}, trials={trials}")
     rng = np.random.default_rng(seed)
     counts = rng.integers(grips[0], grips[1] + 1, size=n_objects)
     object_id = np.repeat(np.arange(n_objects), counts)

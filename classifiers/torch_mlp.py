@@ -146,7 +146,7 @@ class TorchMLPClassifier(ClassifierMixin, BaseEstimator):
 
     def _split(self, codes: np.ndarray, seed: int) -> tuple[np.ndarray, np.ndarray]:
         rows = np.arange(codes.size)
-        n_valid = int(round(self.validation_fraction * codes.size))
+        n_valid = round(self.validation_fraction * codes.size)
         n_classes = len(self.classes_)
         smallest = np.bincount(codes).min()
         if n_valid < n_classes or codes.size - n_valid < n_classes or smallest < 2:
@@ -163,8 +163,9 @@ class TorchMLPClassifier(ClassifierMixin, BaseEstimator):
         )
         loss_fn = nn.CrossEntropyLoss()
         generator = torch.Generator().manual_seed(seed)
-        best_loss, best_state, stale, epoch = np.inf, None, 0, 0
+        best_loss, best_state, stale, epochs = np.inf, None, 0, 0
         for epoch in range(1, self.max_epochs + 1):
+            epochs = epoch
             self.network_.train()
             order = torch.from_numpy(train_idx)[torch.randperm(train_idx.size, generator=generator)]
             for batch in order.split(max(1, int(self.batch_size))):
@@ -186,7 +187,7 @@ class TorchMLPClassifier(ClassifierMixin, BaseEstimator):
                     break
         if best_state is not None:
             self.network_.load_state_dict(best_state)
-        return epoch, float(best_loss)
+        return epochs, float(best_loss)
 
 
 @contextmanager

@@ -5,7 +5,7 @@ Model (fixed here, the paper does not use ε):
 - Contact ``i`` at ``P_i`` with inward unit normal ``N_i`` and Coulomb friction ``mu``: in 2-D the
   friction cone is spanned exactly by its two edge forces, ``N_i`` turned by ``±arctan(mu)``. Each
   edge force has unit length (unit force per contact).
-- A force ``f`` at ``P`` gives the wrench ``(f_x, f_y, tau / L)`` with the torque ``tau = (P - C) × f``
+- A force ``f`` at ``P`` gives the wrench ``(f_x, f_y, tau / L)``, torque ``tau = (P - C) × f``
   about the object centroid ``C`` and ``L = (semi_major + semi_minor) / 2`` (mm), so that all three
   components are dimensionless and ε does not depend on the object's scale or pose.
 - The grasp wrench space is the convex hull of the union of the six edge wrenches (the L1 or "sum"
@@ -40,7 +40,8 @@ _TOLERANCE = 1e-9
 def contact_wrenches(table: pd.DataFrame, params: GraspParams) -> np.ndarray:
     """The six friction-cone edge wrenches of each row, shape ``(rows, 6, 3)``."""
     _check_columns(table)
-    points = table[["p1_x", "p1_y", "p2_x", "p2_y", "p3_x", "p3_y"]].to_numpy(float).reshape(-1, 3, 2)
+    points = table[["p1_x", "p1_y", "p2_x", "p2_y", "p3_x", "p3_y"]].to_numpy(float)
+    points = points.reshape(-1, 3, 2)
     normals = table[["n1_x", "n1_y", "n2_x", "n2_y", "n3_x", "n3_y"]].to_numpy(float)
     normals = normals.reshape(-1, 3, 2)
     normals = normals / np.linalg.norm(normals, axis=2, keepdims=True)

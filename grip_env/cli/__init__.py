@@ -24,7 +24,7 @@ def _root() -> None:
     """Learn which Barrett BH8-280 grips hold: generate, train, ablate, select, study, show."""
 
 
-_COMMAND_MODULES = ("show", "study", "generate", "validate")
+_COMMAND_MODULES = ("show", "study", "generate", "validate", "train", "ablate", "select")
 
 
 def _register_commands() -> None:

@@ -1,0 +1,36 @@
+"""``grip-env ablate``: the feature-ablation study (with / without hand features, ε, LOFO)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from grip_env.cli.errors import user_errors
+
+
+def ablate(
+    data: Annotated[Path, typer.Option("--data", help="dataset directory (grip-env generate)")],
+    out: Annotated[Path, typer.Option("--out", "-o", help="output directory (created if needed)")],
+    config: Annotated[
+        Path | None, typer.Option(help="YAML config (default: the embedded configs/default.yaml)")
+    ] = None,
+    model: Annotated[str, typer.Option(help="model cross-validated on every feature set")] = "svm",
+) -> None:
+    """Write OUT/ablation.json (metrics, paired differences, importances) and OUT/ablation.png."""
+    with user_errors():
+        from classifiers.ablation import run_ablation
+        from grip_env.config import load_config
+        from grip_env.dataset import load
+
+        result = run_ablation(load(data), out, load_config(config), model)
+        for name, entry in result["feature_sets"].items():
+            auc = entry["models"][model]["roc_auc"]["mean"]
+            typer.echo(f"{name:18s} ROC-AUC {auc:.3f}" if auc is not None else name)
+        typer.echo(f"wrote {out / 'ablation.json'}")
+
+
+def register(app: typer.Typer) -> None:
+    """Add the command to the ``grip-env`` app."""
+    app.command("ablate")(ablate)
