@@ -46,13 +46,9 @@ def check_policy(policy: str) -> str:
 
 
 def check_grip_table(data: Any) -> pd.DataFrame:
-    """Load a dataset directory/file or accept a DataFrame; it must hold recorded outcomes."""
+    """Load a dataset (directory or ``.parquet`` table) or take a DataFrame with outcomes."""
     if isinstance(data, str | Path):
-        from grip_env.dataset import load
-
-        if not Path(data).exists():
-            raise ValueError(f"dataset not found: {data}")
-        data = load(data)
+        data = _read_table(Path(data))
     if not isinstance(data, pd.DataFrame):
         raise ValueError(f"data must be a dataset path or DataFrame, got {type(data).__name__}")
     if not any(column in data.columns for column in _OUTCOME_COLUMNS):
@@ -63,6 +59,17 @@ def check_grip_table(data: Any) -> pd.DataFrame:
     if data.empty:
         raise ValueError("dataset holds no grip")
     return data
+
+
+def _read_table(path: Path) -> pd.DataFrame:
+    """A dataset directory (``grip_env.dataset.load``) or a bare Parquet grip table."""
+    if not path.exists():
+        raise ValueError(f"dataset not found: {path}")
+    if path.is_file() and path.suffix == ".parquet":
+        return pd.read_parquet(path)
+    from grip_env.dataset import load
+
+    return load(path)
 
 
 def make_selector_env(
