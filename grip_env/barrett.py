@@ -232,7 +232,7 @@ def _two_finger(grasps, index, obj, params, config, offsets) -> Configurations:
     for side in (1.0, -1.0):  # finger 1 on the line x = +25, finger 2 on x = -25
         with np.errstate(divide="ignore", invalid="ignore"):
             u = (side * SPREAD_AXIS_OFFSET_MM - ax) / (bx - ax)
-        feasible &= (u * length >= params.lam) & ((1.0 - u) * length >= params.lam)
+        feasible &= (u * length >= params.lam - 1e-7) & ((1.0 - u) * length >= params.lam - 1e-7)
         fractions.append(u)
         depths.append(ay + u * (by - ay))
     feasible &= (depths[0] > 0) & (depths[1] > 0)

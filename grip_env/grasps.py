@@ -42,8 +42,11 @@ from grip_env.perception.regions import Regions
 END_FRACTION = 0.15
 #: Lateral offset of fingers 1 and 2 from the thumb line in a two-finger grasp (mm).
 HALF_FINGER_BASE_MM = 25.0
-#: Contacts closer than this (mm) on the same regions count as the same grasp.
-DEDUP_RESOLUTION_MM = 0.5
+#: Grasps on the same regions whose contacts all lie closer than this fraction of their regions'
+#: lengths count as the same grasp.
+DEDUP_FRACTION = 0.01
+_NOISE_FRACTION = 1e-7  # contact fractions closer than this are the same point
+_TOLERANCE_MM = 1e-7  # slack on length limits for rounding noise
 
 Array = NDArray[np.float64]
 DEFAULT_PARAMS = GraspParams()
@@ -136,6 +139,9 @@ def _three_finger(regions: Regions, obj: PlanarObject, t: Array) -> Grasps:
     triplets = np.array(list(combinations(range(len(regions)), 3)))
     # every region of a triplet takes a turn at being the one solved last (index 2)
     ordered = np.concatenate([np.roll(triplets, shift, axis=1) for shift in range(3)])
+    # the first two normals must cross: parallel ones have no focus
+    ordered = ordered[np.abs(_cross(regions.normal[ordered[:, 0]],
+                                    regions.normal[ordered[:, 1]])) > 1e-9]
     n = len(t)
     ia, ib, ic = ordered[:, 0], ordered[:, 1], ordered[:, 2]
     pa = np.broadcast_to(regions.point(ia[:, None], t[None, :])[:, :, None, :],
@@ -145,20 +151,18 @@ def _three_finger(regions: Regions, obj: PlanarObject, t: Array) -> Grasps:
     na = regions.normal[ia][:, None, None, :]
     nb = regions.normal[ib][:, None, None, :]
     denom = _cross(na, nb)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        sa = _cross(pb - pa, nb) / denom
-        sb = _cross(pb - pa, na) / denom
-        focus = pa + sa[..., None] * na
-        a_c, d_c = regions.a[ic][:, None, None, :], regions.direction[ic][:, None, None, :]
-        tc = np.sum((focus - a_c) * d_c, axis=-1) / regions.length[ic][:, None, None]
-        pc = a_c + tc[..., None] * (regions.b[ic] - regions.a[ic])[:, None, None, :]
+    sa = _cross(pb - pa, nb) / denom
+    sb = _cross(pb - pa, na) / denom
+    focus = pa + sa[..., None] * na
+    a_c, d_c = regions.a[ic][:, None, None, :], regions.direction[ic][:, None, None, :]
+    tc = np.sum((focus - a_c) * d_c, axis=-1) / regions.length[ic][:, None, None]
+    pc = a_c + tc[..., None] * (regions.b[ic] - regions.a[ic])[:, None, None, :]
     nc = regions.normal[ic][:, None, None, :]
     normals = np.stack(np.broadcast_arrays(na, nb, nc), axis=-2)
     keep = (
-        (np.abs(denom) > 1e-9)
-        & (sa > 0) & (sb > 0)
+        (sa > 0) & (sb > 0)
         & (np.sum((focus - pc) * nc, axis=-1) > 0)
-        & (tc >= END_FRACTION - 1e-12) & (tc <= 1.0 - END_FRACTION + 1e-12)
+        & (tc >= END_FRACTION - 1e-9) & (tc <= 1.0 - END_FRACTION + 1e-9)
         & (_largest_gap(normals) < np.pi - 1e-9)
     )
     cand = np.nonzero(keep)
@@ -185,7 +189,7 @@ def _two_finger(regions: Regions, obj: PlanarObject, count: int, params: GraspPa
     length = regions.length
     fingers, thumbs = np.nonzero(~np.eye(len(regions), dtype=bool))
     facing = np.sum(regions.normal[thumbs] * -regions.normal[fingers], axis=1)
-    long_enough = length[fingers] >= 2 * (HALF_FINGER_BASE_MM + margin)
+    long_enough = length[fingers] >= 2 * (HALF_FINGER_BASE_MM + margin) - _TOLERANCE_MM
     pick = (facing >= np.cos(params.friction_angle) - 1e-12) & long_enough
     fingers, thumbs = fingers[pick], thumbs[pick]
     # thumb positions (along its region) whose +-25 mm neighbours project inside the finger region
@@ -195,12 +199,12 @@ def _two_finger(regions: Regions, obj: PlanarObject, count: int, params: GraspPa
     reach = HALF_FINGER_BASE_MM + margin
     low = np.maximum(END_FRACTION * length[thumbs], np.minimum(u_a, u_b) + reach)
     high = np.minimum((1 - END_FRACTION) * length[thumbs], np.maximum(u_a, u_b) - reach)
-    keep = low <= high
+    keep = low <= high + _TOLERANCE_MM
     fingers, thumbs, low, high = fingers[keep], thumbs[keep], low[keep], high[keep]
     if len(fingers) == 0:
         return Grasps.empty()
     fraction = np.linspace(0.0, 1.0, count) if count > 1 else np.array([0.5])
-    u = low[:, None] + fraction[None, :] * (high - low)[:, None]  # (K, n)
+    u = low[:, None] + fraction[None, :] * np.maximum(high - low, 0.0)[:, None]  # (K, n)
     thumb_points = regions.a[thumbs][:, None, :] + u[..., None] * regions.direction[thumbs][:, None]
     thumb_normal = np.broadcast_to(regions.normal[thumbs][:, None, :], thumb_points.shape)
     fingers = np.broadcast_to(fingers[:, None], u.shape)
@@ -239,7 +243,8 @@ def two_finger_contacts(
             u = _cross(base - a, thumb_direction) / denom
         point = a + u[..., None] * d
         ahead = np.sum((point - thumb_point) * thumb_direction, axis=-1)
-        ok &= (u >= margin) & (u <= length - margin) & (ahead > 0)
+        ok &= (u >= margin - _TOLERANCE_MM) & (u <= length - margin + _TOLERANCE_MM)
+        ok &= ahead > 0
         points.append(point)
     return points[0], points[1], ok
 
@@ -261,12 +266,22 @@ def _largest_gap(normals: Array) -> Array:
 
 
 def _deduplicated(grasps: Grasps) -> Grasps:
+    """Drop repeated grasps: same regions and contacts within DEDUP_FRACTION of each other.
+
+    Contacts are compared by their fraction along their region, which does not depend on where
+    the object lies or on its scale. Exact repeats (up to rounding noise) go first, then grasps
+    next to each other in sorted order that are closer than DEDUP_FRACTION on every contact.
+    """
     if len(grasps) == 0:
         return grasps
-    cells = np.round(grasps.contacts.reshape(len(grasps), 6) / DEDUP_RESOLUTION_MM)
-    keys = np.concatenate([grasps.region, cells], axis=1)
-    _, first = np.unique(keys, axis=0, return_index=True)
-    return grasps.take(np.sort(first))
+    span = grasps.region_b - grasps.region_a
+    arc = np.sum((grasps.contacts - grasps.region_a) * span, axis=-1) / np.sum(span**2, axis=-1)
+    keys = np.concatenate([grasps.region, np.round(arc / _NOISE_FRACTION)], axis=1)
+    keys, first = np.unique(keys, axis=0, return_index=True)  # sorted lexicographically
+    same_regions = np.all(np.diff(keys[:, :3], axis=0) == 0, axis=1)
+    close = np.all(np.abs(np.diff(keys[:, 3:], axis=0)) * _NOISE_FRACTION <= DEDUP_FRACTION, axis=1)
+    repeated = np.concatenate([[False], same_regions & close])
+    return grasps.take(np.sort(first[~repeated]))
 
 
 def _cross(u: Array, v: Array) -> Array:

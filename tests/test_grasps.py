@@ -1,0 +1,159 @@
+"""Grasp synthesis: force closure by construction, two-finger geometry, invariances."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from grip_env.config import SynthesisConfig
+from grip_env.grasps import END_FRACTION, HALF_FINGER_BASE_MM, Grasps, synthesize_grasps
+from grip_env.objects import PlanarObject, make_shape
+from grip_env.objects.shapes import rectangle
+from grip_env.params import GraspParams
+from grip_env.perception.regions import Regions
+
+PARAMS = GraspParams()
+ALL = SynthesisConfig(max_grasps=100_000)
+
+
+def side_regions(obj: PlanarObject, inset: float = 3.0) -> Regions:
+    """One region per polygon side, inset from the corners, flat (rho = 0)."""
+    a, b = obj.contour, np.roll(obj.contour, -1, axis=0)
+    length = np.linalg.norm(b - a, axis=1)
+    d = (b - a) / length[:, None]
+    keep = length > 2 * inset + 1
+    normal = np.stack([-d[:, 1], d[:, 0]], axis=1)
+    return Regions((a + inset * d)[keep], (b - inset * d)[keep], normal[keep],
+                   np.zeros(int(keep.sum())))
+
+
+def _cross(u, v):
+    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+
+def _assert_well_formed(grasps: Grasps, regions: Regions, obj: PlanarObject) -> None:
+    three = ~grasps.two_finger
+    # three-finger: normal lines meet at the focus, in front of every contact, inside the object
+    to_focus = grasps.focus[three][:, None, :] - grasps.contacts[three]
+    np.testing.assert_allclose(_cross(to_focus, grasps.normals[three]), 0.0, atol=1e-7)
+    assert np.all(np.sum(to_focus * grasps.normals[three], axis=-1) > 0)
+    assert obj.contains(grasps.focus[three]).all()
+    angles = np.sort(np.arctan2(grasps.normals[three, :, 1], grasps.normals[three, :, 0]), axis=1)
+    gaps = np.diff(np.concatenate([angles, angles[:, :1] + 2 * np.pi], axis=1), axis=1)
+    assert np.all(gaps < np.pi)  # normals positively span the plane
+    assert np.all(np.isnan(grasps.focus[grasps.two_finger]))
+    # every contact on its region, with the region's inward normal
+    np.testing.assert_allclose(grasps.normals, regions.normal[grasps.region])
+    t = np.sum((grasps.contacts - regions.a[grasps.region]) * regions.direction[grasps.region],
+               axis=-1) / regions.length[grasps.region]
+    off = _cross(grasps.contacts - regions.a[grasps.region], regions.direction[grasps.region])
+    np.testing.assert_allclose(off, 0.0, atol=1e-7)
+    assert np.all((t >= -1e-9) & (t <= 1 + 1e-9))
+    assert np.all((t[three] >= END_FRACTION - 1e-9) & (t[three] <= 1 - END_FRACTION + 1e-9))
+    assert np.all(grasps.region[three, 0] < grasps.region[three, 1])
+    assert np.all(grasps.region[three, 1] < grasps.region[three, 2])
+
+
+def test_equilateral_triangle_has_the_edge_midpoint_grasp():
+    obj = make_shape("triangle")
+    regions = side_regions(obj)
+    grasps = synthesize_grasps(regions, obj, PARAMS, ALL)
+    assert len(grasps) > 0 and not grasps.two_finger.any()
+    _assert_well_formed(grasps, regions, obj)
+    midpoints = (obj.contour + np.roll(obj.contour, -1, axis=0)) / 2
+    distance = np.linalg.norm(grasps.contacts[:, :, None] - midpoints[None, None], axis=-1)
+    at_midpoints = np.all(distance.min(axis=2) < 1e-9, axis=1)
+    assert at_midpoints.sum() == 1
+    np.testing.assert_allclose(grasps.focus[at_midpoints][0], obj.centroid, atol=1e-9)
+    # the centred grasp ranks first
+    assert at_midpoints[0]
+
+
+def test_rectangle_gives_only_two_finger_grasps_across_its_width():
+    obj = PlanarObject.from_polygon(rectangle(100, 50))
+    regions = side_regions(obj)
+    grasps = synthesize_grasps(regions, obj, PARAMS, ALL)
+    assert len(grasps) > 0 and grasps.two_finger.all()  # no concurrent positively spanning triplet
+    _assert_well_formed(grasps, regions, obj)
+    p1, p2, p3 = grasps.contacts[:, 0], grasps.contacts[:, 1], grasps.contacts[:, 2]
+    np.testing.assert_allclose(np.linalg.norm(p1 - p2, axis=1), 2 * HALF_FINGER_BASE_MM)
+    np.testing.assert_allclose(np.abs(p1[:, 1] - p3[:, 1]), 50.0)  # across the width
+    np.testing.assert_allclose((p1 + p2)[:, 0] / 2, p3[:, 0], atol=1e-9)  # thumb opposite
+    # finger 1 on the hand's +x side: hand x = thumb normal turned clockwise
+    n3 = grasps.normals[:, 2]
+    hand_x = np.stack([n3[:, 1], -n3[:, 0]], axis=1)
+    assert np.all(np.sum((p1 - p3) * hand_x, axis=1) > 0)
+    # the short sides (44 mm regions) cannot carry two fingers 50 mm apart
+    assert np.all(np.abs(grasps.normals[:, 2, 1]) == 1.0)
+
+
+def test_square_too_small_for_two_fingers_and_triangle_too_few_regions():
+    small = PlanarObject.from_polygon(rectangle(50, 50))
+    assert len(synthesize_grasps(side_regions(small), small, PARAMS, ALL)) == 0
+    two_sides = Regions(np.array([[0.0, 0], [10, 80]]), np.array([[10.0, 0], [0, 80]]),
+                        np.array([[0.0, 1], [0, -1]]), np.zeros(2))
+    assert len(synthesize_grasps(two_sides, small, PARAMS, ALL)) == 0
+    assert len(synthesize_grasps(Regions.empty(), small, PARAMS, ALL)) == 0
+
+
+def test_tilted_regions_pair_only_within_the_friction_cone():
+    # a trapezoid whose slanted side is tilted beyond arctan(mu) from the opposite one
+    steep = PlanarObject.from_polygon([[0, 0], [120, 0], [120, 60], [0, 60 + 120 * 0.5]])
+    shallow = PlanarObject.from_polygon([[0, 0], [120, 0], [120, 60], [0, 60 + 120 * 0.3]])
+    assert math.atan(0.3) < PARAMS.friction_angle < math.atan(0.5)
+    for obj, expected in ((steep, False), (shallow, True)):
+        grasps = synthesize_grasps(side_regions(obj), obj, PARAMS, ALL)
+        pairs = {tuple(r) for r in grasps.region[grasps.two_finger][:, [0, 2]]}
+        assert (({(0, 2), (2, 0)} & pairs) != set()) is expected
+
+
+def test_max_grasps_keeps_the_best_ranked():
+    obj = make_shape("pentagon")
+    regions = side_regions(obj)
+    every = synthesize_grasps(regions, obj, PARAMS, ALL)
+    few = synthesize_grasps(regions, obj, PARAMS, SynthesisConfig(max_grasps=7))
+    assert len(every) > 7 and len(few) == 7
+    np.testing.assert_allclose(few.contacts, every.contacts[:7])
+
+
+def test_bad_regions_are_refused():
+    obj = make_shape("square")
+    with pytest.raises(ValueError, match="Regions"):
+        synthesize_grasps(obj.contour, obj, PARAMS, ALL)
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    shape=st.sampled_from(["triangle", "pentagon", "trapezoid", "star", "rectangle", "hexagon"]),
+    angle=st.floats(-math.pi, math.pi),
+    offset=st.tuples(st.floats(-300, 300), st.floats(-300, 300)),
+)
+def test_grasps_move_with_the_object(shape, angle, offset):
+    obj = make_shape(shape)
+    moved = obj.transformed(angle, offset)
+    grasps = synthesize_grasps(side_regions(obj), obj, PARAMS, ALL)
+    moved_grasps = synthesize_grasps(side_regions(moved), moved, PARAMS, ALL)
+    assert len(moved_grasps) == len(grasps)
+    rotation = np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
+    expected = grasps.contacts @ rotation.T + np.array(offset)
+    np.testing.assert_allclose(_sorted(moved_grasps.contacts), _sorted(expected), atol=1e-6)
+
+
+@pytest.mark.parametrize("scale", [0.7, 1.6])
+def test_three_finger_grasps_scale_with_the_object(scale):
+    obj = make_shape("pentagon")
+    big = obj.transformed(scale=scale)
+    grasps = synthesize_grasps(side_regions(obj, 3.0), obj, PARAMS, ALL)
+    scaled = synthesize_grasps(side_regions(big, 3.0 * scale), big, PARAMS, ALL)
+    assert len(scaled) == len(grasps) > 0
+    np.testing.assert_allclose(_sorted(scaled.contacts), _sorted(grasps.contacts * scale),
+                               atol=1e-6)
+
+
+def _sorted(contacts: np.ndarray) -> np.ndarray:
+    flat = contacts.reshape(len(contacts), -1).round(4)
+    return flat[np.lexsort(flat.T[::-1])]
