@@ -7,6 +7,8 @@ features, so the machinery is tested in isolation; the end-to-end test uses the 
 from __future__ import annotations
 
 import json
+import os
+import signal
 import sys
 from pathlib import Path
 
@@ -20,6 +22,7 @@ from grip_env.config import Config
 from grip_env.dataset import (
     DatasetMismatchError,
     ObjectTask,
+    WorkerLost,
     generate,
     load,
     load_objects,
@@ -166,6 +169,20 @@ def test_resume_after_crash_computes_only_missing_objects(tmp_path: Path) -> Non
     TRIALS_SEEN.clear()
     run(out, job=counting_job)
     assert TRIALS_SEEN == []
+
+
+def dying_job(task: ObjectTask) -> pd.DataFrame:
+    if task.index == 3:
+        os.kill(os.getpid(), signal.SIGKILL)
+    return toy_job(task)
+
+
+def test_resume_after_a_killed_worker(tmp_path: Path) -> None:
+    out = tmp_path / "d"
+    with pytest.raises(WorkerLost, match="proc_7_0000"):
+        run(out, workers=2, job=dying_job)
+    assert not json.loads((out / "manifest.json").read_text())["complete"]
+    pd.testing.assert_frame_equal(load(run(out, workers=2)), load(run(tmp_path / "clean")))
 
 
 def test_resume_recomputes_a_deleted_shard(tmp_path: Path) -> None:

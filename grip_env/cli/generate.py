@@ -51,7 +51,7 @@ def generate(
     """
     with user_errors():
         from grip_env.config import load_config
-        from grip_env.dataset import dataset_manifest
+        from grip_env.dataset import WorkerLost, dataset_manifest
         from grip_env.dataset import generate as generate_dataset
 
         cfg = load_config(config)
@@ -63,6 +63,9 @@ def generate(
         except KeyboardInterrupt:
             typer.echo(f"interrupted; rerun the same command to finish {out}", err=True)
             raise typer.Exit(code=130) from None
+        except WorkerLost as exc:
+            typer.echo(f"error: {exc}; rerun the same command to finish {out}", err=True)
+            raise typer.Exit(code=1) from None
         except OSError as exc:
             raise ValueError(f"cannot write the dataset in {out}: {exc}") from None
         manifest = dataset_manifest(path)

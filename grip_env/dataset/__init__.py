@@ -5,7 +5,7 @@
 >>> grips = load(path); problems = validate(path)               # doctest: +SKIP
 """
 
-from grip_env.dataset.backends import BACKENDS
+from grip_env.dataset.backends import BACKENDS, WorkerLost
 from grip_env.dataset.catalog import load_objects, read_objects
 from grip_env.dataset.generation import DatasetMismatchError, generate
 from grip_env.dataset.jobs import ObjectJob, ObjectTask, simulate_object, with_outcomes
@@ -19,6 +19,7 @@ __all__ = [
     "DatasetMismatchError",
     "ObjectJob",
     "ObjectTask",
+    "WorkerLost",
     "dataset_manifest",
     "generate",
     "load",

@@ -9,6 +9,7 @@ from __future__ import annotations
 import multiprocessing
 from collections.abc import Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 
 import pandas as pd
 
@@ -16,8 +17,13 @@ from grip_env.dataset.jobs import ObjectJob, ObjectTask
 
 BACKENDS = ("process", "ray")
 _IN_FLIGHT_PER_WORKER = 2
+_PRELOAD = ("grip_env.dataset.jobs", "grip_env.features", "pyarrow")
 
 Results = Iterator[tuple[ObjectTask, pd.DataFrame]]
+
+
+class WorkerLost(RuntimeError):
+    """A worker process died (killed, out of memory, crashed) before finishing its object."""
 
 
 def check_backend(backend: str, workers: int) -> None:
@@ -35,8 +41,9 @@ def run_jobs(
     """Run ``job`` on every task; yields ``(task, rows)`` in completion order.
 
     ``backend="process"`` with one worker runs in this process; with more it uses a pool of
-    'spawn' processes (each holds its own PyBullet client). ``backend="ray"`` submits Ray tasks to
-    the cluster at ``address`` (a local Ray instance with ``workers`` CPUs when None).
+    'forkserver' (or 'spawn') processes, each with its own PyBullet client. ``backend="ray"``
+    submits Ray tasks to the cluster at ``address`` (a local Ray instance with ``workers`` CPUs
+    when None).
     """
     check_backend(backend, workers)
     if backend == "ray":
@@ -46,11 +53,20 @@ def run_jobs(
     return _pool_results(job, tasks, workers)
 
 
+def _pool_context() -> multiprocessing.context.BaseContext:
+    """'forkserver' (workers fork from a clean server with the heavy imports done) where it
+    exists, else 'spawn'. Neither copies a live PyBullet client into a worker."""
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return multiprocessing.get_context("spawn")
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload(list(_PRELOAD))
+    return context
+
+
 def _pool_results(job: ObjectJob, tasks: Iterable[ObjectTask], workers: int) -> Results:
-    context = multiprocessing.get_context("spawn")
     queue = iter(tasks)
-    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
-        running: dict[Future[pd.DataFrame], ObjectTask] = {}
+    running: dict[Future[pd.DataFrame], ObjectTask] = {}
+    with ProcessPoolExecutor(max_workers=workers, mp_context=_pool_context()) as pool:
         try:
             while True:
                 for task in _take(queue, workers * _IN_FLIGHT_PER_WORKER - len(running)):
@@ -59,7 +75,13 @@ def _pool_results(job: ObjectJob, tasks: Iterable[ObjectTask], workers: int) -> 
                     return
                 done, _ = wait(running, return_when=FIRST_COMPLETED)
                 for future in sorted(done, key=lambda f: running[f].index):
-                    yield running.pop(future), future.result()
+                    rows = future.result()
+                    yield running.pop(future), rows
+        except BrokenProcessPool:
+            in_flight = ", ".join(sorted(task.object_id for task in running.values()))
+            raise WorkerLost(
+                f"a worker process died while objects {in_flight} were in flight"
+            ) from None
         finally:
             for future in running:
                 future.cancel()
