@@ -50,7 +50,7 @@ class SynthesisConfig(_Section):
     contacts_per_region: int = Field(5, ge=1, le=50, description="candidate contacts per region")
     max_grasps: int = Field(200, ge=1, le=100_000, description="keep the best grasps by Q_G")
     thumb_search_steps: int = Field(61, ge=3, le=10_000, description="thumb directions tried")
-    min_extension_mm: float = Field(30.0, ge=0.0, le=500.0, description="shortest finger reach")
+    min_extension_mm: float = Field(15.0, ge=0.0, le=500.0, description="shortest finger reach")
     max_extension_mm: float = Field(160.0, gt=0.0, le=1000.0, description="longest finger reach")
     max_spread_rad: float = Field(1.5, gt=0.0, le=3.2, description="largest usable spread")
     finger_width_mm: float = Field(25.0, gt=0.0, le=100.0, description="finger width")
