@@ -1,0 +1,207 @@
+"""RL selector: set-policy equivariance, exact metrics, training, report and bad input."""
+
+from __future__ import annotations
+
+import json
+from itertools import permutations
+
+import gymnasium as gym
+import numpy as np
+import pandas as pd
+import pytest
+import torch as th
+from gymnasium import spaces
+from sb3_contrib import MaskablePPO
+from stable_baselines3.common.vec_env import DummyVecEnv
+from typer.testing import CliRunner
+
+from classifiers.selector import REPORT_FILE, run_selector
+from classifiers.selector.evaluation import attempt_metrics, random_metrics
+from classifiers.selector.policy import CandidateSetPolicy, masked_pool
+from classifiers.selector.training import make_selector_model, torch_threads, train_selector
+from classifiers.synthetic import synthetic_grips
+from grip_env.config import load_config
+
+K, F = 6, 3
+
+
+class KnownOddsEnv(gym.Env):
+    """Each episode: 2..K candidates with random features; p(hold) = sigmoid(3 x0 - 2 x1).
+
+    The reward is that probability (the expected success), so the best choice is known exactly.
+    """
+
+    def __init__(self) -> None:
+        self.observation_space = spaces.Dict({
+            "features": spaces.Box(-5.0, 5.0, (K, F), np.float32),
+            "mask": spaces.MultiBinary(K),
+        })
+        self.action_space = spaces.Discrete(K)
+
+    @staticmethod
+    def odds(features: np.ndarray) -> np.ndarray:
+        return 1.0 / (1.0 + np.exp(-(3.0 * features[..., 0] - 2.0 * features[..., 1])))
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        count = int(self.np_random.integers(2, K + 1))
+        self.features = np.zeros((K, F), np.float32)
+        self.features[:count] = self.np_random.normal(size=(count, F)).clip(-5, 5)
+        self.mask = np.zeros(K, np.int8)
+        self.mask[:count] = 1
+        return self._observation(), {}
+
+    def _observation(self):
+        return {"features": self.features.copy(), "mask": self.mask.copy()}
+
+    def action_masks(self) -> np.ndarray:
+        return self.mask.astype(bool)
+
+    def step(self, action):
+        reward = float(self.odds(self.features[int(action)]))
+        return self._observation(), reward, True, False, {}
+
+
+def _set_model(seed: int = 0) -> MaskablePPO:
+    return MaskablePPO(CandidateSetPolicy, KnownOddsEnv(), n_steps=64, batch_size=32, seed=seed)
+
+
+def _probabilities_and_value(model, features, mask):
+    obs, _ = model.policy.obs_to_tensor({"features": features, "mask": mask})
+    with th.no_grad():
+        dist = model.policy.get_distribution(obs, action_masks=mask.astype(bool)[None])
+        value = model.policy.predict_values(obs)
+    return dist.distribution.probs[0].numpy(), float(value[0, 0])
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_set_policy_is_permutation_equivariant(seed):
+    model = _set_model(seed)
+    rng = np.random.default_rng(seed)
+    features = rng.normal(size=(K, F)).astype(np.float32)
+    mask = np.array([1, 1, 0, 1, 1, 0], dtype=np.int8)
+    order = rng.permutation(K)
+    probs, value = _probabilities_and_value(model, features, mask)
+    shuffled_probs, shuffled_value = _probabilities_and_value(model, features[order], mask[order])
+    np.testing.assert_allclose(shuffled_probs, probs[order], atol=1e-6)
+    assert shuffled_value == pytest.approx(value, abs=1e-5)
+    assert probs[mask == 0].max() == 0.0
+    assert probs.sum() == pytest.approx(1.0)
+    action, _ = model.predict({"features": features, "mask": mask}, action_masks=mask.astype(bool),
+                              deterministic=True)  # fmt: skip
+    shuffled_action, _ = model.predict(
+        {"features": features[order], "mask": mask[order]}, action_masks=mask[order].astype(bool),
+        deterministic=True,
+    )  # fmt: skip
+    assert order[int(shuffled_action)] == int(action)
+
+
+def test_set_policy_ignores_padded_slots():
+    model = _set_model()
+    features = np.random.default_rng(3).normal(size=(K, F)).astype(np.float32)
+    mask = np.array([1, 1, 1, 0, 0, 0], dtype=np.int8)
+    probs, value = _probabilities_and_value(model, features, mask)
+    garbage = features.copy()
+    garbage[3:] = 4.0
+    probs_garbage, value_garbage = _probabilities_and_value(model, garbage, mask)
+    np.testing.assert_allclose(probs_garbage, probs, atol=1e-6)
+    assert value_garbage == pytest.approx(value, abs=1e-5)
+
+
+def test_masked_pool_by_hand():
+    embeddings = th.tensor([[[1.0, -2.0], [3.0, 4.0], [100.0, 100.0]]])
+    mask = th.tensor([[1.0, 1.0, 0.0]])
+    np.testing.assert_allclose(masked_pool(embeddings, mask).numpy(), [[2.0, 1.0, 3.0, 4.0]])
+    assert masked_pool(embeddings, th.zeros(1, 3)).abs().sum() == 0.0
+
+
+def test_attempt_metrics_by_hand():
+    first, within, attempts = attempt_metrics(np.array([0.5, 0.2, 0.9]), max_attempts=2)
+    assert (first, within, attempts) == pytest.approx((0.5, 1 - 0.5 * 0.8, 1 + 0.5))
+
+
+@pytest.mark.parametrize("max_attempts", [1, 2, 3, 5])
+def test_random_metrics_average_every_order(max_attempts):
+    p = np.array([0.9, 0.1, 0.4, 0.0])
+    brute = np.mean([attempt_metrics(p[list(o)], max_attempts) for o in permutations(range(4))],
+                    axis=0)  # fmt: skip
+    np.testing.assert_allclose(random_metrics(p, max_attempts), brute, atol=1e-12)
+
+
+@pytest.mark.slow
+def test_short_training_beats_random_on_known_odds():
+    env = DummyVecEnv([KnownOddsEnv for _ in range(4)])
+    env.seed(0)
+    with torch_threads(1):
+        model = make_selector_model(env, "set", seed=0)
+        model.learn(2048)
+    probe = KnownOddsEnv()
+    chosen, random, best = [], [], []
+    for episode in range(200):
+        obs, _ = probe.reset(seed=10_000 + episode)
+        action, _ = model.predict(obs, action_masks=probe.action_masks(), deterministic=True)
+        odds = probe.odds(probe.features)[probe.mask == 1]
+        chosen.append(probe.odds(probe.features[int(action)]))
+        random.append(odds.mean())
+        best.append(odds.max())
+    assert np.mean(chosen) > np.mean(random) + 0.5 * (np.mean(best) - np.mean(random))
+
+
+@pytest.fixture(scope="module")
+def grips() -> pd.DataFrame:
+    return synthetic_grips(n_objects=16, grips=(4, 10), seed=2)
+
+
+@pytest.fixture(scope="module")
+def small_config():
+    return load_config().override(
+        selector={"max_candidates": 12, "max_attempts": 2}, learning={"models": ("logreg",)}
+    )
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("policy", ["set", "flat"])
+def test_run_selector_writes_report_model_and_curve(grips, small_config, tmp_path, policy):
+    report = run_selector(grips, tmp_path, small_config, policy=policy, timesteps=128,
+                          progress=False)  # fmt: skip
+    assert json.loads((tmp_path / REPORT_FILE).read_text()) == report
+    for name in ("model.zip", "learning_curve.png"):
+        assert (tmp_path / name).stat().st_size > 0
+    assert any((tmp_path / "tb").iterdir())
+    policies = report["policies"]
+    assert set(policies) == {"rl", "random", "best_qc", "best_qg", "classifier_logreg", "oracle"}
+    for scores in policies.values():
+        low, high = scores["success_rate"]["ci"]
+        assert 0.0 <= low <= scores["success_rate"]["mean"] <= high <= 1.0
+        assert 1.0 <= scores["expected_attempts"]["mean"] <= 2.0
+    oracle = policies["oracle"]["success_rate"]["mean"]
+    assert all(s["success_rate"]["mean"] <= oracle + 1e-12 for s in policies.values())
+    split = report["split"]
+    assert set(split["train"]).isdisjoint(split["test"])
+    assert len(policies["rl"]["per_object"]) == len(split["test"])
+    assert report["training"]["policy"] == policy
+    assert MaskablePPO.load(tmp_path / "model.zip").num_timesteps == report["training"]["timesteps"]
+
+
+def test_unknown_policy_is_refused(grips, small_config, tmp_path):
+    with pytest.raises(ValueError, match="policy"):
+        train_selector(grips, small_config, tmp_path, policy="transformer", timesteps=8)
+
+
+def test_dataset_without_outcomes_is_refused(grips, small_config, tmp_path):
+    bare = grips.drop(columns=["trials", "successes", "success_rate", "success"])
+    with pytest.raises(ValueError, match="outcome"):
+        run_selector(bare, tmp_path, small_config, timesteps=8, progress=False)
+
+
+def test_cli_reports_bad_policy_with_exit_code_2(grips, tmp_path):
+    from grip_env.cli import _register_commands, app
+
+    _register_commands()
+    path = tmp_path / "grips.parquet"
+    grips.to_parquet(path)
+    result = CliRunner().invoke(
+        app, ["select", "--data", str(path), "--out", str(tmp_path / "o"), "--policy", "bad"]
+    )
+    assert result.exit_code == 2
+    assert "policy" in result.output
