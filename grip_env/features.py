@@ -13,7 +13,7 @@ G1 = C2 = 0 and use the contact triangle's centroid C_T in G2 and C5.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -50,6 +50,7 @@ REQUIRED_COLUMNS: tuple[str, ...] = FINITE_COLUMNS + FOCUS_COLUMNS + (TWO_FINGER
 DEFAULT_PARAMS = GraspParams()
 _FINGERS = ("1", "2", "3")
 _TWO_PI = 2.0 * np.pi
+_CHUNK_ROWS = 8192
 
 Columns = Mapping[str, ArrayLike]
 Array = NDArray[np.float64]
@@ -92,85 +93,96 @@ def features_from_arrays(
         row_labels: optional labels used to name bad rows in errors (default: positions).
 
     Returns:
-        (N, 14) float array, columns in :data:`OUTPUT_NAMES` order.
+        (N, 14) float array (column-major), columns in :data:`OUTPUT_NAMES` order.
     """
     arrays = _validated_arrays(columns, row_labels)
-    features = _features(arrays, params)
-    capped = np.where(features <= params.feature_cap, features, params.feature_cap)
-    q_grasp = capped[0:6].sum(axis=0)
-    q_config = capped[0:4].sum(axis=0) + capped[6:12].sum(axis=0)
-    return np.vstack([capped, q_grasp, q_config]).T
+    count = len(arrays[TWO_FINGER])
+    out = np.empty((len(OUTPUT_NAMES), count))
+    for start in range(0, count, _CHUNK_ROWS):  # chunks keep the temporaries in cache
+        rows = slice(start, start + _CHUNK_ROWS)
+        _fill_outputs(out[:, rows], {name: v[rows] for name, v in arrays.items()}, params)
+    return out.T
+
+
+def _fill_outputs(out: Array, arrays: dict[str, Array], params: GraspParams) -> None:
+    """Write the capped features and the two indexes of one chunk into ``out`` (14, n)."""
+    for row, value in zip(out, _features(arrays, params), strict=False):
+        np.fmin(value, params.feature_cap, out=row)  # fmin also turns NaN into the cap
+    shared = out[0] + out[1] + out[2] + out[3]
+    np.add(shared, out[4] + out[5], out=out[12])
+    np.add(shared, out[6] + out[7] + out[8] + out[9] + out[10] + out[11], out=out[13])
 
 
 # ------------------------------------------------------------------------------- the formulas
-def _features(a: dict[str, Array], params: GraspParams) -> Array:
-    """(12, N) uncapped features; infinite or NaN where a formula is undefined."""
-    two_finger = a[TWO_FINGER].astype(bool)
-    px, py = _stack(a, "p")
-    triangle_centre = (px.mean(axis=0), py.mean(axis=0))
-    object_centre = (a["centroid_x"], a["centroid_y"])
-    object_size = a["semi_major"] + a["semi_minor"]
-    grasp_focus = _where_two_finger(two_finger, triangle_centre, (a["cg_x"], a["cg_y"]))
-    real_focus = _where_two_finger(two_finger, triangle_centre, (a["cc_x"], a["cc_y"]))
-    extensions = np.vstack([a[name] for name in EXTENSIONS])
+Vectors = tuple[Array, Array]  # x and y of n points or directions
+
+
+def _features(a: dict[str, Array], params: GraspParams) -> list[Array]:
+    """The twelve uncapped features of n grips; infinite where a formula is undefined."""
+    two_finger = a[TWO_FINGER] != 0.0
+    p, n, f = (_per_finger(a, prefix) for prefix in ("p", "n", "f"))
+    ends = [(_vector(a, f"r{i}a"), _vector(a, f"r{i}b")) for i in _FINGERS]
+    extensions = [a[name] for name in EXTENSIONS]
+    triangle_centre = ((p[0][0] + p[1][0] + p[2][0]) / 3.0, (p[0][1] + p[1][1] + p[2][1]) / 3.0)
+    grasp_focus = _where_two_finger(two_finger, triangle_centre, _vector(a, "cg"))
+    real_focus = _where_two_finger(two_finger, triangle_centre, _vector(a, "cc"))
+    centre, size = _vector(a, "centroid"), a["semi_major"] + a["semi_minor"]
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        return np.vstack([
-            point_arrangement(px, py, two_finger),
-            triangle_size(px, py, a["area"], params.weight),
-            grasping_margin(px, py, _region_ends(a), params.lam),
+        return [
+            point_arrangement(p, two_finger),
+            triangle_size(p, a["area"], params.weight),
+            grasping_margin(p, ends, params.lam),
             1.0 - (a["rho1"] + a["rho2"] + a["rho3"]),
-            np.where(two_finger, 0.0, force_arrangement(*_stack(a, "n"))),
-            centring(grasp_focus, object_centre, object_size, params.weight),
-            force_line(_stack(a, "f"), _stack(a, "n"), params.friction_angle),
-            np.where(two_finger, 0.0, _distance(a["cg_x"], a["cg_y"], *real_focus)
-                     / (params.eta * params.mu / 2.0)),
+            np.where(two_finger, 0.0, force_arrangement(n)),
+            centring(grasp_focus, centre, size, params.weight),
+            force_line(f, n, params.friction_angle),
+            np.where(two_finger, 0.0,
+                     _distance(_vector(a, "cg"), real_focus) / (params.eta * params.mu / 2.0)),
             finger_extension(extensions, params.eta),
             finger_spread(a["spread"]),
-            centring(real_focus, object_centre, object_size, params.weight),
-            np.maximum(extensions - params.eta, 0.0).sum(axis=0),
-        ])
+            centring(real_focus, centre, size, params.weight),
+            finger_limit(extensions, params.eta),
+        ]
 
 
-def point_arrangement(px: Array, py: Array, two_finger: NDArray[np.bool_]) -> Array:
-    """S1 from the interior angles of the contact triangle; S1'' in two-finger rows.
+def point_arrangement(p: Sequence[Vectors], two_finger: NDArray[np.bool_]) -> Array:
+    """S1 from the interior angles of the contact triangle P1 P2 P3; S1'' in two-finger rows.
 
-    ``px``, ``py`` are (3, N) contact coordinates. A triangle with two coincident contacts counts
-    as degenerate to a segment (S1 = 2).
+    A triangle with two coincident contacts counts as degenerate to a segment (S1 = 2).
     """
-    ux, uy = np.roll(px, -1, axis=0) - px, np.roll(py, -1, axis=0) - py
-    vx, vy = np.roll(px, -2, axis=0) - px, np.roll(py, -2, axis=0) - py
-    angles = np.arctan2(np.abs(ux * vy - uy * vx), ux * vx + uy * vy)  # at P1, P2, P3
-    three = (3.0 / (2.0 * np.pi)) * np.abs(angles - np.pi / 3.0).sum(axis=0)
-    beta, gamma, alpha = angles
+    beta, gamma, alpha = (_interior_angle(p[i], p[(i + 1) % 3], p[(i + 2) % 3]) for i in range(3))
+    third = np.pi / 3.0
+    three = (3.0 / (2.0 * np.pi)) * (np.abs(alpha - third) + np.abs(beta - third)
+                                     + np.abs(gamma - third))
     two = (2.0 / np.pi) * (np.abs(beta - gamma) + alpha)
-    coincident = ((ux == 0.0) & (uy == 0.0)).any(axis=0)
+    coincident = _same(p[0], p[1]) | _same(p[1], p[2]) | _same(p[2], p[0])
     return np.where(coincident, 2.0, np.where(two_finger, two, three))
 
 
-def triangle_size(px: Array, py: Array, area: Array, weight: float) -> Array:
+def triangle_size(p: Sequence[Vectors], area: Array, weight: float) -> Array:
     """S2 = W * A / (4 * A_T)."""
-    triangle_area = 0.5 * np.abs(
-        (px[1] - px[0]) * (py[2] - py[0]) - (py[1] - py[0]) * (px[2] - px[0])
-    )
+    (x0, y0), (x1, y1), (x2, y2) = p
+    triangle_area = 0.5 * np.abs((x1 - x0) * (y2 - y0) - (y1 - y0) * (x2 - x0))
     return weight * area / (4.0 * triangle_area)
 
 
-def grasping_margin(px: Array, py: Array, ends: tuple[Array, Array], lam: float) -> Array:
-    """S3: sum over the six contact-to-region-end distances d of (lam/d - 1 if d < lam else 0).
+def grasping_margin(
+    p: Sequence[Vectors], ends: Sequence[tuple[Vectors, Vectors]], lam: float
+) -> Array:
+    """S3: sum over the six contact-to-region-end distances d of (lam/d - 1 if d < lam else 0)."""
+    total = np.zeros_like(p[0][0])
+    for contact, region in zip(p, ends, strict=True):
+        for end in region:
+            total += np.maximum(lam / _distance(contact, end) - 1.0, 0.0)
+    return total
 
-    ``ends`` holds (2, 3, N) x and y of the region ends a, b of each finger.
-    """
-    ex, ey = ends
-    d = np.sqrt((ex - px) ** 2 + (ey - py) ** 2)
-    return np.where(d < lam, lam / d - 1.0, 0.0).sum(axis=(0, 1))
 
-
-def force_arrangement(nx: Array, ny: Array) -> Array:
+def force_arrangement(n: Sequence[Vectors]) -> Array:
     """G1 from the three angles between consecutive force directions around the circle.
 
     Infinite when an angle reaches pi (the forces no longer span the plane).
     """
-    a0, a1, a2 = np.arctan2(ny, nx)
+    a0, a1, a2 = (np.arctan2(y, x) for x, y in n)
     low = np.minimum(np.minimum(a0, a1), a2)
     high = np.maximum(np.maximum(a0, a1), a2)
     middle = np.maximum(np.minimum(a0, a1), np.minimum(np.maximum(a0, a1), a2))
@@ -181,59 +193,67 @@ def force_arrangement(nx: Array, ny: Array) -> Array:
     return np.where(no_closure, np.inf, (np.pi**3 / 27.0) / product - 1.0)
 
 
-def centring(
-    centre: tuple[Array, Array], object_centre: tuple[Array, Array], size: Array, weight: float
-) -> Array:
+def centring(centre: Vectors, object_centre: Vectors, size: Array, weight: float) -> Array:
     """G2 / C5 = 2W |centre - C| / (M_L + m_L)."""
-    return 2.0 * weight * _distance(*centre, *object_centre) / size
+    return (2.0 * weight) * _distance(centre, object_centre) / size
 
 
-def force_line(
-    forces: tuple[Array, Array], normals: tuple[Array, Array], friction_angle: float
-) -> Array:
+def force_line(f: Sequence[Vectors], n: Sequence[Vectors], friction_angle: float) -> Array:
     """C1 = (4k/3) sum(delta_i^2) / arctan^2(mu), k = 3 if any delta_i > arctan(mu) else 1."""
-    (fx, fy), (nx, ny) = forces, normals
-    delta = np.arctan2(np.abs(fx * ny - fy * nx), fx * nx + fy * ny)
-    k = np.where((delta > friction_angle).any(axis=0), 3.0, 1.0)
-    return (4.0 * k / 3.0) * (delta**2).sum(axis=0) / friction_angle**2
+    d0, d1, d2 = (_angle_between(fi, ni) for fi, ni in zip(f, n, strict=True))
+    outside = (d0 > friction_angle) | (d1 > friction_angle) | (d2 > friction_angle)
+    k = np.where(outside, 3.0, 1.0)
+    return (4.0 / (3.0 * friction_angle**2)) * k * (d0 * d0 + d1 * d1 + d2 * d2)
 
 
-def finger_extension(extensions: Array, eta: float) -> Array:
-    """C3 = ((e1-e2)^2 + (e2-e3)^2 + (e3-e1)^2) / eta^2 for (3, N) extensions."""
-    e1, e2, e3 = extensions
+def finger_extension(e: Sequence[Array], eta: float) -> Array:
+    """C3 = ((e1-e2)^2 + (e2-e3)^2 + (e3-e1)^2) / eta^2."""
+    e1, e2, e3 = e
     return ((e1 - e2) ** 2 + (e2 - e3) ** 2 + (e3 - e1) ** 2) / eta**2
 
 
 def finger_spread(spread: Array) -> Array:
     """C4 = 0 for theta <= pi/3, (pi/6)/(pi/2 - theta) - 1 above; infinite at theta >= pi/2."""
-    value = (np.pi / 6.0) / (np.pi / 2.0 - spread) - 1.0
-    value = np.where(spread >= np.pi / 2.0, np.inf, value)
+    value = np.where(spread >= np.pi / 2.0, np.inf, (np.pi / 6.0) / (np.pi / 2.0 - spread) - 1.0)
     return np.where(spread <= np.pi / 3.0, 0.0, value)
 
 
-# ------------------------------------------------------------------------------- array helpers
-def _stack(a: dict[str, Array], prefix: str) -> tuple[Array, Array]:
-    """(3, N) x and y of the per-finger vectors ``<prefix>1..3``."""
-    return (np.vstack([a[f"{prefix}{i}_x"] for i in _FINGERS]),
-            np.vstack([a[f"{prefix}{i}_y"] for i in _FINGERS]))
+def finger_limit(e: Sequence[Array], eta: float) -> Array:
+    """C6 = sum of the extensions beyond eta (mm)."""
+    e1, e2, e3 = e
+    return np.maximum(e1 - eta, 0.0) + np.maximum(e2 - eta, 0.0) + np.maximum(e3 - eta, 0.0)
 
 
-def _region_ends(a: dict[str, Array]) -> tuple[Array, Array]:
-    """(2, 3, N) x and y of the region ends a and b of fingers 1..3."""
-    def axis(name: str) -> Array:
-        return np.stack([np.vstack([a[f"r{i}{end}_{name}"] for i in _FINGERS]) for end in "ab"])
-    return axis("x"), axis("y")
+# ------------------------------------------------------------------------------- vector helpers
+def _vector(a: dict[str, Array], prefix: str) -> Vectors:
+    return a[f"{prefix}_x"], a[f"{prefix}_y"]
 
 
-def _where_two_finger(
-    two_finger: NDArray[np.bool_], if_two: tuple[Array, Array], if_three: tuple[Array, Array]
-) -> tuple[Array, Array]:
+def _per_finger(a: dict[str, Array], prefix: str) -> list[Vectors]:
+    return [_vector(a, f"{prefix}{i}") for i in _FINGERS]
+
+
+def _where_two_finger(two_finger: NDArray[np.bool_], if_two: Vectors, if_three: Vectors) -> Vectors:
     return (np.where(two_finger, if_two[0], if_three[0]),
             np.where(two_finger, if_two[1], if_three[1]))
 
 
-def _distance(x0: Array, y0: Array, x1: Array, y1: Array) -> Array:
-    return np.sqrt((x0 - x1) ** 2 + (y0 - y1) ** 2)
+def _distance(u: Vectors, v: Vectors) -> Array:
+    return np.sqrt((u[0] - v[0]) ** 2 + (u[1] - v[1]) ** 2)
+
+
+def _same(u: Vectors, v: Vectors) -> NDArray[np.bool_]:
+    return (u[0] == v[0]) & (u[1] == v[1])
+
+
+def _angle_between(u: Vectors, v: Vectors) -> Array:
+    """Unsigned angle in [0, pi] between directions u and v."""
+    return np.arctan2(np.abs(u[0] * v[1] - u[1] * v[0]), u[0] * v[0] + u[1] * v[1])
+
+
+def _interior_angle(at: Vectors, to1: Vectors, to2: Vectors) -> Array:
+    """Angle at ``at`` between the sides towards ``to1`` and ``to2``."""
+    return _angle_between((to1[0] - at[0], to1[1] - at[1]), (to2[0] - at[0], to2[1] - at[1]))
 
 
 # ------------------------------------------------------------------------------- validation
@@ -253,26 +273,25 @@ def _validated_arrays(columns: Columns, row_labels: ArrayLike | None) -> dict[st
         raise ValueError(f"descriptor arrays have different lengths: {sorted(lengths)}")
     labels = np.arange(lengths.pop()) if row_labels is None else np.asarray(row_labels)
 
-    def fail(name: str, bad: NDArray[np.bool_], what: str) -> None:
-        row = labels[int(np.argmax(bad))]
-        raise ValueError(f"column {name!r} has {what} at row {row!r}")
+    def check(name: str, ok: NDArray[np.bool_], what: str) -> None:
+        if not ok.all():
+            row = labels[int(np.argmin(ok))]
+            raise ValueError(f"column {name!r} has {what} at row {row!r}")
 
     for name in (*FINITE_COLUMNS, TWO_FINGER):
-        if not np.isfinite(arrays[name]).all():
-            fail(name, ~np.isfinite(arrays[name]), "a non-finite value")
-    three_finger = arrays[TWO_FINGER] == 0.0
+        if not np.isfinite(arrays[name].sum()):  # fast path: a finite sum means finite values
+            check(name, np.isfinite(arrays[name]), "a non-finite value")
+    two_finger = arrays[TWO_FINGER] != 0.0
     for name in FOCUS_COLUMNS:
-        bad = three_finger & ~np.isfinite(arrays[name])
-        if bad.any():
-            fail(name, bad, "a non-finite value in a three-finger row")
+        if not np.isfinite(arrays[name].sum()):
+            check(name, two_finger | np.isfinite(arrays[name]),
+                  "a non-finite value in a three-finger row")
     for prefix in ("n", "f"):
         for i in _FINGERS:
-            bad = (arrays[f"{prefix}{i}_x"] == 0.0) & (arrays[f"{prefix}{i}_y"] == 0.0)
-            if bad.any():
-                fail(f"{prefix}{i}_x", bad, "a zero-length direction")
+            x, y = _vector(arrays, f"{prefix}{i}")
+            check(f"{prefix}{i}_x", np.logical_or(x, y), "a zero-length direction")
     for name in ("area", "semi_major"):
-        if not (arrays[name] > 0.0).all():
-            fail(name, ~(arrays[name] > 0.0), "a value that is not positive")
+        check(name, arrays[name] > 0.0, "a value that is not positive")
     return arrays
 
 
