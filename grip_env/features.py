@@ -72,8 +72,9 @@ def compute_features(table: pd.DataFrame, params: GraspParams = DEFAULT_PARAMS) 
             (the message names the column and the row's index label).
     """
     if len(table) == 0:
-        return pd.DataFrame(np.zeros((0, len(OUTPUT_NAMES))), index=table.index,
-                            columns=list(OUTPUT_NAMES))
+        return pd.DataFrame(
+            np.zeros((0, len(OUTPUT_NAMES))), index=table.index, columns=list(OUTPUT_NAMES)
+        )
     _require_columns(table.columns)
     columns = {name: table[name].to_numpy() for name in REQUIRED_COLUMNS}
     values = features_from_arrays(columns, params, row_labels=table.index)
@@ -94,6 +95,9 @@ def features_from_arrays(
 
     Returns:
         (N, 14) float array (column-major), columns in :data:`OUTPUT_NAMES` order.
+
+    Raises:
+        ValueError: as :func:`compute_features`; bad rows are named by position or label.
     """
     arrays = _validated_arrays(columns, row_labels)
     count = len(arrays[TWO_FINGER])
@@ -136,8 +140,11 @@ def _features(a: dict[str, Array], params: GraspParams) -> list[Array]:
             np.where(two_finger, 0.0, force_arrangement(n)),
             centring(grasp_focus, centre, size, params.weight),
             force_line(f, n, params.friction_angle),
-            np.where(two_finger, 0.0,
-                     _distance(_vector(a, "cg"), real_focus) / (params.eta * params.mu / 2.0)),
+            np.where(
+                two_finger,
+                0.0,
+                _distance(_vector(a, "cg"), real_focus) / (params.eta * params.mu / 2.0),
+            ),
             finger_extension(extensions, params.eta),
             finger_spread(a["spread"]),
             centring(real_focus, centre, size, params.weight),
@@ -152,8 +159,9 @@ def point_arrangement(p: Sequence[Vectors], two_finger: NDArray[np.bool_]) -> Ar
     """
     beta, gamma, alpha = (_interior_angle(p[i], p[(i + 1) % 3], p[(i + 2) % 3]) for i in range(3))
     third = np.pi / 3.0
-    three = (3.0 / (2.0 * np.pi)) * (np.abs(alpha - third) + np.abs(beta - third)
-                                     + np.abs(gamma - third))
+    three = (3.0 / (2.0 * np.pi)) * (
+        np.abs(alpha - third) + np.abs(beta - third) + np.abs(gamma - third)
+    )
     two = (2.0 / np.pi) * (np.abs(beta - gamma) + alpha)
     coincident = _same(p[0], p[1]) | _same(p[1], p[2]) | _same(p[2], p[0])
     return np.where(coincident, 2.0, np.where(two_finger, two, three))
@@ -234,8 +242,10 @@ def _per_finger(a: dict[str, Array], prefix: str) -> list[Vectors]:
 
 
 def _where_two_finger(two_finger: NDArray[np.bool_], if_two: Vectors, if_three: Vectors) -> Vectors:
-    return (np.where(two_finger, if_two[0], if_three[0]),
-            np.where(two_finger, if_two[1], if_three[1]))
+    return (
+        np.where(two_finger, if_two[0], if_three[0]),
+        np.where(two_finger, if_two[1], if_three[1]),
+    )
 
 
 def _distance(u: Vectors, v: Vectors) -> Array:
@@ -284,8 +294,11 @@ def _validated_arrays(columns: Columns, row_labels: ArrayLike | None) -> dict[st
     two_finger = arrays[TWO_FINGER] != 0.0
     for name in FOCUS_COLUMNS:
         if not np.isfinite(arrays[name].sum()):
-            check(name, two_finger | np.isfinite(arrays[name]),
-                  "a non-finite value in a three-finger row")
+            check(
+                name,
+                two_finger | np.isfinite(arrays[name]),
+                "a non-finite value in a three-finger row",
+            )
     for prefix in ("n", "f"):
         for i in _FINGERS:
             x, y = _vector(arrays, f"{prefix}{i}")

@@ -199,8 +199,13 @@ def test_finger_extension() -> None:
 
 @pytest.mark.parametrize(
     ("spread", "expected"),
-    [(0.0, 0.0), (0.4, 0.0), (math.pi / 3, 0.0), (math.pi / 2 - math.pi / 12, 1.0),
-     (1.2, (math.pi / 6) / (math.pi / 2 - 1.2) - 1)],
+    [
+        (0.0, 0.0),
+        (0.4, 0.0),
+        (math.pi / 3, 0.0),
+        (math.pi / 2 - math.pi / 12, 1.0),
+        (1.2, (math.pi / 6) / (math.pi / 2 - 1.2) - 1),
+    ],
 )
 def test_finger_spread(spread: float, expected: float) -> None:
     row = ideal_triangle_row() | {"spread": spread}
@@ -223,9 +228,11 @@ def test_indexes_sum_their_features() -> None:
 # ------------------------------------------------------------------------------- two-finger grips
 @pytest.mark.parametrize(
     ("thumb", "expected"),
-    [((0.0, 20.0), 1.0),  # beta = gamma = pi/4, alpha = pi/2
-     ((0.0, 20.0 * math.sqrt(3)), 2 / 3),  # equilateral: alpha = pi/3
-     ((20.0, 20.0), 2 - 4 * math.atan(0.5) / math.pi)],  # beta = atan(1/2), gamma = pi/2
+    [
+        ((0.0, 20.0), 1.0),  # beta = gamma = pi/4, alpha = pi/2
+        ((0.0, 20.0 * math.sqrt(3)), 2 / 3),  # equilateral: alpha = pi/3
+        ((20.0, 20.0), 2 - 4 * math.atan(0.5) / math.pi),
+    ],  # beta = atan(1/2), gamma = pi/2
 )
 def test_two_finger_point_arrangement(thumb: tuple[float, float], expected: float) -> None:
     assert feature(two_finger_row(thumb), "S1") == pytest.approx(expected)
@@ -263,14 +270,14 @@ def test_caps() -> None:
 
 
 # ------------------------------------------------------------------------------- invariances
-POINT_PREFIXES = (
-    "p1", "p2", "p3", "r1a", "r1b", "r2a", "r2b", "r3a", "r3b", "cg", "cc", "centroid",
-)
+POINT_PREFIXES = ("p1", "p2", "p3", "r1a", "r1b", "r2a", "r2b", "r3a", "r3b", "cg", "cc")
+POINT_PREFIXES += ("centroid",)
 DIRECTION_PREFIXES = ("n1", "n2", "n3", "f1", "f2", "f3")
 
 
-def moved(table: pd.DataFrame, angle: float, offset: tuple[float, float], scale: float
-          ) -> pd.DataFrame:
+def moved(
+    table: pd.DataFrame, angle: float, offset: tuple[float, float], scale: float
+) -> pd.DataFrame:
     """Rotate, scale and translate every point; rotate every direction; scale every length."""
     out = table.copy()
     c, s = math.cos(angle), math.sin(angle)
@@ -314,21 +321,25 @@ def test_scaling_lengths(seed: int, scale: float, angle: float) -> None:
     uncapped = GraspParams(feature_cap=1e6)
     params = GraspParams(lam=PARAMS.lam * scale, eta=PARAMS.eta * scale, feature_cap=1e6)
     before, rescaled = compute_features(table, uncapped), compute_features(scaled, params)
-    np.testing.assert_allclose(rescaled[["S3", "C2", "C3"]], before[["S3", "C2", "C3"]],
-                               rtol=1e-7, atol=1e-7)
+    np.testing.assert_allclose(
+        rescaled[["S3", "C2", "C3"]], before[["S3", "C2", "C3"]], rtol=1e-7, atol=1e-7
+    )
     np.testing.assert_allclose(rescaled["C6"], scale * before["C6"], rtol=1e-7, atol=1e-7)
 
 
 # ------------------------------------------------------------------------------- reference
-@pytest.mark.parametrize("params", [PARAMS, GraspParams(mu=0.2, lam=5.0, weight=2.0, eta=90.0,
-                                                        feature_cap=30.0)])
+@pytest.mark.parametrize(
+    "params", [PARAMS, GraspParams(mu=0.2, lam=5.0, weight=2.0, eta=90.0, feature_cap=30.0)]
+)
 def test_matches_per_grip_reference(params: GraspParams) -> None:
     table = random_grip_table(400, seed=11)
     hand_rows = pd.DataFrame([ideal_triangle_row(), two_finger_row(), two_finger_row((9.0, 14.0))])
-    table = pd.concat([table, hand_rows[table.columns.intersection(hand_rows.columns)]],
-                      ignore_index=True)
-    pd.testing.assert_frame_equal(compute_features(table, params),
-                                  reference_features(table, params), rtol=1e-9, atol=1e-9)
+    table = pd.concat(
+        [table, hand_rows[table.columns.intersection(hand_rows.columns)]], ignore_index=True
+    )
+    pd.testing.assert_frame_equal(
+        compute_features(table, params), reference_features(table, params), rtol=1e-9, atol=1e-9
+    )
 
 
 def test_arrays_entry_matches_table_entry() -> None:

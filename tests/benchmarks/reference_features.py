@@ -133,7 +133,8 @@ def random_grip_table(count: int, seed: int = 0, two_finger_share: float = 0.2) 
     columns: dict[str, np.ndarray] = {}
     focus = rng.uniform(-30.0, 30.0, (count, 2))
     around = rng.uniform(-np.pi, np.pi, (count, 1)) + rng.normal(
-        np.arange(3) * 2.0 * np.pi / 3.0, 0.6, (count, 3))
+        np.arange(3) * 2.0 * np.pi / 3.0, 0.6, (count, 3)
+    )
     reach = rng.uniform(15.0, 70.0, (count, 3, 1))
     p = focus[:, None, :] + reach * np.stack([np.cos(around), np.sin(around)], axis=-1)
     to_focus = focus[:, None, :] - p
@@ -152,10 +153,14 @@ def random_grip_table(count: int, seed: int = 0, two_finger_share: float = 0.2) 
     for i in range(3):
         k = str(i + 1)
         columns[f"p{k}_x"], columns[f"p{k}_y"] = p[:, i, 0], p[:, i, 1]
-        columns[f"n{k}_x"], columns[f"n{k}_y"] = np.cos(normal_angle[:, i]), np.sin(
-            normal_angle[:, i])
-        columns[f"f{k}_x"], columns[f"f{k}_y"] = np.cos(force_angle[:, i]), np.sin(
-            force_angle[:, i])
+        columns[f"n{k}_x"], columns[f"n{k}_y"] = (
+            np.cos(normal_angle[:, i]),
+            np.sin(normal_angle[:, i]),
+        )
+        columns[f"f{k}_x"], columns[f"f{k}_y"] = (
+            np.cos(force_angle[:, i]),
+            np.sin(force_angle[:, i]),
+        )
     for i in range(3):
         for e, end in zip("ab", ends, strict=True):
             columns[f"r{i + 1}{e}_x"], columns[f"r{i + 1}{e}_y"] = end[:, i, 0], end[:, i, 1]
