@@ -141,7 +141,8 @@ def search_half_width(params: GraspParams) -> float:
 
 def force_line_value(forces: Array, normals: Array, friction_angle: float) -> Array:
     """C1 = (4k/3) sum(delta_i^2) / arctan(mu)^2 for (..., 3, 2) forces and normals."""
-    return _force_line_from_cos(np.sum(forces * normals, axis=-1), friction_angle)
+    return _force_line_from_cos(np.moveaxis(np.sum(forces * normals, axis=-1), -1, 0),
+                                friction_angle)
 
 
 def configurations(
@@ -170,7 +171,8 @@ def configurations(
 
 # ----------------------------------------------------------------------------- three fingers
 def _three_finger(grasps, index, obj, params, config, offsets) -> Configurations:
-    # one row per (grasp, thumb choice), one column per thumb direction; hand-frame components
+    # one row per (grasp, thumb choice), one column per thumb direction; hand-frame components.
+    # Contacts a, b are the two non-thumb contacts; finger 1 is the one on the hand's +x side.
     grasp, thumb = np.repeat(index, 3), np.tile(np.arange(3), len(index))
     others = np.stack([(thumb + 1) % 3, (thumb + 2) % 3], axis=1)
     p3, n3 = grasps.contacts[grasp, thumb], grasps.normals[grasp, thumb]
@@ -178,44 +180,48 @@ def _three_finger(grasps, index, obj, params, config, offsets) -> Configurations
     frame = _HandFrame(yaw)
     ax, ay = frame.coordinates(grasps.contacts[grasp, others[:, 0]] - p3)
     bx, by = frame.coordinates(grasps.contacts[grasp, others[:, 1]] - p3)
+    nax, nay = frame.coordinates(grasps.normals[grasp, others[:, 0]])
+    nbx, nby = frame.coordinates(grasps.normals[grasp, others[:, 1]])
     a_is_one = ax > 0
-    finger_of = np.stack([np.where(a_is_one, others[:, :1], others[:, 1:]),
-                          np.where(a_is_one, others[:, 1:], others[:, :1]),
-                          np.broadcast_to(thumb[:, None], yaw.shape)], axis=-1)  # (K, S, 3)
-    x1, y1 = np.where(a_is_one, ax, bx), np.where(a_is_one, ay, by)
-    x2, y2 = np.where(a_is_one, bx, ax), np.where(a_is_one, by, ay)
-    n1x, n1y = frame.coordinates(grasps.normals[grasp[:, None], finger_of[..., 0]])
-    n2x, n2y = frame.coordinates(grasps.normals[grasp[:, None], finger_of[..., 1]])
+    x1, y1, n1x, n1y = (np.where(a_is_one, u, v) for u, v in
+                        ((ax, bx), (ay, by), (nax, nbx), (nay, nby)))
+    x2, y2, n2x, n2y = (np.where(a_is_one, v, u) for u, v in
+                        ((ax, bx), (ay, by), (nax, nbx), (nay, nby)))
     # C_C = P3 + c y lies on the line through P1 and P2's mirror image (-x2, y2)
     _, focus_y = frame.coordinates(grasps.focus[grasp] - p3)
-    dx, dy = x1 + x2, y1 - y2
-    mirrored = np.hypot(dx, dy) <= 1e-9 * (np.abs(x1) + np.abs(x2) + 1.0)
+    dx = x1 + x2
+    mirrored = np.hypot(dx, y1 - y2) <= 1e-9 * (np.abs(x1) + np.abs(x2) + 1.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         c = np.where(mirrored, focus_y, (x1 * y2 + x2 * y1) / dx)
         reach = np.hypot(x1, y1 - c)
         sin_t, cos_t = x1 / reach, (y1 - c) / reach
         palm_y = c + SPREAD_AXIS_OFFSET_MM * cos_t / sin_t
-    extensions = np.stack([np.hypot(x1, y1 - palm_y), np.hypot(x2, y2 - palm_y), palm_y], -1)
-    cos_delta = np.stack([-sin_t * n1x - cos_t * n1y, sin_t * n2x - cos_t * n2y,
-                          np.broadcast_to(np.cos(offsets), yaw.shape)], axis=-1)
+    e1, e2 = np.hypot(x1, y1 - palm_y), np.hypot(x2, y2 - palm_y)
+    cos_delta = (-sin_t * n1x - cos_t * n1y, sin_t * n2x - cos_t * n2y, np.cos(offsets))
     feasible = (x1 > 0) & (x2 < 0) & (c > 0) & (sin_t > 0)
     feasible &= cos_t >= np.cos(config.max_spread_rad)
-    feasible &= _reachable(extensions, cos_delta, config)
+    feasible &= _reachable((e1, e2, palm_y), cos_delta, config)
     cost = _force_line_from_cos(cos_delta, params.friction_angle)
-    spread = np.arctan2(sin_t, cos_t)
+
+    def finger_of(rows, cols):
+        one = a_is_one[rows, cols]
+        return np.stack([np.where(one, others[rows, 0], others[rows, 1]),
+                         np.where(one, others[rows, 1], others[rows, 0]), thumb[rows]], axis=1)
 
     def assemble(rows, cols):
-        y_axis = frame.y[rows, cols]
-        palm = p3[rows] + palm_y[rows, cols, None] * y_axis
-        contacts = grasps.contacts[grasp[rows, None], finger_of[rows, cols]]
-        return contacts, finger_forces(yaw[rows, cols], spread[rows, cols]), palm
+        palm = p3[rows] + palm_y[rows, cols, None] * frame.y[rows, cols]
+        contacts = grasps.contacts[grasp[rows, None], finger_of(rows, cols)]
+        spread = np.arctan2(sin_t[rows, cols], cos_t[rows, cols])
+        return contacts, finger_forces(yaw[rows, cols], spread), palm
 
     rows, cols, contacts, forces, palm = _best_clear(cost, feasible, obj, assemble)
     pick = (rows, cols)
     return _configurations(
-        grasps, grasp[rows], finger_of[pick], contacts=contacts, forces=forces,
-        focus=p3[rows] + c[pick][:, None] * frame.y[pick], extensions=extensions[pick],
-        spread=spread[pick], palm=palm, yaw=_wrapped(yaw[pick]), force_line=cost[pick])
+        grasps, grasp[rows], finger_of(rows, cols), contacts=contacts, forces=forces,
+        focus=p3[rows] + c[pick][:, None] * frame.y[pick],
+        extensions=np.stack([e1[pick], e2[pick], palm_y[pick]], axis=1),
+        spread=np.arctan2(sin_t[pick], cos_t[pick]), palm=palm, yaw=_wrapped(yaw[pick]),
+        force_line=cost[pick])
 
 
 # ------------------------------------------------------------------------------- two fingers
@@ -240,8 +246,8 @@ def _two_finger(grasps, index, obj, params, config, offsets) -> Configurations:
     extensions = np.stack([np.hypot(SPREAD_AXIS_OFFSET_MM, depths[0] - palm_y),
                            np.hypot(SPREAD_AXIS_OFFSET_MM, depths[1] - palm_y), palm_y], -1)
     _, nfy = frame.coordinates(grasps.normals[index, 0])
-    cos_delta = np.stack([-nfy, -nfy, np.broadcast_to(np.cos(offsets), yaw.shape)], axis=-1)
-    feasible &= _reachable(extensions, cos_delta, config)
+    cos_delta = (-nfy, -nfy, np.cos(offsets))
+    feasible &= _reachable(tuple(np.moveaxis(extensions, -1, 0)), cos_delta, config)
     cost = _force_line_from_cos(cos_delta, params.friction_angle)
 
     def assemble(rows, cols):
@@ -305,17 +311,25 @@ class _HandFrame:
         return vx * self.sin - vy * self.cos, vx * self.cos + vy * self.sin
 
 
-def _reachable(extensions: Array, cos_delta: Array, config: SynthesisConfig) -> Array:
-    into_object = (cos_delta > 0).all(axis=-1)
-    in_range = ((extensions >= config.min_extension_mm)
-                & (extensions <= config.max_extension_mm)).all(axis=-1)
-    return into_object & in_range & (extensions[..., 2] > 0)
+def _reachable(extensions, cos_delta, config: SynthesisConfig) -> NDArray[np.bool_]:
+    """Extensions (e1, e2, e3) within range, e3 > 0, every force into the object (delta < pi/2)."""
+    ok = extensions[2] > 0
+    for e in extensions:
+        ok &= (e >= config.min_extension_mm) & (e <= config.max_extension_mm)
+    for cosine in cos_delta:
+        ok &= cosine > 0
+    return ok
 
 
-def _force_line_from_cos(cos_delta: Array, friction_angle: float) -> Array:
-    delta = np.arccos(np.clip(cos_delta, -1.0, 1.0))
-    k = np.where((delta > friction_angle).any(axis=-1), 3.0, 1.0)
-    return (4.0 * k / 3.0) * np.sum(delta**2, axis=-1) / friction_angle**2
+def _force_line_from_cos(cos_delta, friction_angle: float) -> Array:
+    """C1 from the cosines (cos delta_1, cos delta_2, cos delta_3) of the force deviations."""
+    deltas = [np.arccos(np.clip(cosine, -1.0, 1.0)) for cosine in cos_delta]
+    outside = np.zeros(np.broadcast_shapes(*(d.shape for d in deltas)), dtype=bool)
+    total = np.zeros(outside.shape)
+    for delta in deltas:
+        outside |= delta > friction_angle
+        total += delta**2
+    return np.where(outside, 4.0, 4.0 / 3.0) * total / friction_angle**2
 
 
 def _best_clear(cost, feasible, obj, assemble):

@@ -22,7 +22,9 @@ is the finger on the hand's +x side (hand x = thumb direction turned 90 degrees 
 Grasps are ranked by a cheap centring score (lower is better): distance of the grasp centre
 (C_G, or the contact triangle's centroid for two-finger grasps) from the object's centroid over
 M_L + m_L, plus, for three-finger grasps, how far the largest gap between normal directions exceeds
-2*pi/3, over pi/3. The best ``config.max_grasps`` are kept.
+2*pi/3, over pi/3. Repeats (same regions, contacts within 1% of their regions' lengths) are
+removed among the best 4 * ``config.max_grasps`` candidates, then the best ``config.max_grasps``
+are kept.
 """
 
 from __future__ import annotations
@@ -47,6 +49,7 @@ HALF_FINGER_BASE_MM = 25.0
 DEDUP_FRACTION = 0.01
 _NOISE_FRACTION = 1e-7  # contact fractions closer than this are the same point
 _TOLERANCE_MM = 1e-7  # slack on length limits for rounding noise
+_SHORTLIST = 4  # best-ranked candidates examined per grasp kept (repeats come in up to threes)
 
 Array = NDArray[np.float64]
 DEFAULT_PARAMS = GraspParams()
@@ -87,7 +90,9 @@ class Grasps:
                    np.zeros(0, dtype=bool))
 
     def take(self, index: NDArray[np.int_]) -> Grasps:
-        """The grasps at ``index``, in that order."""
+        """The grasps at ``index``, in that order (indices past the end are ignored)."""
+        index = np.asarray(index)
+        index = index[index < len(self)]
         return Grasps(**{name: getattr(self, name)[index] for name in _FIELDS})
 
     @classmethod
@@ -128,8 +133,9 @@ def synthesize_grasps(
     ])
     if len(grasps) == 0:
         return grasps
-    order = np.argsort(_score(grasps, obj), kind="stable")[: config.max_grasps]
-    return grasps.take(order)
+    # repeats share their score, so they sit together at the top of the ranking
+    order = np.argsort(_score(grasps, obj), kind="stable")[: _SHORTLIST * config.max_grasps]
+    return _deduplicated(grasps.take(order)).take(np.arange(config.max_grasps))
 
 
 # ----------------------------------------------------------------------------- three fingers
@@ -137,48 +143,37 @@ def _three_finger(regions: Regions, obj: PlanarObject, t: Array) -> Grasps:
     if len(regions) < 3:
         return Grasps.empty()
     triplets = np.array(list(combinations(range(len(regions)), 3)))
+    # the normals must positively span the plane (a property of the regions alone)
+    triplets = triplets[_largest_gap(regions.normal[triplets]) < np.pi - 1e-9]
     # every region of a triplet takes a turn at being the one solved last (index 2)
     ordered = np.concatenate([np.roll(triplets, shift, axis=1) for shift in range(3)])
     # the first two normals must cross: parallel ones have no focus
     ordered = ordered[np.abs(_cross(regions.normal[ordered[:, 0]],
                                     regions.normal[ordered[:, 1]])) > 1e-9]
-    n = len(t)
-    ia, ib, ic = ordered[:, 0], ordered[:, 1], ordered[:, 2]
-    pa = np.broadcast_to(regions.point(ia[:, None], t[None, :])[:, :, None, :],
-                         (len(ordered), n, n, 2))
-    pb = np.broadcast_to(regions.point(ib[:, None], t[None, :])[:, None, :, :],
-                         (len(ordered), n, n, 2))
-    na = regions.normal[ia][:, None, None, :]
-    nb = regions.normal[ib][:, None, None, :]
+    # one row per (ordered triplet, contact on a, contact on b)
+    row, i, j = (g.ravel() for g in np.meshgrid(np.arange(len(ordered)), np.arange(len(t)),
+                                                  np.arange(len(t)), indexing="ij"))
+    ia, ib = ordered[row, 0], ordered[row, 1]
+    pa, pb = regions.point(ia, t[i]), regions.point(ib, t[j])
+    na, nb = regions.normal[ia], regions.normal[ib]
     denom = _cross(na, nb)
-    sa = _cross(pb - pa, nb) / denom
-    sb = _cross(pb - pa, na) / denom
-    focus = pa + sa[..., None] * na
-    a_c, d_c = regions.a[ic][:, None, None, :], regions.direction[ic][:, None, None, :]
-    tc = np.sum((focus - a_c) * d_c, axis=-1) / regions.length[ic][:, None, None]
-    pc = a_c + tc[..., None] * (regions.b[ic] - regions.a[ic])[:, None, None, :]
-    nc = regions.normal[ic][:, None, None, :]
-    normals = np.stack(np.broadcast_arrays(na, nb, nc), axis=-2)
-    keep = (
-        (sa > 0) & (sb > 0)
-        & (np.sum((focus - pc) * nc, axis=-1) > 0)
-        & (tc >= END_FRACTION - 1e-9) & (tc <= 1.0 - END_FRACTION + 1e-9)
-        & (_largest_gap(normals) < np.pi - 1e-9)
-    )
-    cand = np.nonzero(keep)
-    if len(cand[0]) == 0:
-        return Grasps.empty()
-    focus = focus[cand]
-    inside = obj.contains(focus)
-    rows = tuple(c[inside] for c in cand)
-    contacts = np.stack([pa[rows], pb[rows], pc[rows]], axis=1)
-    region = ordered[rows[0]]
+    sa, sb = _cross(pb - pa, nb) / denom, _cross(pb - pa, na) / denom
+    ahead = (sa > 0) & (sb > 0)  # the focus lies in front of both contacts
+    row, pa, pb, focus = row[ahead], pa[ahead], pb[ahead], (pa + sa[:, None] * na)[ahead]
+    ic = ordered[row, 2]
+    tc = np.sum((focus - regions.a[ic]) * regions.direction[ic], axis=1) / regions.length[ic]
+    pc = regions.point(ic, tc)
+    keep = (tc >= END_FRACTION - 1e-9) & (tc <= 1.0 - END_FRACTION + 1e-9)
+    keep &= np.sum((focus - pc) * regions.normal[ic], axis=1) > 0
+    keep[keep] = obj.contains(focus[keep])
+    contacts = np.stack([pa[keep], pb[keep], pc[keep]], axis=1)
+    region = ordered[row[keep]]
     # canonical order by region index, so the three solving orders de-duplicate against each other
     order = np.argsort(region, axis=1)
     region = np.take_along_axis(region, order, axis=1)
     contacts = np.take_along_axis(contacts, order[..., None], axis=1)
-    grasps = _grasps_on(regions, contacts, region, focus[inside], two_finger=False)
-    return _deduplicated(grasps)
+    grasps = _grasps_on(regions, contacts, region, focus[keep], two_finger=False)
+    return grasps
 
 
 # ------------------------------------------------------------------------------- two fingers
@@ -217,9 +212,8 @@ def _two_finger(regions: Regions, obj: PlanarObject, count: int, params: GraspPa
     middles = (contacts[:, :2] + contacts[:, 2:]) / 2.0
     inside = obj.contains(middles).all(axis=1)
     region = np.stack([fingers[flat], fingers[flat], thumbs[flat]], axis=1)[inside]
-    grasps = _grasps_on(regions, contacts[inside], region, np.full((len(region), 2), np.nan),
-                        two_finger=True)
-    return _deduplicated(grasps)
+    return _grasps_on(regions, contacts[inside], region, np.full((len(region), 2), np.nan),
+                      two_finger=True)
 
 
 def two_finger_contacts(
@@ -277,11 +271,11 @@ def _deduplicated(grasps: Grasps) -> Grasps:
     span = grasps.region_b - grasps.region_a
     arc = np.sum((grasps.contacts - grasps.region_a) * span, axis=-1) / np.sum(span**2, axis=-1)
     keys = np.concatenate([grasps.region, np.round(arc / _NOISE_FRACTION)], axis=1)
-    keys, first = np.unique(keys, axis=0, return_index=True)  # sorted lexicographically
-    same_regions = np.all(np.diff(keys[:, :3], axis=0) == 0, axis=1)
-    close = np.all(np.abs(np.diff(keys[:, 3:], axis=0)) * _NOISE_FRACTION <= DEDUP_FRACTION, axis=1)
-    repeated = np.concatenate([[False], same_regions & close])
-    return grasps.take(np.sort(first[~repeated]))
+    order = np.lexsort(keys.T[::-1])
+    step = np.diff(keys[order], axis=0)
+    repeated = np.all(step[:, :3] == 0, axis=1) & np.all(
+        np.abs(step[:, 3:]) * _NOISE_FRACTION <= DEDUP_FRACTION, axis=1)
+    return grasps.take(np.sort(order[np.concatenate([[True], ~repeated])]))
 
 
 def _cross(u: Array, v: Array) -> Array:

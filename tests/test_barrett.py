@@ -25,7 +25,8 @@ from grip_env.objects.shapes import rectangle, regular_polygon
 from grip_env.params import GraspParams
 
 PARAMS = GraspParams()
-SYNTHESIS = SynthesisConfig()
+SYNTHESIS = SynthesisConfig(min_extension_mm=30.0, max_extension_mm=160.0, max_spread_rad=1.5,
+                            thumb_search_steps=61)
 
 
 def _grasps(contacts, normals, focus, two_finger=False, region_ends=None) -> Grasps:
@@ -91,9 +92,9 @@ def test_equilateral_triangle_gives_the_symmetric_sixty_degree_configuration():
 def test_hand_limits_reject_configurations():
     obj = PlanarObject.from_polygon(regular_polygon(3, 100, np.pi / 2))
     grasp = _edge_midpoint_grasp(obj)
-    narrow = SynthesisConfig(max_spread_rad=0.5)
-    short = SynthesisConfig(max_extension_mm=40.0)
-    long_ = SynthesisConfig(min_extension_mm=70.0)
+    narrow = SYNTHESIS.model_copy(update={"max_spread_rad": 0.5})
+    short = SYNTHESIS.model_copy(update={"max_extension_mm": 40.0})
+    long_ = SYNTHESIS.model_copy(update={"min_extension_mm": 70.0})
     for config in (narrow, short, long_):
         confs = configurations(grasp, obj, PARAMS, config)
         assert len(confs) == 0 or np.all(confs.force_line > 0.5)  # the ideal one is gone
