@@ -1,0 +1,218 @@
+"""The candidate table: column contract, per-row geometry, known grips, invariances."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from grip_env.barrett import SPREAD_AXIS_OFFSET_MM, approach_clear
+from grip_env.columns import CANDIDATE_COLUMNS
+from grip_env.config import Config
+from grip_env.features import FEATURE_NAMES
+from grip_env.objects import PlanarObject, load_object_set, make_shape, procedural_objects
+from grip_env.objects.shapes import rectangle, regular_polygon
+from grip_env.params import GraspParams
+from grip_env.perception.regions import Regions
+from grip_env.pipeline import candidates
+
+PARAMS = GraspParams()
+CONFIG = Config().override(synthesis={"min_extension_mm": 15.0, "max_extension_mm": 160.0,
+                                      "max_spread_rad": 1.5, "max_grasps": 200})
+ALL_GRASPS = CONFIG.override(synthesis={"max_grasps": 100_000})
+TOL = 1e-6
+
+
+def side_regions(obj: PlanarObject, inset: float = 3.0) -> Regions:
+    """One region per polygon side, inset from the corners, flat (rho = 0)."""
+    a, b = obj.contour, np.roll(obj.contour, -1, axis=0)
+    length = np.linalg.norm(b - a, axis=1)
+    d = (b - a) / length[:, None]
+    keep = length > 2 * inset + 1
+    normal = np.stack([-d[:, 1], d[:, 0]], axis=1)
+    return Regions((a + inset * d)[keep], (b - inset * d)[keep], normal[keep],
+                   np.zeros(int(keep.sum())))
+
+
+def _xy(table: pd.DataFrame, prefix: str) -> np.ndarray:
+    return np.stack([table[[f"{prefix}{i}_x", f"{prefix}{i}_y"]].to_numpy() for i in "123"],
+                    axis=1)
+
+
+def _cross(u, v):
+    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+
+def assert_row_geometry(table: pd.DataFrame, obj: PlanarObject, config: Config = CONFIG) -> None:
+    """Every row satisfies DESIGN's hand model and its grasp's geometry."""
+    assert list(table.columns) == list(CANDIDATE_COLUMNS)
+    if len(table) == 0:
+        return
+    p, n, f = _xy(table, "p"), _xy(table, "n"), _xy(table, "f")
+    ends_a = np.stack([table[[f"r{i}a_x", f"r{i}a_y"]].to_numpy() for i in "123"], axis=1)
+    ends_b = np.stack([table[[f"r{i}b_x", f"r{i}b_y"]].to_numpy() for i in "123"], axis=1)
+    two = table["two_finger"].to_numpy(bool)
+    three = ~two
+    psi, theta = table["hand_yaw"].to_numpy(), table["spread"].to_numpy()
+    palm = table[["hand_x", "hand_y"]].to_numpy()
+    e = table[["e1", "e2", "e3"]].to_numpy()
+    x = np.stack([np.sin(psi), -np.cos(psi)], axis=1)
+    y = np.stack([np.cos(psi), np.sin(psi)], axis=1)
+    # unit forces matching the formula from (psi, theta)
+    s, c = np.sin(theta)[:, None], np.cos(theta)[:, None]
+    np.testing.assert_allclose(f[:, 0], -s * x - c * y, atol=TOL)
+    np.testing.assert_allclose(f[:, 1], s * x - c * y, atol=TOL)
+    np.testing.assert_allclose(f[:, 2], y, atol=TOL)
+    np.testing.assert_allclose(np.linalg.norm(f, axis=-1), 1.0, atol=TOL)
+    np.testing.assert_allclose(np.linalg.norm(n, axis=-1), 1.0, atol=TOL)
+    # force lines: fingers through their spread axes O +- 25 x, thumb through O before it
+    axes = np.stack([palm + SPREAD_AXIS_OFFSET_MM * x, palm - SPREAD_AXIS_OFFSET_MM * x], axis=1)
+    np.testing.assert_allclose(_cross(p[:, :2] - axes, f[:, :2]), 0.0, atol=TOL)
+    np.testing.assert_allclose(p[:, 2], palm - e[:, 2:3] * y, atol=TOL)
+    np.testing.assert_allclose(e, np.linalg.norm(p - palm[:, None], axis=-1), atol=TOL)
+    # hand limits
+    synthesis = config.synthesis
+    assert np.all((e >= synthesis.min_extension_mm - TOL) & (e <= synthesis.max_extension_mm + TOL))
+    assert np.all((theta >= 0) & (theta <= synthesis.max_spread_rad + TOL))
+    assert np.all(theta[two] == 0)
+    assert np.all(np.sum(f * n, axis=-1) > 0)  # every force pushes into the object
+    assert approach_clear(obj, p, f).all()
+    # contacts on their region segments, with the regions' normals
+    span = ends_b - ends_a
+    t = np.sum((p - ends_a) * span, axis=-1) / np.sum(span**2, axis=-1)
+    assert np.all((t > -TOL) & (t < 1 + TOL))
+    np.testing.assert_allclose(_cross(p - ends_a, span / np.linalg.norm(span, axis=-1)[..., None]),
+                               0.0, atol=TOL)
+    np.testing.assert_allclose(_cross(span, n), np.linalg.norm(span, axis=-1), atol=TOL)  # left
+    np.testing.assert_allclose(ends_a[two, 0], ends_a[two, 1])  # two-finger: shared region
+    # three-finger: normal lines meet at C_G; real force lines meet at C_C = O - 25 cot(theta) y
+    cg = table[["cg_x", "cg_y"]].to_numpy()
+    cc = table[["cc_x", "cc_y"]].to_numpy()
+    np.testing.assert_allclose(_cross(cg[three, None] - p[three], n[three]), 0.0, atol=TOL)
+    np.testing.assert_allclose(_cross(cc[three, None] - p[three], f[three]), 0.0, atol=TOL)
+    cot = np.cos(theta[three]) / np.sin(theta[three])
+    expected_cc = palm[three] - SPREAD_AXIS_OFFSET_MM * cot[:, None] * y[three]
+    np.testing.assert_allclose(cc[three], expected_cc, atol=TOL)
+    assert np.isnan(cg[two]).all() and np.isnan(cc[two]).all()
+    # identity, descriptors and order
+    assert table["grip_id"].is_unique
+    assert (table["object_id"] == obj.name).all()
+    for name, value in obj.descriptors().items():
+        np.testing.assert_allclose(table[name], value)
+    assert table["Q_C"].is_monotonic_increasing
+    assert np.isfinite(table[list(FEATURE_NAMES)].to_numpy()).all()
+
+
+@pytest.mark.parametrize("obj", load_object_set("default"), ids=lambda o: o.name)
+def test_default_objects_rows_satisfy_their_geometry(obj):
+    table = candidates(obj, PARAMS, CONFIG, regions=side_regions(obj))
+    assert_row_geometry(table, obj)
+
+
+@pytest.mark.parametrize("obj", load_object_set("default"), ids=lambda o: o.name)
+def test_default_objects_with_found_regions(obj):
+    table = candidates(obj, PARAMS, CONFIG)
+    assert_row_geometry(table, obj)
+
+
+def test_procedural_and_mask_objects():
+    for obj in procedural_objects(6, seed=3):
+        assert_row_geometry(candidates(obj, PARAMS, CONFIG), obj)
+    mask = np.zeros((120, 160), dtype=bool)
+    mask[20:90, 30:140] = True  # a 110 x 70 mm block
+    obj = PlanarObject.from_mask(mask, mm_per_px=1.0, name="block")
+    table = candidates(obj, PARAMS, CONFIG)
+    assert_row_geometry(table, obj)
+    assert table["two_finger"].any()
+
+
+def test_rectangle_gives_two_finger_grips():
+    obj = PlanarObject.from_polygon(rectangle(100, 55), name="rect")
+    table = candidates(obj, PARAMS, CONFIG, regions=side_regions(obj))
+    assert len(table) > 0 and table["two_finger"].all()
+    best = table.iloc[0]
+    assert best["C1"] == pytest.approx(0.0, abs=1e-9)
+    assert abs(best["p3_y"] - best["p1_y"]) == pytest.approx(55.0)
+    assert best["grip_id"] == f"rect/{best['grasp_id']}/2"
+
+
+def test_equilateral_triangle_gives_the_sixty_degree_grip():
+    obj = PlanarObject.from_polygon(regular_polygon(3, 100, np.pi / 2), name="tri")
+    table = candidates(obj, PARAMS, CONFIG, regions=side_regions(obj))
+    assert not table["two_finger"].any()
+    best = table.iloc[0]
+    assert best["spread"] == pytest.approx(np.pi / 3, abs=1e-6)
+    assert best["C1"] == pytest.approx(0.0, abs=1e-9)
+    midpoints = (obj.contour + np.roll(obj.contour, -1, axis=0)) / 2
+    contacts = _xy(table.iloc[:1], "p")[0]
+    assert np.linalg.norm(contacts[:, None] - midpoints[None], axis=-1).min(axis=1).max() < 1e-6
+    np.testing.assert_allclose(best[["cc_x", "cc_y"]].to_numpy(float), obj.centroid, atol=1e-6)
+
+
+@pytest.mark.parametrize("case", ["huge", "cross", "no_regions"])
+def test_object_without_feasible_grip_gives_an_empty_table(case):
+    if case == "huge":  # contacts 300 mm from the centre: beyond every finger's reach
+        obj = PlanarObject.from_polygon(regular_polygon(3, 600, np.pi / 2))
+        regions = side_regions(obj, inset=60)
+    elif case == "cross":  # axis-aligned sides only, arms too short for two fingers
+        obj = make_shape("cross")
+        regions = side_regions(obj)
+    else:
+        obj, regions = make_shape("square"), Regions.empty()
+    table = candidates(obj, PARAMS, CONFIG, regions=regions)
+    assert len(table) == 0
+    assert list(table.columns) == list(CANDIDATE_COLUMNS)
+
+
+def test_bad_input_is_refused():
+    with pytest.raises(ValueError, match="PlanarObject"):
+        candidates(np.zeros((3, 2)))
+    with pytest.raises(ValueError, match="GraspParams"):
+        candidates(make_shape("square"), params={"mu": 0.4})
+
+
+def _features_match(a: pd.DataFrame, b: pd.DataFrame, names) -> None:
+    """Same multiset of rows in feature space (rows matched by nearest neighbour)."""
+    assert len(a) == len(b)
+    if len(a) == 0:
+        return
+    np.testing.assert_allclose(np.sort(a["Q_C"]), np.sort(b["Q_C"]), atol=1e-6)
+    fa, fb = a[list(names)].to_numpy(), b[list(names)].to_numpy()
+    distance = np.abs(fa[:, None] - fb[None]).max(axis=-1)
+    assert distance.min(axis=1).max() < 1e-6
+    assert distance.min(axis=0).max() < 1e-6
+
+
+@settings(max_examples=12, deadline=None)
+@given(
+    shape=st.sampled_from(["triangle", "trapezoid", "pentagon", "rectangle", "l_shape", "star"]),
+    angle=st.floats(-math.pi, math.pi),
+    offset=st.tuples(st.floats(-400, 400), st.floats(-400, 400)),
+)
+def test_rigid_motion_leaves_features_unchanged(shape, angle, offset):
+    obj = make_shape(shape)
+    moved = obj.transformed(angle, offset)
+    table = candidates(obj, PARAMS, ALL_GRASPS, regions=side_regions(obj))
+    moved_table = candidates(moved, PARAMS, ALL_GRASPS, regions=side_regions(moved))
+    _features_match(table, moved_table, FEATURE_NAMES)
+
+
+@pytest.mark.parametrize("scale", [0.8, 1.3])
+def test_scaling_keeps_scale_free_grasp_features(scale):
+    """S1, S2, G1, G2 of the three-finger grips present at both scales do not change."""
+    obj = PlanarObject.from_polygon(regular_polygon(5, 70, np.pi / 2), name="pentagon")
+    big = obj.transformed(scale=scale)
+    table = candidates(obj, PARAMS, ALL_GRASPS, regions=side_regions(obj, 3.0))
+    scaled = candidates(big, PARAMS, ALL_GRASPS, regions=side_regions(big, 3.0 * scale))
+    key = _xy(table, "p").reshape(len(table), -1)
+    scaled_key = _xy(scaled, "p").reshape(len(scaled), -1) / scale
+    distance = np.abs(key[:, None] - scaled_key[None]).max(axis=-1)
+    rows, cols = np.nonzero(distance < 1e-6)
+    assert len(rows) > 10
+    names = ["S1", "S2", "G1", "G2"]
+    np.testing.assert_allclose(table[names].to_numpy()[rows], scaled[names].to_numpy()[cols],
+                               atol=1e-9)
