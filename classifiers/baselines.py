@@ -89,7 +89,8 @@ class RankingClassifier(ClassifierMixin, BaseEstimator):
 
     def predict(self, X: Any) -> np.ndarray:
         """The more probable class."""
-        return self.classes_[(self.predict_proba(X)[:, 1] >= 0.5).astype(int)]
+        positive = self.predict_proba(X)[:, 1]
+        return self.classes_[(positive >= 0.5).astype(int)]
 
     def _score(self, X: np.ndarray) -> np.ndarray:
         if X.shape[1] != 1:

@@ -107,7 +107,8 @@ class TorchMLPClassifier(ClassifierMixin, BaseEstimator):
 
     def predict(self, X: Any) -> np.ndarray:
         """Most probable class of each row."""
-        return self.classes_[np.argmax(self.predict_proba(X), axis=1)]
+        proba = self.predict_proba(X)
+        return self.classes_[np.argmax(proba, axis=1)]
 
     def state_dict(self) -> dict[str, torch.Tensor]:
         """The fitted network's tensors (weights and input standardisation)."""

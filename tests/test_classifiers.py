@@ -1,0 +1,168 @@
+"""Classifier registry, baselines, grouped evaluation, persistence and bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from sklearn.utils.estimator_checks import parametrize_with_checks
+
+from classifiers.evaluation import evaluate_models, grouped_folds, top1
+from classifiers.models import MODEL_NAMES, make_model
+from classifiers.persistence import load_model, save_model
+from classifiers.synthetic import synthetic_grips
+from classifiers.torch_mlp import TorchMLPClassifier
+from grip_env.config import LearningConfig
+
+FAST = {"mlp_torch": {"model__max_epochs": 30}, "mlp_sklearn": {"model__max_iter": 60}}
+
+
+@pytest.fixture(scope="module")
+def synthetic_grips_table() -> pd.DataFrame:
+    """30 objects with 10–40 grips each; success logistic in C1, C4, S3, S2 plus noise."""
+    return synthetic_grips(n_objects=30, seed=0)
+
+
+def fast_model(name: str, seed: int = 0):
+    return make_model(name, seed).set_params(**FAST.get(name, {}))
+
+
+@pytest.mark.slow
+@parametrize_with_checks([TorchMLPClassifier((16,), max_epochs=60, random_state=0)])
+def test_torch_mlp_passes_all_sklearn_estimator_checks(estimator, check):
+    check(estimator)
+
+
+@pytest.mark.parametrize("name", MODEL_NAMES)
+def test_every_model_fits_and_predicts(synthetic_grips_table, name):
+    table = synthetic_grips_table
+    model = fast_model(name).fit(table, table["success"])
+    proba = model.predict_proba(table)
+    assert proba.shape == (len(table), 2)
+    assert np.allclose(proba.sum(axis=1), 1.0) and np.all((proba >= 0) & (proba <= 1))
+    assert set(np.unique(model.predict(table))) <= {False, True}
+
+
+def test_grouped_folds_never_share_an_object(synthetic_grips_table):
+    table = synthetic_grips_table
+    groups = table["object_id"].to_numpy()
+    seen = []
+    for train, test in grouped_folds(table, folds=4, seed=1):
+        assert not set(groups[train]) & set(groups[test])
+        seen.append(test)
+    assert np.array_equal(np.sort(np.concatenate(seen)), np.arange(len(table)))
+
+
+def test_rank_baselines_are_computed_from_the_columns(synthetic_grips_table):
+    table = synthetic_grips_table
+    for name, column in (("rank_qc", "Q_C"), ("rank_qg", "Q_G")):
+        model = make_model(name).fit(table, table["success"])
+        score = model.decision_function(table)
+        np.testing.assert_allclose(score, -table[column].to_numpy())
+        for _, grips in table.groupby("object_id"):
+            assert np.argmax(model.decision_function(grips)) == np.argmin(grips[column].to_numpy())
+        positive = model.predict_proba(table)[:, 1]
+        order = np.argsort(table[column].to_numpy())
+        assert np.all(np.diff(positive[order]) <= 1e-12)  # monotone: lower index, higher p
+
+
+def test_random_baseline_is_seeded(synthetic_grips_table):
+    table = synthetic_grips_table
+    a = make_model("random", seed=3).fit(table, table["success"]).decision_function(table)
+    b = make_model("random", seed=3).fit(table, table["success"]).decision_function(table)
+    c = make_model("random", seed=4).fit(table, table["success"]).decision_function(table)
+    assert np.array_equal(a, b) and not np.array_equal(a, c)
+
+
+def test_top1_picks_the_highest_score_per_object():
+    test = pd.DataFrame({"object_id": [0, 0, 1, 1], "success": [False, True, True, False],
+                         "success_rate": [0.2, 0.8, 0.6, 0.0]})  # fmt: skip
+    assert top1(test, np.array([0.1, 0.9, 0.7, 0.2])) == (1.0, pytest.approx(0.7))
+    assert top1(test, np.array([0.9, 0.1, 0.2, 0.7])) == (0.0, pytest.approx(0.1))
+
+
+@pytest.mark.parametrize("name", MODEL_NAMES)
+def test_saved_models_reload_and_predict_the_same(synthetic_grips_table, tmp_path, name):
+    table = synthetic_grips_table
+    model = fast_model(name).fit(table, table["success"])
+    save_model(model, tmp_path, name, {"dataset_sha256": "abc"})
+    loaded, info = load_model(tmp_path, name)
+    np.testing.assert_array_equal(loaded.predict_proba(table), model.predict_proba(table))
+    assert info["dataset_sha256"] == "abc" and info["name"] == name
+    assert not list(tmp_path.glob("*.pkl"))
+
+
+def test_learned_models_beat_random_on_learnable_data(synthetic_grips_table):
+    config = LearningConfig(folds=3, repeats=1, seed=0)
+    models = {name: fast_model(name) for name in ("logreg", "mlp_torch", "random")}
+    result = evaluate_models(synthetic_grips_table, models, config=config)
+    auc = {name: result["models"][name]["roc_auc"]["mean"] for name in models}
+    assert auc["random"] < 0.6
+    assert auc["logreg"] > auc["random"] + 0.15 and auc["mlp_torch"] > auc["random"] + 0.15
+    top = result["models"]["logreg"]["top1_success"]
+    assert top["ci"][0] <= top["mean"] <= top["ci"][1]
+    assert result["cv"]["folds"] == 3 and result["cv"]["seeds"] == [0]
+
+
+def test_metrics_json_shape(synthetic_grips_table):
+    config = LearningConfig(folds=2, repeats=2, seed=5)
+    result = evaluate_models(synthetic_grips_table, ["rank_qc"], config=config)
+    summary = result["models"]["rank_qc"]
+    for metric in ("accuracy", "balanced_accuracy", "roc_auc", "f1", "brier", "top1_success"):
+        assert set(summary[metric]) >= {"mean", "ci"} and len(summary[metric]["ci"]) == 2
+        assert summary[metric]["n"] == 4
+    assert result["cv"]["seeds"] == [5, 6] and result["cv"]["groups"] == "object_id"
+
+
+@pytest.mark.parametrize(
+    ("mutate", "message"),
+    [
+        (lambda t: t.drop(columns=["success", "successes", "success_rate"]), "lacks the columns"),
+        (lambda t: t.assign(success=True), "one class"),
+        (lambda t: t[t["object_id"] < 2], "fewer than"),
+    ],
+)
+def test_bad_datasets_raise_value_error(synthetic_grips_table, mutate, message):
+    with pytest.raises(ValueError, match=message):
+        evaluate_models(mutate(synthetic_grips_table), ["rank_qc"], config=LearningConfig(folds=3))
+
+
+def test_unknown_names_raise_value_error(synthetic_grips_table):
+    with pytest.raises(ValueError, match="unknown model name 'forest'"):
+        make_model("forest")
+    with pytest.raises(ValueError, match="unknown feature names"):
+        make_model("svm", features=("S1", "Z9"))
+    with pytest.raises(ValueError, match="unknown feature names"):
+        evaluate_models(synthetic_grips_table, ["svm"], features=["C7"])
+    with pytest.raises(ValueError, match="DataFrame"):
+        make_model("logreg").fit(np.zeros((4, 12)), [0, 1, 0, 1])
+
+
+@pytest.mark.slow
+def test_train_cli_writes_metrics_models_and_plots(synthetic_grips_table, tmp_path, monkeypatch):
+    import json
+
+    import yaml
+    from typer.testing import CliRunner
+
+    import grip_env.dataset
+    from grip_env.cli import _register_commands, app
+
+    monkeypatch.setattr(grip_env.dataset, "load", lambda path: synthetic_grips_table)
+    config = tmp_path / "config.yaml"
+    config.write_text(yaml.safe_dump({"learning": {"folds": 2, "repeats": 1}}))
+    _register_commands()
+    out = tmp_path / "out"
+    args = ["train", "--data", str(tmp_path), "--out", str(out), "--config", str(config),
+            "--models", "logreg,rank_qc,mlp_torch"]  # fmt: skip
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert set(metrics["models"]) == {"logreg", "rank_qc", "mlp_torch"}
+    assert len(metrics["dataset"]["sha256"]) == 64
+    assert (out / "roc.png").is_file() and (out / "calibration.png").is_file()
+    assert {p.name for p in (out / "models").iterdir()} >= {"logreg.skops", "mlp_torch.pt"}
+    loaded, info = load_model(out / "models", "mlp_torch")
+    assert info["features"] == list(loaded[0].columns) and info["dataset_sha256"]
+    bad = CliRunner().invoke(app, [*args[:-1], "forest"])
+    assert bad.exit_code == 2 and "unknown model name" in bad.output
