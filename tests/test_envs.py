@@ -13,8 +13,14 @@ from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
 import grip_env  # noqa: F401  (registers the environments)
 from grip_env.columns import CONTACTS, DATASET_COLUMNS, FEATURES
-from grip_env.envs import GripAcceptEnv, GripSelectEnv, objects_in_split, split_objects
-from grip_env.objects import make_shape
+from grip_env.envs import (
+    GripAcceptEnv,
+    GripSelectEnv,
+    LiveBackend,
+    objects_in_split,
+    split_objects,
+)
+from grip_env.objects import SHAPE_NAMES, make_shape
 
 NAMES = ("rectangle", "triangle", "hexagon", "l_shape", "square", "disc")
 SIZES = (5, 12, 3, 20, 8, 1)  # candidates per object; K = 8 below truncates two of them
@@ -216,7 +222,7 @@ def test_masked_action_is_penalised_not_raised(data, slot):
     env.reset(seed=0)
     _, reward, terminated, _, info = env.step(slot)
     assert (reward, terminated, info["invalid_action"]) == (-3.0, True, True)
-    assert info["grip_id"] == "" and np.isnan(info["Q_C"]) and info["attempts"] == 0
+    assert info["grip_id"] == "" and info["Q_C"] is None and info["attempts"] == 0
 
 
 def test_repeating_a_failed_grip_is_invalid(data):
@@ -360,7 +366,8 @@ def test_sb3_subproc_vec_env_runs(data):
 
     # "module:id" makes gymnasium import grip_env (and so register the ids) in each worker.
     venv = make_vec_env("grip_env:GripAccept-v0", n_envs=2, seed=0, vec_env_cls=SubprocVecEnv,
-                        env_kwargs={"data": data, "max_candidates": 8})
+                        env_kwargs={"data": data, "max_candidates": 8},
+                        vec_env_kwargs={"start_method": "fork"})
     venv.reset()
     for _ in range(10):
         _, reward, _, _ = venv.step(np.ones(2, dtype=np.int64))
@@ -388,3 +395,44 @@ def test_ppo_trains_on_flattened_observations(data):
     for env in (FlattenObservation(select_env(data)), FlattenObservation(accept_env(data))):
         model = PPO("MlpPolicy", env, n_steps=64, batch_size=32, n_epochs=1, seed=0, device="cpu")
         model.learn(total_timesteps=256)
+
+
+# ------------------------------------------------------------------------------ live backend
+def test_make_without_arguments_is_live_on_the_default_set():
+    env = gymnasium.make("GripSelect-v0")
+    assert isinstance(env.unwrapped.backend, LiveBackend)
+    assert set(env.unwrapped.object_ids) == set(SHAPE_NAMES)
+    obs, info = env.reset(seed=0)
+    assert info["object_id"] in SHAPE_NAMES and 0 < obs["mask"].sum() <= 64
+    found = env.unwrapped._candidate_set(env.unwrapped.object_ids.index(info["object_id"]))
+    assert np.all(np.diff(found.q_c[: found.count]) >= 0)  # lowest Q_C first
+    env.close()
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("env_id", ["GripSelect-v0", "GripAccept-v0"])
+@pytest.mark.filterwarnings("ignore::UserWarning")
+def test_checkers_pass_on_live(env_id):
+    env = gymnasium.make(env_id, objects=["rectangle"], max_candidates=4,
+                         render_mode="rgb_array")
+    gym_check_env(env.unwrapped)
+    sb3_check_env(env.unwrapped)
+    env.close()
+
+
+@pytest.mark.slow
+def test_live_steps_run_pybullet_deterministically():
+    env = GripSelectEnv(objects=["rectangle"], max_candidates=4, max_attempts=2)
+    outcomes = []
+    for _ in range(2):
+        env.reset(seed=11)
+        _, reward, _, _, info = env.step(0)
+        outcomes.append((reward, info["success"], info["grip_id"]))
+        assert info["success_rate"] is None and info["attempts"] == 1
+        assert info["grip_id"].startswith("rectangle/")
+    assert outcomes[0] == outcomes[1]
+
+
+def test_missing_dataset_path_is_a_value_error(tmp_path):
+    with pytest.raises(ValueError, match="not found"):
+        GripSelectEnv(tmp_path / "no-such-dataset")

@@ -30,7 +30,7 @@ class GripAcceptEnv(GripEnvBase):
     normalised features, and ``progress`` = (candidates already shown / K, executions used /
     max_attempts, the object's candidate count / K). Action: ``Discrete(2)``.
 
-    ``info`` holds ``object_id``, ``grip_id``, ``Q_C``, ``success_rate`` (recorded rate, NaN
+    ``info`` holds ``object_id``, ``grip_id``, ``Q_C``, ``success_rate`` (recorded rate; None
     live) of the candidate acted on, ``attempts``, ``executed``, ``success`` and
     ``invalid_action`` (always False). Options are those of
     :class:`~grip_env.envs.select.GripSelectEnv`.

@@ -91,6 +91,8 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
             for index in range(len(self.object_ids)):
                 self._candidate_set(index)
         self._window: HumanWindow | None = None
+        self._identity = np.arange(self.max_candidates)
+        self._identity.flags.writeable = False
 
     # ------------------------------------------------------------------ candidates
     def _fit_scaler(self, normalize: str) -> FeatureScaler:
@@ -117,9 +119,10 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         Objects without a candidate are rejected and redrawn, so the draw sequence does not depend
         on which objects were already computed.
         """
-        rng, total = self.np_random, len(self.object_ids)
+        rng, total, sets = self.np_random, len(self.object_ids), self._sets
         while True:
-            found = self._candidate_set(int(rng.integers(total)))
+            index = int(rng.random() * total)  # uniform index; cheaper than rng.integers
+            found = sets[index] or self._candidate_set(index)
             if found.count:
                 return found
             if all(s is not None and not s.count for s in self._sets):
@@ -127,24 +130,30 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
 
     def _shuffled_slots(self, count: int) -> NDArray[np.intp]:
         """Slot order for an episode: identity, or the real candidates permuted."""
+        if self.candidate_order == "q_c":
+            return self._identity
         slots = np.arange(self.max_candidates)
-        if self.candidate_order == "shuffled":
-            slots[:count] = self.np_random.permutation(count)
+        slots[:count] = self.np_random.permutation(count)
         return slots
 
     # ------------------------------------------------------------------ info and drawing
     @staticmethod
     def _grip_info(found: CandidateSet, row: int) -> dict[str, Any]:
-        """object_id, grip_id, Q_C and success_rate of candidate ``row`` (padding: sentinels)."""
-        if row < found.count:
-            grip_id = found.grip_ids[row]
-        else:
+        """object_id, grip_id, Q_C and success_rate of candidate ``row``.
+
+        Unknown values are None (a padded slot's ``Q_C``, a live grip's ``success_rate``) so that
+        infos compare equal across identical runs; a padded slot's ``grip_id`` is -1 or "".
+        """
+        if row >= found.count:
             grip_id = -1 if found.grip_ids and isinstance(found.grip_ids[0], int) else ""
+            return {"object_id": found.object_id, "grip_id": grip_id, "Q_C": None,
+                    "success_rate": None}
+        rate = float(found.success_rate[row])
         return {
             "object_id": found.object_id,
-            "grip_id": grip_id,
+            "grip_id": found.grip_ids[row],
             "Q_C": float(found.q_c[row]),
-            "success_rate": float(found.success_rate[row]),
+            "success_rate": None if rate != rate else rate,
         }
 
     def render(self) -> NDArray[np.uint8] | None:

@@ -143,12 +143,14 @@ def candidate_set(
     mask = np.zeros(max_candidates, dtype=np.int8)
     mask[:count] = 1
     q_c = _padded(rows["Q_C"].to_numpy(dtype=np.float64), max_candidates)
-    rate = _success_rate(rows)
+    rate = _padded(_success_rate(rows), max_candidates)
     contacts = np.zeros((max_candidates, 3, 2))
     contacts[:count] = rows.loc[:, list(CONTACTS)].to_numpy(dtype=np.float64).reshape(-1, 3, 2)
+    for array in (features, mask, q_c, rate, contacts):
+        array.flags.writeable = False  # shared by every episode on this object
     return CandidateSet(
         object_id=str(object_id), count=count, features=features, mask=mask, q_c=q_c,
-        success_rate=_padded(rate, max_candidates), contacts=contacts,
+        success_rate=rate, contacts=contacts,
         grip_ids=tuple(rows["grip_id"].tolist()), rows=rows,
     )
 

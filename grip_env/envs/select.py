@@ -31,7 +31,7 @@ class GripSelectEnv(GripEnvBase):
 
     The episode terminates on success, when ``max_attempts`` grips were executed, after an invalid
     action, or when no valid candidate remains. ``info`` holds ``object_id``, ``grip_id``, ``Q_C``,
-    ``success_rate`` (recorded rate, NaN live), ``attempts``, ``success`` and ``invalid_action``.
+    ``success_rate`` (recorded rate; None live), ``attempts``, ``success`` and ``invalid_action``.
 
     Args:
         data: a dataset path or DataFrame (replay backend); None runs grips live in PyBullet.
@@ -68,6 +68,7 @@ class GripSelectEnv(GripEnvBase):
         self._features = np.zeros((k, width), dtype=np.float32)
         self._mask = np.zeros(k, dtype=np.int8)
         self._attempts = 0
+        self._remaining = 0
         self._chosen: int | None = None
         self._outcome: bool | None = None
 
@@ -78,8 +79,9 @@ class GripSelectEnv(GripEnvBase):
         super().reset(seed=seed)
         found = self._found = self._sample_candidates()
         self._slots = slots = self._shuffled_slots(found.count)
-        self._features = found.features[slots]
+        self._features = found.features if slots is self._identity else found.features[slots]
         self._mask = found.mask.copy()
+        self._remaining = found.count
         self._attempts, self._chosen, self._outcome = 0, None, None
         if self.render_mode == "human":
             self.render()
@@ -101,9 +103,10 @@ class GripSelectEnv(GripEnvBase):
         success = self.backend.execute(found, row, self.np_random)
         self._attempts += 1
         self._mask[slot] = 0
+        self._remaining -= 1
         self._chosen, self._outcome = row, success
         reward = self.success_reward if success else self.failure_reward
-        terminated = success or self._attempts >= self.max_attempts or not self._mask.any()
+        terminated = success or self._attempts >= self.max_attempts or not self._remaining
         info.update(attempts=self._attempts, success=success, invalid_action=False)
         if self.render_mode == "human":
             self.render()
