@@ -32,6 +32,7 @@ from grip_env.dataset import (
 from grip_env.dataset.jobs import object_seeds
 from grip_env.features import compute_features
 from grip_env.objects import load_object_set
+from grip_env.pipeline import candidates
 
 CONFIG = Config().override(dataset={"trials": 4, "seed": 7, "max_grips_per_object": 5})
 TRIALS_SEEN: list[int] = []
@@ -293,3 +294,37 @@ def test_missing_shard_is_refused_by_load(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="missing"):
         load(out)
     assert any("part-000004" in p and "missing" in p for p in validate(out))
+
+
+# ----------------------------------------------------------------------------- the real job
+REAL = Config().override(dataset={"max_grips_per_object": 2, "trials": 2, "seed": 3})
+
+
+@pytest.mark.slow
+def test_real_job_same_dataset_from_one_and_two_workers(tmp_path: Path) -> None:
+    serial = generate(REAL, tmp_path / "one", objects="basic", workers=1, progress=False)
+    pooled = generate(REAL, tmp_path / "two", objects="basic", workers=2, progress=False)
+    grips = load(serial)
+    pd.testing.assert_frame_equal(grips, load(pooled))
+    assert validate(serial) == []
+    assert set(grips["object_id"]) <= {"rectangle", "triangle", "hexagon", "l_shape"}
+    assert (grips.groupby("object_id").size() <= 2).all()
+    assert (grips["trials"] == 2).all()
+    assert grips["grip_id"].str.count("/").eq(2).all()  # object/grasp/thumb, one object prefix
+    # within an object, rows are the best (lowest) candidates by Q_C, best first
+    for object_id, rows in grips.groupby("object_id", sort=False):
+        assert rows["Q_C"].is_monotonic_increasing
+        obj = next(o for o in load_object_set("basic") if o.name == object_id)
+        best = candidates(obj, REAL.grasp, REAL)["Q_C"].head(2).to_numpy()
+        np.testing.assert_allclose(rows["Q_C"].to_numpy(), best)
+
+
+@pytest.mark.slow
+def test_real_job_plans_on_perceived_contour(tmp_path: Path) -> None:
+    config = REAL.override(uncertainty={"perceived_contour": True})
+    grips = load(generate(config, tmp_path / "d", objects="rectangle", workers=1, progress=False))
+    planned = load(generate(REAL, tmp_path / "p", objects="rectangle", workers=1, progress=False))
+    assert len(grips) > 0
+    # the perceived rectangle's descriptors differ slightly from the true polygon's
+    assert not np.allclose(grips["area"].iloc[0], planned["area"].iloc[0], rtol=0, atol=1e-9)
+    assert np.isclose(grips["area"].iloc[0], planned["area"].iloc[0], rtol=0.05)

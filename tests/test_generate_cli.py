@@ -22,7 +22,7 @@ from grip_env.dataset import load
 
 _register_commands()
 RUNNER = CliRunner()
-SMALL = Config().override(dataset={"max_grips_per_object": 3, "trials": 2})
+SMALL = Config().override(dataset={"max_grips_per_object": 2, "trials": 2})
 
 
 @pytest.fixture
@@ -75,7 +75,7 @@ def test_validate_of_non_dataset_exits_2(tmp_path: Path) -> None:
 
 def _generate_command(config: Path, out: Path, *extra: str) -> list[str]:
     return [sys.executable, "-c", "from grip_env.cli import main; main()", "generate",
-            "--config", str(config), "--out", str(out), "--objects", "3", "--seed", "5",
+            "--config", str(config), "--out", str(out), "--objects", "basic", "--seed", "5",
             "--workers", "1", "--no-progress", *extra]
 
 
@@ -110,7 +110,7 @@ def test_killed_run_resumes_to_the_uninterrupted_dataset(
     assert code == 0 and "OK" in text
 
     code, text = cli("generate", "--config", str(small_config), "--out", str(killed),
-                     "--objects", "3", "--seed", "6", "--no-progress")
+                     "--objects", "basic", "--seed", "6", "--no-progress")
     assert code == 2 and "dataset.seed: 5 -> 6" in text and "--overwrite" in text
 
 
@@ -118,7 +118,7 @@ def test_killed_run_resumes_to_the_uninterrupted_dataset(
 def test_validate_cli_flags_tampered_feature(tmp_path: Path, small_config: Path) -> None:
     out = tmp_path / "d"
     code, _ = cli("generate", "--config", str(small_config), "--out", str(out),
-                  "--objects", "2", "--workers", "1", "--no-progress")
+                  "--objects", "rectangle", "--workers", "1", "--no-progress")
     assert code == 0
     shard = sorted((out / "grips").glob("part-*.parquet"))[0]
     table = pq.read_table(shard)

@@ -165,8 +165,9 @@ def _run(
                 if time.perf_counter() - last_flush >= _MANIFEST_FLUSH_SECONDS:
                     write_manifest(directory, manifest)
                     last_flush = time.perf_counter()
+                bar.set_postfix(grips=rows, grips_per_s=f"{rows / _elapsed(started):.1f}",
+                                refresh=False)
                 bar.update(1)
-                bar.set_postfix(grips=rows, grips_per_s=f"{rows / _elapsed(started):.1f}")
         finally:
             manifest["complete"] = len(manifest["shards"]) == total
             write_manifest(directory, manifest)

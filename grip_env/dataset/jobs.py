@@ -61,8 +61,8 @@ def simulate_object(task: ObjectTask) -> pd.DataFrame:
             task.obj, config.perception, config.objects.thickness_mm, seed=perception_seed
         )
     table = candidates(planned_on, config.grasp, config)
-    best = table.sort_values("Q_C", ascending=False, kind="stable")
-    best = best.head(config.dataset.max_grips_per_object)
+    # Q_C sums penalties: lower is better, and candidates come best first
+    best = table.sort_values("Q_C", kind="stable").head(config.dataset.max_grips_per_object)
     outcome = run_trials(task.obj, best, config, config.dataset.trials, trials_seed)
     return with_outcomes(best, outcome["trials"], outcome["successes"], task.object_id)
 
