@@ -128,7 +128,7 @@ def synthesize_grasps(
     if config.contacts_per_region == 1:
         t = np.array([0.5])
     grasps = Grasps.concatenate([
-        _three_finger(regions, obj, t),
+        _three_finger(regions, obj, t, _SHORTLIST * config.max_grasps),
         _two_finger(regions, obj, config.contacts_per_region, params),
     ])
     if len(grasps) == 0:
@@ -139,7 +139,7 @@ def synthesize_grasps(
 
 
 # ----------------------------------------------------------------------------- three fingers
-def _three_finger(regions: Regions, obj: PlanarObject, t: Array) -> Grasps:
+def _three_finger(regions: Regions, obj: PlanarObject, t: Array, limit: int) -> Grasps:
     if len(regions) < 3:
         return Grasps.empty()
     triplets = np.array(list(combinations(range(len(regions)), 3)))
@@ -166,8 +166,13 @@ def _three_finger(regions: Regions, obj: PlanarObject, t: Array) -> Grasps:
     keep = (tc >= END_FRACTION - 1e-9) & (tc <= 1.0 - END_FRACTION + 1e-9)
     keep &= np.sum((focus - pc) * regions.normal[ic], axis=1) > 0
     keep[keep] = obj.contains(focus[keep])
-    contacts = np.stack([pa[keep], pb[keep], pc[keep]], axis=1)
+    keep = np.nonzero(keep)[0]
+    # only the best ``limit`` candidates can make the final cut
     region = ordered[row[keep]]
+    best = np.argsort(_centring(focus[keep], obj) + _excess_gap(regions.normal[region]),
+                      kind="stable")[:limit]
+    keep, region = keep[best], region[best]
+    contacts = np.stack([pa[keep], pb[keep], pc[keep]], axis=1)
     # canonical order by region index, so the three solving orders de-duplicate against each other
     order = np.argsort(region, axis=1)
     region = np.take_along_axis(region, order, axis=1)
@@ -246,10 +251,16 @@ def two_finger_contacts(
 # ---------------------------------------------------------------------------------- helpers
 def _score(grasps: Grasps, obj: PlanarObject) -> Array:
     centre = np.where(grasps.two_finger[:, None], grasps.contacts.mean(axis=1), grasps.focus)
-    size = sum(obj.inertia_semi_axes)
-    centring = np.linalg.norm(centre - obj.centroid, axis=1) / size
-    excess_gap = np.maximum(_largest_gap(grasps.normals) - 2 * np.pi / 3, 0.0) / (np.pi / 3)
-    return centring + np.where(grasps.two_finger, 0.0, excess_gap)
+    excess_gap = np.where(grasps.two_finger, 0.0, _excess_gap(grasps.normals))
+    return _centring(centre, obj) + excess_gap
+
+
+def _centring(centre: Array, obj: PlanarObject) -> Array:
+    return np.linalg.norm(centre - obj.centroid, axis=1) / sum(obj.inertia_semi_axes)
+
+
+def _excess_gap(normals: Array) -> Array:
+    return np.maximum(_largest_gap(normals) - 2 * np.pi / 3, 0.0) / (np.pi / 3)
 
 
 def _largest_gap(normals: Array) -> Array:
