@@ -216,3 +216,16 @@ def test_scaling_keeps_scale_free_grasp_features(scale):
     names = ["S1", "S2", "G1", "G2"]
     np.testing.assert_allclose(table[names].to_numpy()[rows], scaled[names].to_numpy()[cols],
                                atol=1e-9)
+
+
+def test_perceived_object():
+    from grip_env.perception.render import perceive
+
+    obj = make_shape("trapezoid")
+    seen = perceive(obj, CONFIG.perception)
+    table = candidates(seen, PARAMS, CONFIG)
+    assert_row_geometry(table, seen)
+    assert len(table) > 0 and table["two_finger"].any() and (~table["two_finger"]).any()
+    # planned on the perceived contour, close to the true object's grips
+    truth = candidates(obj, PARAMS, CONFIG)
+    assert abs(table["Q_C"].min() - truth["Q_C"].min()) < 0.5
