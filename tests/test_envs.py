@@ -359,7 +359,6 @@ def test_sync_vector_env_batches_episodes(data):
     envs.close()
 
 
-@pytest.mark.slow
 def test_sb3_subproc_vec_env_runs(data):
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import SubprocVecEnv
