@@ -19,7 +19,7 @@ as the foot of the grasp focus C_G on the thumb line. The psi with the best forc
 Two-finger grasps: theta = 0, fingers on the lines 25 mm beside the thumb line, re-intersected with
 their shared region for every psi. The palm centre's position along the thumb line is then free;
 it is placed where e3 equals the finger extension at the fingers' mean depth d ahead of the thumb,
-e3 = (25^2 + d^2) / (2 d).
+e3 = (25^2 + d^2) / (2 d), moved as little as needed to keep every extension >= min_extension_mm.
 
 Rejected: theta outside [0, max_spread_rad]; any e_i outside [min_extension_mm, max_extension_mm];
 e3 <= 0; C_C behind the thumb; a force not pointing into the object (delta_i >= pi/2); a finger or
