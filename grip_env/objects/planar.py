@@ -125,11 +125,16 @@ class PlanarObject:
 
     def convex_pieces(self) -> list[NDArray[np.float64]]:
         """Exact convex pieces covering the object (the contour itself when convex)."""
+        return [piece.copy() for piece in self._convex_pieces]
+
+    @cached_property
+    def _convex_pieces(self) -> list[NDArray[np.float64]]:
         if self.is_convex:
             return [self.contour.copy()]
         triangles = shapely.constrained_delaunay_triangles(self._polygon)
-        pieces = [np.asarray(t.exterior.coords)[:-1] for t in triangles.geoms]
-        return [_ccw(p) for p in pieces if Polygon(p).area > _MIN_AREA_MM2]
+        pieces = [_ccw(np.asarray(t.exterior.coords)[:-1]) for t in triangles.geoms]
+        pieces = [p for p in pieces if Polygon(p).area > _MIN_AREA_MM2]
+        return merge_convex(pieces)
 
     # ----------------------------------------------------------------- transforms
     def transformed(
@@ -176,6 +181,49 @@ def polygon_moments(
     myy = iyy / area - cy * cy
     mxy = ixy / area - cx * cy
     return float(area), np.array([cx, cy]), np.array([[mxx, mxy], [mxy, myy]])
+
+
+def merge_convex(pieces: list[NDArray[np.float64]]) -> list[NDArray[np.float64]]:
+    """Merge CCW convex pieces across shared edges while the union stays convex (Hertel-Mehlhorn).
+
+    Fewer, larger pieces make cheaper and better-behaved collision shapes than raw triangles.
+    """
+    polys = [[tuple(v) for v in piece] for piece in pieces]
+    merged = True
+    while merged:
+        merged = False
+        edges = {}
+        for index, poly in enumerate(polys):
+            for k in range(len(poly)):
+                edges[(poly[k], poly[(k + 1) % len(poly)])] = index
+        for (a, b), i in edges.items():
+            j = edges.get((b, a))
+            if j is None or j == i:
+                continue
+            union = _splice(polys[i], polys[j], a, b)
+            if _is_convex(union):
+                polys[i] = union
+                del polys[j]
+                merged = True
+                break
+    return [np.array(poly, dtype=float) for poly in polys]
+
+
+def _splice(first: list, second: list, a: tuple, b: tuple) -> list:
+    """Union of two CCW polygons sharing the edge a->b in ``first`` (b->a in ``second``)."""
+    i = first.index(b)
+    rotated_first = first[i:] + first[:i]  # starts at b, ends at a
+    j = second.index(a)
+    rotated_second = second[j:] + second[:j]  # starts at a, ends at b
+    return rotated_first + rotated_second[1:-1]
+
+
+def _is_convex(poly: list) -> bool:
+    pts = np.asarray(poly, dtype=float)
+    d1 = np.roll(pts, -1, axis=0) - pts
+    d2 = np.roll(d1, -1, axis=0)
+    cross = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+    return bool(np.all(cross >= -1e-9 * np.abs(d1).max() ** 2))
 
 
 def _ccw(vertices: NDArray[np.float64]) -> NDArray[np.float64]:
