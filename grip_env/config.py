@@ -64,10 +64,10 @@ class SimConfig(_Section):
     finger_force_n: float = Field(15.0, gt=0.0, le=200.0, description="fingertip force")
     finger_friction: float = Field(1.0, gt=0.0, le=3.0, description="finger pad lateral friction")
     lift_height_mm: float = Field(60.0, gt=0.0, le=1000.0, description="lift distance")
-    shake_amplitude_mm: float = Field(10.0, ge=0.0, le=200.0, description="shake amplitude")
-    shake_frequency_hz: float = Field(4.0, ge=0.0, le=50.0, description="shake frequency")
+    shake_amplitude_mm: float = Field(15.0, ge=0.0, le=200.0, description="shake amplitude")
+    shake_frequency_hz: float = Field(5.0, ge=0.0, le=50.0, description="shake frequency")
     hold_tolerance_mm: float = Field(20.0, gt=0.0, le=500.0, description="drift still held")
-    mass_per_weight_kg: float = Field(0.3, gt=0.0, le=50.0, description="object mass for W = 1")
+    mass_per_weight_kg: float = Field(1.0, gt=0.0, le=50.0, description="object mass for W = 1")
     fingertip_clearance_mm: float = Field(
         4.0, ge=0.0, le=100.0, description="lowest finger point above the table while closing"
     )
@@ -81,7 +81,7 @@ class SimConfig(_Section):
 class UncertaintyConfig(_Section):
     """Execution noise, each drawn from a seeded generator per trial."""
 
-    position_std_mm: float = Field(1.0, ge=0.0, le=50.0, description="palm position error std")
+    position_std_mm: float = Field(2.0, ge=0.0, le=50.0, description="palm position error std")
     yaw_std_rad: float = Field(0.02, ge=0.0, le=1.0, description="palm orientation error std")
     friction_range: tuple[float, float] = Field((0.4, 1.0), description="true friction drawn in")
     mass_rel_std: float = Field(0.2, ge=0.0, le=2.0, description="object mass relative std")

@@ -54,7 +54,8 @@ def test_fingers_facing_each_other_fail_more_than_opposed_fingers():
     facing = grip((0, 0), np.pi / 2, spread,
                   ((50, reach * np.cos(spread)), (-50, reach * np.cos(spread)), (0, -30)), "f")
     opposed = grip((0, 0), np.pi / 2, 0.0, ((25, 30), (-25, 30), (0, -30)), "o")
-    config = Config().override(grasp={"mu": 0.2}, uncertainty={"friction_range": (0.3, 0.3)})
+    config = Config().override(grasp={"mu": 0.2}, uncertainty={"friction_range": (0.3, 0.3)},
+                               sim={"mass_per_weight_kg": 0.3})
     result = run_trials(PLATE, pd.DataFrame([facing, opposed]), config, trials=6, seed=0)
     assert result.loc[1, "successes"] >= 5
     assert result.loc[0, "successes"] <= result.loc[1, "successes"] - 2
