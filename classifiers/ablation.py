@@ -101,7 +101,9 @@ def paired_difference(
     keys = ["repeat", "fold"]
     merged = frame.merge(reference, on=keys, suffixes=("", "_ref"), validate="one_to_one")
     return {
-        metric: interval((merged[metric] - merged[f"{metric}_ref"]).to_numpy(float), folds)
+        metric: interval(
+            (merged[metric] - merged[f"{metric}_ref"]).to_numpy(float), folds, bounds=(-1.0, 1.0)
+        )
         for metric in METRICS
     }
 

@@ -163,13 +163,22 @@ def evaluate_models(
 def summarise(per_fold: pd.DataFrame, folds: int) -> dict[str, dict[str, dict[str, Any]]]:
     """Mean and corrected 95% t-interval of each metric, per model."""
     return {
-        str(name): {metric: interval(group[metric].to_numpy(float), folds) for metric in METRICS}
+        str(name): {
+            metric: interval(group[metric].to_numpy(float), folds, bounds=(0.0, 1.0))
+            for metric in METRICS
+        }
         for name, group in per_fold.groupby("model", sort=False)
     }
 
 
-def interval(values: np.ndarray, folds: int) -> dict[str, Any]:
-    """``{"mean", "ci", "n"}`` by the Nadeau–Bengio corrected resampled t-test; NaNs dropped."""
+def interval(
+    values: np.ndarray, folds: int, bounds: tuple[float, float] = (-np.inf, np.inf)
+) -> dict[str, Any]:
+    """``{"mean", "ci", "n"}`` by the Nadeau–Bengio corrected resampled t-test; NaNs dropped.
+
+    The interval is clipped to ``bounds``, the range the metric can take (all of ours lie in
+    [0, 1]; paired differences in [-1, 1]).
+    """
     values = values[np.isfinite(values)]
     n = values.size
     if n == 0:
@@ -179,7 +188,8 @@ def interval(values: np.ndarray, folds: int) -> dict[str, Any]:
         return {"mean": mean, "ci": [mean, mean], "n": 1}
     spread = np.sqrt((1.0 / n + 1.0 / (folds - 1)) * values.var(ddof=1))
     half = float(stats.t.ppf(0.975, n - 1) * spread)
-    return {"mean": mean, "ci": [mean - half, mean + half], "n": int(n)}
+    low, high = max(mean - half, bounds[0]), min(mean + half, bounds[1])
+    return {"mean": mean, "ci": [float(low), float(high)], "n": int(n)}
 
 
 def cv_description(

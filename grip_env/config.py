@@ -25,7 +25,7 @@ class ObjectsConfig(_Section):
     """Which objects a job runs on."""
 
     set: str = Field("default", description="named object set, or 'procedural'")
-    procedural_count: int = Field(0, ge=0, le=1_000_000, description="extra procedural objects")
+    procedural_count: int = Field(22, ge=0, le=1_000_000, description="extra procedural objects")
     procedural_size_mm: tuple[float, float] = Field((50.0, 150.0), description="size range across")
     thickness_mm: float = Field(30.0, gt=0.0, le=500.0, description="extrusion height")
 
@@ -91,11 +91,11 @@ class UncertaintyConfig(_Section):
 class DatasetConfig(_Section):
     """Dataset generation."""
 
-    trials: int = Field(5, ge=1, le=1000, description="simulated trials per grip")
+    trials: int = Field(4, ge=1, le=1000, description="simulated trials per grip")
     seed: int = Field(0, ge=0, description="run seed")
     workers: int = Field(2, ge=1, le=1024, description="parallel workers")
     backend: Literal["process", "ray"] = Field("process", description="parallel backend")
-    max_grips_per_object: int = Field(40, ge=1, le=10_000, description="best grips by Q_C")
+    max_grips_per_object: int = Field(30, ge=1, le=10_000, description="best grips by Q_C")
 
 
 class LearningConfig(_Section):

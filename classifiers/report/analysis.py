@@ -19,7 +19,8 @@ CORRELATION_COLUMNS = ("C1", "C2", "C3", "C4", "C5", "C6", "S1", "S2", "S3", "S4
 def feature_correlations(table: pd.DataFrame) -> pd.DataFrame:
     """Pearson correlations among C1..C6, S1..S4 and Q_C (the paper's correlation table)."""
     _require(table, CORRELATION_COLUMNS)
-    return table.loc[:, list(CORRELATION_COLUMNS)].corr(method="pearson")
+    correlations = table.loc[:, list(CORRELATION_COLUMNS)].corr(method="pearson")
+    return correlations.rename_axis("feature")
 
 
 @dataclass(frozen=True)

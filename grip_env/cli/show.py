@@ -55,7 +55,10 @@ def _render_trial(planar, cfg, seed: int, out: Path) -> Path:  # type: ignore[no
     table = candidates(planar, cfg.grasp, cfg)
     if table.empty:
         raise ValueError(f"object {planar.name!r} has no feasible grip to simulate")
-    return render_trial_strip(planar, table.iloc[0], cfg, seed, out)
+    result = render_trial_strip(planar, table.iloc[0], cfg, seed, out)
+    outcome = "held" if result.success else "slipped"
+    typer.echo(f"trial of {table.iloc[0]['grip_id']}: {outcome} (drift {result.drift_mm:.1f} mm)")
+    return out
 
 
 def register(app: typer.Typer) -> None:
