@@ -1,10 +1,11 @@
 """Simulation layer: the only package that calls pybullet."""
 
+# world first: it imports pybullet with the native start-up banner silenced
+from grip_env.sim.world import MM, Body, World  # isort: skip
 from grip_env.sim.execution import run_trials
 from grip_env.sim.hand import HAND_URDF, Hand
 from grip_env.sim.trial import GripPlan, TrialResult, TrialScene, grip_plans, render_trial_strip
 from grip_env.sim.uncertainty import TrialNoise, sample_noise
-from grip_env.sim.world import MM, Body, World
 
 __all__ = [
     "HAND_URDF",

@@ -7,14 +7,38 @@ millimetres; metres exist only inside this layer.
 from __future__ import annotations
 
 import contextlib
+import os
+import sys
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet
 from numpy.typing import NDArray
-from pybullet_utils.bullet_client import BulletClient
 
 from grip_env.objects import PlanarObject
+
+
+@contextlib.contextmanager
+def _quiet_native_stdout() -> Iterator[None]:
+    """Silence what pybullet's C code prints to file descriptor 1 (build banner, ``argv[0]=``)."""
+    try:
+        sys.stdout.flush()
+        saved = os.dup(1)
+    except (OSError, ValueError):
+        yield
+        return
+    try:
+        with open(os.devnull, "w") as devnull:
+            os.dup2(devnull.fileno(), 1)
+            yield
+    finally:
+        os.dup2(saved, 1)
+        os.close(saved)
+
+
+with _quiet_native_stdout():
+    import pybullet
+    from pybullet_utils.bullet_client import BulletClient
 
 MM = 1e-3  # metres per millimetre
 
@@ -31,7 +55,8 @@ class World:
     """A headless PyBullet world owning its own client; use as a context manager or ``close()``."""
 
     def __init__(self, timestep: float = 1.0 / 240.0, solver_iterations: int = 50) -> None:
-        self.client = BulletClient(connection_mode=pybullet.DIRECT)
+        with _quiet_native_stdout():
+            self.client = BulletClient(connection_mode=pybullet.DIRECT)
         self.timestep = timestep
         self.solver_iterations = solver_iterations
         self.reset()
