@@ -53,7 +53,10 @@ def run_study(
     from grip_env.dataset import generate, load
 
     data_dir = out / "dataset"
-    stage("dataset", data_dir / "COMPLETE", lambda: _generate(generate, config, data_dir))
+    log("[study] dataset (resumes or reuses what is already in place) ...")
+    start = time.perf_counter()
+    generate(config, data_dir)
+    timings["dataset"] = time.perf_counter() - start
     table = load(data_dir)
     stage("classifiers", out / "classifiers" / "metrics.json",
           lambda: train_and_save(table, out / "classifiers", config))
@@ -66,11 +69,6 @@ def run_study(
     from classifiers.report.study_report import write_report
 
     return write_report(out, config, table)
-
-
-def _generate(generate: Callable[..., Path], config: Config, data_dir: Path) -> None:
-    generate(config, data_dir)
-    (data_dir / "COMPLETE").write_text("dataset generation finished\n")
 
 
 def _merge_timings(path: Path, timings: dict[str, float]) -> None:

@@ -167,3 +167,23 @@ def load_config(path: str | Path | None = None) -> Config:
     if not isinstance(data, dict):
         raise ValueError(f"config {path} must be a mapping of sections, got {type(data).__name__}")
     return config_from_dict(data)
+
+
+def config_reference_markdown() -> str:
+    """The configuration reference table (README's), generated from the fields above."""
+    lines = ["| key | default | meaning |", "| --- | --- | --- |"]
+    defaults = Config()
+    for section in Config.model_fields:
+        values = getattr(defaults, section)
+        for name, field in type(values).model_fields.items():
+            value = _show(getattr(values, name))
+            lines.append(f"| `{section}.{name}` | {value} | {field.description or ''} |")
+    return "\n".join(lines)
+
+
+def _show(value: Any) -> str:
+    if isinstance(value, float):
+        return f"{value:.6g}"
+    if isinstance(value, tuple):
+        return ", ".join(_show(v) for v in value)
+    return str(value)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from grip_env import GraspParams
-from grip_env.config import DEFAULT_CONFIG_PATH, Config, load_config
+from grip_env.config import DEFAULT_CONFIG_PATH, Config, config_reference_markdown, load_config
 
 
 def test_default_yaml_equals_the_code_defaults():
@@ -63,3 +63,8 @@ def test_override_validates():
         Config().override(nothing={"a": 1})
     with pytest.raises(ValueError, match=r"grasp\.mu"):
         Config().override(grasp={"mu": 0})
+
+
+def test_readme_configuration_reference_is_current():
+    readme = (DEFAULT_CONFIG_PATH.parents[1] / "README.md").read_text()
+    assert config_reference_markdown() in readme
