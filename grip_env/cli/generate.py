@@ -18,22 +18,22 @@ def generate(
     objects: Annotated[
         str | None,
         typer.Option(help="object set name (e.g. default) or a number of procedural objects "
-                          "[default: config objects.set + objects.procedural_count]"),
+                          "(default: config objects.set + objects.procedural_count)"),
     ] = None,
     trials: Annotated[
-        int | None, typer.Option(help="simulated trials per grip [default: config dataset.trials]")
+        int | None, typer.Option(help="simulated trials per grip (default: config dataset.trials)")
     ] = None,
     seed: Annotated[
-        int | None, typer.Option(help="run seed [default: config dataset.seed]")
+        int | None, typer.Option(help="run seed (default: config dataset.seed)")
     ] = None,
     workers: Annotated[
         int | None,
         typer.Option(help="parallel workers; the data do not depend on it "
-                          "[default: config dataset.workers]"),
+                          "(default: config dataset.workers)"),
     ] = None,
     backend: Annotated[
         str | None,
-        typer.Option(help="process (local process pool) or ray [default: config dataset.backend]"),
+        typer.Option(help="process (local process pool) or ray (default: config dataset.backend)"),
     ] = None,
     address: Annotated[
         str | None,
