@@ -18,7 +18,7 @@ from grip_env.dataset.jobs import ObjectJob, ObjectTask
 
 BACKENDS = ("process", "ray")
 _IN_FLIGHT_PER_WORKER = 2
-_PRELOAD = ("grip_env.dataset.jobs", "grip_env.features", "pyarrow")
+_PRELOAD = ("grip_env.dataset.jobs", "grip_env.pipeline", "grip_env.sim", "pyarrow")
 
 Results = Iterator[tuple[ObjectTask, pd.DataFrame]]
 
