@@ -140,7 +140,12 @@ def _classifier_section(report: Report, out: Path) -> None:
                  caption="Mean and 95% interval over folds × repeats.")
     best = _best(models, "roc_auc")
     if best:
-        report.text(f"Best ROC-AUC: **{best}** ({_fmt(models[best]['roc_auc'])}).")
+        top = _best(models, "top1_success")
+        report.text(
+            f"Best ROC-AUC: **{best}** ({_fmt(models[best]['roc_auc'])}); best top-1 (does the "
+            f"model's top-ranked grip on a test object hold): **{top}** "
+            f"({_fmt(models[top]['top1_success'])})."
+        )
     for png in sorted((out / "classifiers").glob("*.png")):
         report.figure(_rel(png, out), png.stem.replace("_", " "))
 
@@ -153,13 +158,31 @@ def _ablation_section(report: Report, out: Path) -> None:
     if ablation is None:
         report.text("Not run.")
         return
-    for key, block in ablation.items():
-        if isinstance(block, dict) and block and all(isinstance(v, dict) for v in block.values()):
-            flat = {name: _first_model(v) for name, v in block.items()}
-            flat = {k: v for k, v in flat.items() if v}
-            if flat:
-                metrics = sorted({m for v in flat.values() for m in v})
-                report.table(frame_of_intervals(flat, metrics), caption=f"{key}")
+    model, reference = ablation["model"], ablation["reference"]
+    sets = ablation["feature_sets"]
+    scores = {name: block["models"][model] for name, block in sets.items()}
+    differences = {
+        name: block["paired_difference"][model]
+        for name, block in sets.items() if name != reference
+    }
+    shown = ["roc_auc", "balanced_accuracy", "brier", "top1_success"]
+    report.table(frame_of_intervals(scores, shown),
+                 caption=f"Model {model} on each feature set (grouped CV, mean and 95% interval).")
+    report.table(frame_of_intervals(differences, shown),
+                 caption=f"Paired difference against {reference} (same folds and seeds).")
+    hand = differences.get("without_hand", {}).get("roc_auc")
+    if hand is not None:
+        verdict = ("the interval excludes zero" if hand["ci"][0] > 0 or hand["ci"][1] < 0
+                   else "the interval includes zero: no significant effect on this dataset")
+        report.text(
+            f"Removing the six hand features (C1–C6) changes ROC-AUC by {_fmt(hand)} "
+            f"against all twelve; {verdict}."
+        )
+    importance = ablation.get("permutation_importance", {})
+    if importance:
+        report.table(frame_of_intervals({k: {"drop in ROC-AUC": v} for k, v in importance.items()},
+                                        ["drop in ROC-AUC"]),
+                     caption="Permutation importance of each feature on held-out objects.")
     for png in sorted((out / "ablation").glob("*.png")):
         report.figure(_rel(png, out), png.stem.replace("_", " "))
 
@@ -216,12 +239,6 @@ def _json(path: Path) -> dict[str, Any] | None:
 def _best(models: dict[str, dict[str, Any]], metric: str) -> str | None:
     scored = {k: v[metric]["mean"] for k, v in models.items() if metric in v}
     return max(scored, key=scored.get) if scored else None  # type: ignore[arg-type]
-
-
-def _first_model(block: dict[str, Any]) -> dict[str, Any]:
-    if "models" in block and isinstance(block["models"], dict) and block["models"]:
-        return next(iter(block["models"].values()))
-    return {k: v for k, v in block.items() if isinstance(v, dict) and "mean" in v}
 
 
 def _fmt(value: dict[str, Any]) -> str:
