@@ -22,13 +22,7 @@ ALL = SynthesisConfig(max_grasps=100_000)
 
 def side_regions(obj: PlanarObject, inset: float = 3.0) -> Regions:
     """One region per polygon side, inset from the corners, flat (rho = 0)."""
-    a, b = obj.contour, np.roll(obj.contour, -1, axis=0)
-    length = np.linalg.norm(b - a, axis=1)
-    d = (b - a) / length[:, None]
-    keep = length > 2 * inset + 1
-    normal = np.stack([-d[:, 1], d[:, 0]], axis=1)
-    return Regions((a + inset * d)[keep], (b - inset * d)[keep], normal[keep],
-                   np.zeros(int(keep.sum())))
+    return Regions.from_polygon_sides(obj.contour, inset)
 
 
 def _cross(u, v):

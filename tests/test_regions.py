@@ -189,3 +189,13 @@ def test_find_regions_speed(benchmark) -> None:
     obj = make_shape("bean")
     regions = benchmark(find_regions, obj, CONFIG, PARAMS)
     assert len(regions) > 0
+
+
+def test_polygon_side_regions_are_inset_flat_and_face_inwards() -> None:
+
+    regions = Regions.from_polygon_sides(PlanarObject.from_polygon(rectangle(80, 40)).contour, 3.0)
+    assert len(regions) == 4
+    np.testing.assert_allclose(sorted(regions.length), [34, 34, 74, 74])
+    np.testing.assert_array_equal(regions.rho, 0)
+    midpoints = (regions.a + regions.b) / 2
+    assert np.all(np.einsum("ij,ij->i", regions.normal, -midpoints) > 0)  # towards the centre

@@ -130,9 +130,8 @@ def _classifier_section(report: Report, out: Path) -> None:
     from classifiers.study import frame_of_intervals
 
     report.heading("Classifiers (grouped cross-validation by object)")
-    metrics = _json(out / "classifiers" / "metrics.json")
+    metrics = _stage_result(report, out / "classifiers" / "metrics.json")
     if metrics is None:
-        report.text("Not run.")
         return
     models = metrics["models"]
     names = ["roc_auc", "balanced_accuracy", "accuracy", "f1", "brier", "top1_success"]
@@ -146,17 +145,15 @@ def _classifier_section(report: Report, out: Path) -> None:
             f"model's top-ranked grip on a test object hold): **{top}** "
             f"({_fmt(models[top]['top1_success'])})."
         )
-    for png in sorted((out / "classifiers").glob("*.png")):
-        report.figure(_rel(png, out), png.stem.replace("_", " "))
+    _stage_figures(report, out, "classifiers")
 
 
 def _ablation_section(report: Report, out: Path) -> None:
     from classifiers.study import frame_of_intervals
 
     report.heading("Ablation: what the hand features add")
-    ablation = _json(out / "ablation" / "ablation.json")
+    ablation = _stage_result(report, out / "ablation" / "ablation.json")
     if ablation is None:
-        report.text("Not run.")
         return
     model, reference = ablation["model"], ablation["reference"]
     sets = ablation["feature_sets"]
@@ -183,24 +180,21 @@ def _ablation_section(report: Report, out: Path) -> None:
         report.table(frame_of_intervals({k: {"drop in ROC-AUC": v} for k, v in importance.items()},
                                         ["drop in ROC-AUC"]),
                      caption="Permutation importance of each feature on held-out objects.")
-    for png in sorted((out / "ablation").glob("*.png")):
-        report.figure(_rel(png, out), png.stem.replace("_", " "))
+    _stage_figures(report, out, "ablation")
 
 
 def _selector_section(report: Report, out: Path) -> None:
     from classifiers.study import frame_of_intervals
 
     report.heading("RL selector on held-out objects")
-    selector = _json(out / "selector" / "selector.json")
+    selector = _stage_result(report, out / "selector" / "selector.json")
     if selector is None:
-        report.text("Not run.")
         return
     policies = selector["policies"]
     metrics = sorted({m for v in policies.values() for m in v if isinstance(v.get(m), dict)})
     report.table(frame_of_intervals(policies, metrics),
                  caption="First-pick success rate on the held-out objects, mean and 95% interval.")
-    for png in sorted((out / "selector").glob("*.png")):
-        report.figure(_rel(png, out), png.stem.replace("_", " "))
+    _stage_figures(report, out, "selector")
 
 
 def _provenance_section(report: Report, out: Path, config: Config) -> None:
@@ -230,6 +224,19 @@ def _study_objects(config: Config) -> list[PlanarObject]:
             config.objects.procedural_count, config.dataset.seed, config.objects.procedural_size_mm
         )
     return objects
+
+
+def _stage_result(report: Report, path: Path) -> dict[str, Any] | None:
+    """A stage's JSON result, or None after saying in the report that the stage did not run."""
+    result = _json(path)
+    if result is None:
+        report.text("Not run.")
+    return result
+
+
+def _stage_figures(report: Report, out: Path, folder: str) -> None:
+    for png in sorted((out / folder).glob("*.png")):
+        report.figure(_rel(png, out), png.stem.replace("_", " "))
 
 
 def _json(path: Path) -> dict[str, Any] | None:

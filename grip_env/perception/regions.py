@@ -54,6 +54,23 @@ class Regions:
         return self.a[index] + t[..., None] * (self.b[index] - self.a[index])
 
     @classmethod
+    def from_polygon_sides(cls, contour: NDArray[np.float64], inset_mm: float = 3.0) -> Regions:
+        """Idealised regions: one flat region per side of a CCW polygon, inset from its corners.
+
+        Sides shorter than ``2 * inset_mm + 1`` mm are left out. Useful to study grasps on exact
+        geometry, without the curvature estimate of :func:`find_regions`.
+        """
+        a, b = contour, np.roll(contour, -1, axis=0)
+        length = np.linalg.norm(b - a, axis=1)
+        direction = (b - a) / length[:, None]
+        keep = length > 2 * inset_mm + 1
+        normal = np.stack([-direction[:, 1], direction[:, 0]], axis=1)
+        return cls(
+            (a + inset_mm * direction)[keep], (b - inset_mm * direction)[keep], normal[keep],
+            np.zeros(int(keep.sum())),
+        )
+
+    @classmethod
     def empty(cls) -> Regions:
         """No regions."""
         z = np.zeros((0, 2))
