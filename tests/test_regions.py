@@ -192,7 +192,6 @@ def test_find_regions_speed(benchmark) -> None:
 
 
 def test_polygon_side_regions_are_inset_flat_and_face_inwards() -> None:
-
     regions = Regions.from_polygon_sides(PlanarObject.from_polygon(rectangle(80, 40)).contour, 3.0)
     assert len(regions) == 4
     np.testing.assert_allclose(sorted(regions.length), [34, 34, 74, 74])
