@@ -1,0 +1,30 @@
+"""Shared fixtures: a small dataset generated for real (planning, PyBullet trials, Parquet)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from grip_env.config import Config
+
+
+@pytest.fixture(scope="session")
+def generated_dataset_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The 'basic' objects plus four procedural ones, 6 grips each, 2 trials: real labels."""
+    from grip_env.dataset import generate
+
+    config = Config().override(
+        objects={"set": "basic", "procedural_count": 4},
+        dataset={"trials": 2, "max_grips_per_object": 6, "workers": 1},
+    )
+    return generate(config, tmp_path_factory.mktemp("generated") / "data", progress=False)
+
+
+@pytest.fixture(scope="session")
+def generated_grips(generated_dataset_dir: Path) -> pd.DataFrame:
+    """The grips of :func:`generated_dataset_dir`, loaded."""
+    from grip_env.dataset import load
+
+    return load(generated_dataset_dir)
