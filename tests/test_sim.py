@@ -111,3 +111,28 @@ def test_trial_strip_is_written(tmp_path):
     render_trial_strip(BOX, OPPOSED, Config(), seed=0, path=path, width=80, height=60)
     image = np.asarray(Image.open(path))
     assert image.shape == (60, 4 * 80, 3) and image.std() > 0
+
+
+def _wedge(half_angle: float) -> PlanarObject:
+    """A symmetric wedge narrowing towards +x: its long faces lean by ``half_angle`` from x."""
+    slope = np.tan(half_angle)
+    xs = np.array([-40.0, 35.0])
+    top = 27.5 - slope * xs
+    return PlanarObject.from_polygon(
+        [[xs[0], -top[0]], [xs[1], -top[1]], [xs[1], top[1]], [xs[0], top[0]]], name="wedge"
+    )
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("half_angle_deg", "holds"), [(10.0, True), (30.0, False)])
+def test_squeeze_outside_the_friction_cone_slips(half_angle_deg, holds):
+    # Opposed fingers squeeze along y; each face's normal leans half_angle from y. With true
+    # friction 0.30-0.35 (cone half-angle 17-19 deg) a 10 deg wedge stays, a 30 deg one squirts out.
+    angle = np.radians(half_angle_deg)
+    lean = 25 * np.tan(angle)
+    wedge_grip = grip((0, 0), np.pi / 2, 0.0, ((25, 27.5 - lean), (-25, 27.5 + lean), (0, -27.5)))
+    config = Config().override(grasp={"mu": 0.3}, uncertainty={"friction_range": (0.3, 0.35)},
+                               sim={"mass_per_weight_kg": 0.3})
+    result = run_trials(_wedge(angle), pd.DataFrame([wedge_grip]), config, trials=6, seed=0)
+    successes = result.loc[0, "successes"]
+    assert successes >= 4 if holds else successes <= 1
