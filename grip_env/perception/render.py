@@ -20,6 +20,7 @@ from scipy import ndimage
 
 from grip_env.config import PerceptionConfig
 from grip_env.objects import PlanarObject
+from grip_env.perception.corners import sharpen_corners
 from grip_env.perception.segmentation import contour_from_mask, segment
 
 if TYPE_CHECKING:
@@ -79,6 +80,9 @@ def perceive(
 ) -> PlanarObject:
     """The object as the camera sees it: render, segment, extract the contour, back to the plane.
 
+    Corners the pixel grid rounded off are restored where two straight edges meet
+    (:func:`~grip_env.perception.corners.sharpen_corners`).
+
     The result keeps ``obj.name``, has ``source="render"`` and lives in the object's plane frame
     (mm). ``world`` (optional) is reset and reused for the rendering.
     """
@@ -87,6 +91,7 @@ def perceive(
     coverage = object_coverage(grey, segment(grey))
     n = grey.shape[0]
     contour = contour_from_mask(coverage, mm_per_px) + centre - (n - 1) / 2.0 * mm_per_px
+    contour = sharpen_corners(contour, mm_per_px, config)
     return PlanarObject(contour, name=obj.name, source="render")
 
 
