@@ -205,3 +205,16 @@ def test_cli_reports_bad_policy_with_exit_code_2(grips, tmp_path):
     )
     assert result.exit_code == 2
     assert "policy" in result.output
+
+
+@pytest.mark.slow
+def test_live_training_executes_grips_in_pybullet(tmp_path):
+    config = load_config().override(
+        objects={"set": "basic", "procedural_count": 0}, selector={"max_candidates": 16}
+    )
+    model = train_selector(None, config, tmp_path, live=True, timesteps=32, progress=False)
+    assert model.num_timesteps == 32  # a short run collects a short rollout, not 512 live steps
+    timesteps, rewards = model.episode_curve
+    assert list(timesteps) == list(range(1, 33))  # one attempt per episode: each step ends one
+    assert set(rewards) <= {0.0, 1.0}
+    assert (tmp_path / "model.zip").exists()

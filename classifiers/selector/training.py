@@ -93,18 +93,24 @@ def make_selector_env(
 
 
 def make_selector_model(
-    env: DummyVecEnv, policy: str, seed: int = 0, tensorboard_log: str | Path | None = None
+    env: DummyVecEnv, policy: str, seed: int = 0, tensorboard_log: str | Path | None = None,
+    timesteps: int | None = None,
 ) -> MaskablePPO:
-    """A fresh MaskablePPO on ``env`` with the ``"set"`` or ``"flat"`` policy."""
+    """A fresh MaskablePPO on ``env`` with the ``"set"`` or ``"flat"`` policy.
+
+    A rollout is 512 steps over all envs, shortened when ``timesteps`` asks for less (so a short
+    live run does not simulate a full rollout it will never use).
+    """
     check_policy(policy)
     policy_class = CandidateSetPolicy if policy == "set" else "MultiInputPolicy"
-    n_steps = max(16, 512 // env.num_envs)
+    rollout = 512 if timesteps is None else min(512, timesteps)
+    n_steps = max(16, rollout // env.num_envs)
     return MaskablePPO(
         policy_class,
         env,
         learning_rate=1e-3,
         n_steps=n_steps,
-        batch_size=128,
+        batch_size=min(128, n_steps * env.num_envs),
         n_epochs=5,
         gamma=0.99,
         ent_coef=0.01,
@@ -176,7 +182,7 @@ def train_selector(
     env = make_selector_env(table, config, "train", 1 if live else N_ENVS, seed)
     recorder = EpisodeRecorder()
     with torch_threads(1):
-        model = make_selector_model(env, policy, seed, tensorboard_log=out / "tb")
+        model = make_selector_model(env, policy, seed, out / "tb", timesteps=int(steps))
         model.learn(int(steps), callback=recorder, progress_bar=progress,
                     tb_log_name=f"selector_{policy}")  # fmt: skip
     model.save(out / MODEL_FILE)
