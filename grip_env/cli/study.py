@@ -15,8 +15,11 @@ def study(
     out: Annotated[Path, typer.Option("--out", "-o", help="study folder")] = Path("runs/default"),
     quick: Annotated[bool, typer.Option("--quick", help="tiny profile for tests")] = False,
 ) -> None:
-    """Generate the dataset, train and evaluate classifiers, ablate, train the RL selector and
-    write OUT/report.md (and report.html). Rerunning reuses every finished stage."""
+    """Run the whole study and write OUT/report.md and OUT/report.html.
+
+    Generates the dataset, trains and evaluates the classifiers, runs the ablation, trains and
+    evaluates the RL selector, then writes the report. Rerunning reuses every finished stage.
+    """
     with user_errors():
         from classifiers.study import run_study
         from grip_env.config import load_config

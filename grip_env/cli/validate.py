@@ -13,8 +13,11 @@ from grip_env.cli.errors import user_errors
 def validate(
     directory: Annotated[Path, typer.Argument(help="dataset directory written by generate")],
 ) -> None:
-    """Check DIRECTORY: schema, SHA-256 of every file, every feature recomputed from its
-    descriptors, outcome consistency. Exit code 0 when clean, 1 when a problem is found."""
+    """Check a dataset: schema, checksums, features and outcomes.
+
+    Verifies the schema, the SHA-256 of every file, every feature recomputed from its
+    descriptors, and outcome consistency. Exit code 0 when clean, 1 when a problem is found.
+    """
     with user_errors():
         from grip_env.dataset import validate as validate_dataset
         from grip_env.dataset.manifest import read_manifest
