@@ -25,7 +25,7 @@ class ObjectsConfig(_Section):
     """Which objects a job runs on."""
 
     set: str = Field("default", description="named object set, or 'procedural'")
-    procedural_count: int = Field(22, ge=0, le=1_000_000, description="extra procedural objects")
+    procedural_count: int = Field(42, ge=0, le=1_000_000, description="extra procedural objects")
     procedural_size_mm: tuple[float, float] = Field((50.0, 150.0), description="size range across")
     thickness_mm: float = Field(30.0, gt=0.0, le=500.0, description="extrusion height")
 
