@@ -9,10 +9,10 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
+from grip_env.barrett import spread_axes
 from grip_env.objects import PlanarObject
 from grip_env.perception.regions import Regions
 
-SPREAD_AXIS_MM = 25.0
 _FINGER_COLOURS = ("tab:blue", "tab:green", "tab:red")
 
 
@@ -40,9 +40,7 @@ def draw_grip(ax: Axes, grip: pd.Series, highlight: bool = True, label: str | No
     contacts = np.array([[grip[f"p{i}_x"], grip[f"p{i}_y"]] for i in (1, 2, 3)])
     forces = np.array([[grip[f"f{i}_x"], grip[f"f{i}_y"]] for i in (1, 2, 3)])
     palm = np.array([grip["hand_x"], grip["hand_y"]])
-    yaw = grip["hand_yaw"]
-    x_axis = np.array([np.sin(yaw), -np.cos(yaw)])
-    origins = [palm + SPREAD_AXIS_MM * x_axis, palm - SPREAD_AXIS_MM * x_axis, palm]
+    origins = [*spread_axes(palm, grip["hand_yaw"]), palm]  # finger lines start here
     triangle = np.vstack([contacts, contacts[:1]])
     ax.plot(triangle[:, 0], triangle[:, 1], ls=":", color="k", lw=0.8, alpha=alpha)
     arrow = 0.5 * float(np.mean([grip["e1"], grip["e2"], grip["e3"]]))

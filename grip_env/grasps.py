@@ -42,7 +42,9 @@ from grip_env.perception.regions import Regions
 
 #: Contacts sit at fractions of their region in [END_FRACTION, 1 - END_FRACTION].
 END_FRACTION = 0.15
-#: Lateral offset of fingers 1 and 2 from the thumb line in a two-finger grasp (mm).
+#: Lateral offset of fingers 1 and 2 from the thumb line in a two-finger grasp (mm): at spread 0
+#: each finger's force line runs through its spread axis, 25 mm beside the palm centre
+#: (``grip_env.barrett.SPREAD_AXIS_OFFSET_MM``, which imports this module and so cannot be used).
 HALF_FINGER_BASE_MM = 25.0
 #: Grasps on the same regions whose contacts all lie closer than this fraction of their regions'
 #: lengths count as the same grasp.

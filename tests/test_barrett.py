@@ -192,3 +192,9 @@ def _meet(p, n, q, m):
     """Intersection of the lines through p and q perpendicular to n and m."""
     matrix = np.array([n, m])
     return np.linalg.solve(matrix, [n @ p, m @ q])
+
+
+def test_two_finger_grasp_base_matches_the_hands_spread_axes():
+    from grip_env import barrett, grasps
+
+    assert grasps.HALF_FINGER_BASE_MM == barrett.SPREAD_AXIS_OFFSET_MM
