@@ -45,3 +45,26 @@ def test_rank_baseline_orders_by_q_c_on_real_rows(split):
     score = model.predict_proba(test)[:, 1]
     lowest = test["Q_C"].to_numpy().argmin()
     assert score[lowest] == score.max()
+
+
+@pytest.mark.slow
+def test_ablate_cli_on_a_generated_dataset(generated_dataset_dir, tmp_path):
+    import json
+
+    from typer.testing import CliRunner
+
+    from grip_env.cli import _register_commands, app
+
+    _register_commands()
+    config = tmp_path / "c.yaml"
+    config.write_text("learning:\n  folds: 2\n  repeats: 1\n")
+    out = tmp_path / "ablation"
+    args = ["ablate", "--data", str(generated_dataset_dir), "--out", str(out),
+            "--config", str(config), "--model", "logreg"]
+    result = CliRunner().invoke(app, args)
+    assert result.exit_code == 0, result.output
+    ablation = json.loads((out / "ablation.json").read_text())
+    assert {"all_twelve", "without_hand", "hand_only"} <= set(ablation["feature_sets"])
+    assert (out / "ablation.png").exists()
+    bad = CliRunner().invoke(app, [*args[:-1], "nosuch"])
+    assert bad.exit_code == 2 and "nosuch" in bad.output

@@ -2,20 +2,18 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from grip_env.cli.errors import user_errors
+from grip_env.cli.options import ConfigFile, DatasetDir, OutputDir
 
 
 def ablate(
-    data: Annotated[Path, typer.Option("--data", help="dataset directory (grip-env generate)")],
-    out: Annotated[Path, typer.Option("--out", "-o", help="output directory (created if needed)")],
-    config: Annotated[
-        Path | None, typer.Option(help="YAML config (default: the embedded configs/default.yaml)")
-    ] = None,
+    data: DatasetDir,
+    out: OutputDir,
+    config: ConfigFile = None,
     model: Annotated[str, typer.Option(help="model cross-validated on every feature set")] = "svm",
 ) -> None:
     """Write OUT/ablation.json (metrics, paired differences, importances) and OUT/ablation.png."""

@@ -8,13 +8,12 @@ from typing import Annotated
 import typer
 
 from grip_env.cli.errors import user_errors
+from grip_env.cli.options import ConfigFile
 
 
 def generate(
     out: Annotated[Path, typer.Option("--out", "-o", help="dataset directory (created if needed)")],
-    config: Annotated[
-        Path | None, typer.Option(help="YAML config (default: the embedded configs/default.yaml)")
-    ] = None,
+    config: ConfigFile = None,
     objects: Annotated[
         str | None,
         typer.Option(help="object set name (e.g. default) or a number of procedural objects "

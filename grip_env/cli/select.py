@@ -2,20 +2,18 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Annotated
 
 import typer
 
 from grip_env.cli.errors import user_errors
+from grip_env.cli.options import ConfigFile, DatasetDir, OutputDir
 
 
 def select(
-    data: Annotated[Path, typer.Option("--data", "-d", help="dataset (grip-env generate)")],
-    out: Annotated[Path, typer.Option("--out", "-o", help="output directory (created if needed)")],
-    config: Annotated[
-        Path | None, typer.Option(help="YAML config (default: the embedded configs/default.yaml)")
-    ] = None,
+    data: DatasetDir,
+    out: OutputDir,
+    config: ConfigFile = None,
     timesteps: Annotated[
         int | None,
         typer.Option(help="training timesteps [default: config selector.timesteps]"),

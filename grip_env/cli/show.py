@@ -3,18 +3,23 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from grip_env.cli.errors import user_errors
+from grip_env.cli.options import ConfigFile
+
+if TYPE_CHECKING:
+    from grip_env.config import Config
+    from grip_env.objects import PlanarObject
 
 
 def show(
     obj: Annotated[str, typer.Argument(help="shape name, image file, or vertex file (.json/.csv)")],
     out: Annotated[Path, typer.Option("--out", "-o", help="PNG file to write")] = Path("show.png"),
     grips: Annotated[int, typer.Option(help="draw the best N grips by Q_C (0: regions only)")] = 0,
-    config: Annotated[Path | None, typer.Option(help="YAML config (default: embedded)")] = None,
+    config: ConfigFile = None,
     mm_per_px: Annotated[float, typer.Option(help="scale of an image object")] = 1.0,
     sim: Annotated[bool, typer.Option("--sim", help="simulate the best grip")] = False,
     seed: Annotated[int, typer.Option(help="seed of the simulated trial")] = 0,
@@ -32,7 +37,7 @@ def show(
     typer.echo(f"wrote {path}")
 
 
-def _draw(planar, cfg, grips: int, out: Path) -> Path:  # type: ignore[no-untyped-def]
+def _draw(planar: PlanarObject, cfg: Config, grips: int, out: Path) -> Path:
     from grip_env.drawing import object_figure, save_figure
     from grip_env.perception.regions import find_regions
 
@@ -48,7 +53,7 @@ def _draw(planar, cfg, grips: int, out: Path) -> Path:  # type: ignore[no-untype
     return save_figure(object_figure(planar, regions, table, title), out)
 
 
-def _render_trial(planar, cfg, seed: int, out: Path) -> Path:  # type: ignore[no-untyped-def]
+def _render_trial(planar: PlanarObject, cfg: Config, seed: int, out: Path) -> Path:
     from grip_env.pipeline import candidates
     from grip_env.sim import render_trial_strip
 

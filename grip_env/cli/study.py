@@ -8,10 +8,11 @@ from typing import Annotated
 import typer
 
 from grip_env.cli.errors import user_errors
+from grip_env.cli.options import ConfigFile
 
 
 def study(
-    config: Annotated[Path | None, typer.Option(help="YAML config (default: embedded)")] = None,
+    config: ConfigFile = None,
     out: Annotated[Path, typer.Option("--out", "-o", help="study folder")] = Path("runs/default"),
     quick: Annotated[bool, typer.Option("--quick", help="tiny profile for tests")] = False,
 ) -> None:

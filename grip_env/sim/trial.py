@@ -15,9 +15,10 @@ import pandas as pd
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
+from grip_env import barrett
 from grip_env.config import Config
 from grip_env.objects import PlanarObject
-from grip_env.sim.hand import SPREAD_AXIS_OFFSET_MM, Hand, closing_depth, closing_posture
+from grip_env.sim.hand import Hand, closing_depth, closing_posture
 from grip_env.sim.uncertainty import TrialNoise
 from grip_env.sim.world import World
 
@@ -60,12 +61,8 @@ def finger_reaches(grips: pd.DataFrame) -> NDArray[np.float64]:
     """(n, 3) reach of each finger from its line origin to its contact, from the grip columns."""
     yaw, spread = grips["hand_yaw"].to_numpy(float), grips["spread"].to_numpy(float)
     palm = grips[["hand_x", "hand_y"]].to_numpy(float)
-    x_axis = np.column_stack([np.sin(yaw), -np.cos(yaw)])
-    y_axis = np.column_stack([np.cos(yaw), np.sin(yaw)])
-    s, c = np.sin(spread)[:, None], np.cos(spread)[:, None]
-    forces = np.stack([-s * x_axis - c * y_axis, s * x_axis - c * y_axis, y_axis], axis=1)
-    origins = np.stack([palm + SPREAD_AXIS_OFFSET_MM * x_axis,
-                        palm - SPREAD_AXIS_OFFSET_MM * x_axis, palm], axis=1)
+    forces = barrett.finger_forces(yaw, spread)
+    origins = np.concatenate([barrett.spread_axes(palm, yaw), palm[:, None, :]], axis=1)
     contacts = grips[list(PLAN_COLUMNS[4:])].to_numpy(float).reshape(-1, 3, 2)
     return np.einsum("nij,nij->ni", origins - contacts, forces)
 
