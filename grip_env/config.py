@@ -1,24 +1,47 @@
 """Typed, validated configuration: one section per part of the pipeline, read from YAML.
 
-``load_config(path)`` reads a YAML file with a safe loader; unknown keys and out-of-range values
-raise ``ValueError`` naming the offending key. ``configs/default.yaml`` is the embedded default.
+The models below are the one source of every default: ``load_config()`` with no path is exactly
+``Config()``, and ``configs/default.yaml`` (the main job's file) is tested equal to it field by
+field. ``load_config(path)`` reads a YAML file with a safe loader; unknown keys, out-of-range
+values, files above ``MAX_CONFIG_BYTES`` and nesting deeper than Python can follow raise
+``ValueError`` naming the offending key. Every numeric setting is bounded by what is physically
+and computationally sensible (a timestep, a friction, an object size);
+:func:`check_contour_budget` bounds what depends on an object and a setting together.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from grip_env.params import GraspParams
 
 DEFAULT_CONFIG_PATH = Path(__file__).resolve().parents[1] / "configs" / "default.yaml"
+"""The main job's YAML in a source checkout (absent from a wheel: ``load_config()`` needs none)."""
+
+MAX_CONFIG_BYTES = 1_000_000
+"""Largest config file read (a config is a few kB)."""
+MAX_CONTOUR_POINTS = 100_000
+"""Most points a contour may be resampled into (perimeter / ``contour_spacing_mm``)."""
+MAX_OBJECT_VERTICES = 5_000
+"""Most polygon vertices an object may have (its size, not its vertex count, matters here)."""
+MAX_OBJECT_SIZE_MM = 2_000.0
+"""Largest object extent: the open hand spans about 0.3 m; a 2 m part is not a grasp problem."""
+
+Friction = Annotated[float, Field(ge=0.0, le=3.0)]
+ObjectSize = Annotated[float, Field(ge=5.0, le=1000.0)]
 
 
 class _Section(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+
+
+def _ordered(name: str, pair: tuple[float, float]) -> None:
+    if pair[0] > pair[1]:
+        raise ValueError(f"{name} must be (low, high) with low <= high, got {pair}")
 
 
 class ObjectsConfig(_Section):
@@ -26,8 +49,15 @@ class ObjectsConfig(_Section):
 
     set: str = Field("default", description="named object set, or 'procedural'")
     procedural_count: int = Field(42, ge=0, le=1_000_000, description="extra procedural objects")
-    procedural_size_mm: tuple[float, float] = Field((50.0, 150.0), description="size range across")
+    procedural_size_mm: tuple[ObjectSize, ObjectSize] = Field(
+        (50.0, 150.0), description="size range across (5..1000 mm)"
+    )
     thickness_mm: float = Field(30.0, gt=0.0, le=500.0, description="extrusion height")
+
+    @model_validator(mode="after")
+    def _sizes_ordered(self) -> ObjectsConfig:
+        _ordered("procedural_size_mm", self.procedural_size_mm)
+        return self
 
 
 class PerceptionConfig(_Section):
@@ -37,7 +67,7 @@ class PerceptionConfig(_Section):
     resolution_px: int = Field(256, ge=32, le=4096, description="rendered image side (pixels)")
     mm_per_px: float = Field(1.0, gt=0.0, le=20.0, description="rendered image scale")
     pixel_noise: float = Field(0.0, ge=0.0, le=1.0, description="grey-level noise std")
-    contour_spacing_mm: float = Field(1.0, gt=0.0, le=20.0, description="contour resampling step")
+    contour_spacing_mm: float = Field(1.0, ge=0.1, le=20.0, description="contour resampling step")
     curvature_sigma_mm: float = Field(2.0, gt=0.0, le=50.0, description="curvature smoothing scale")
     max_turn_rad: float = Field(0.35, gt=0.0, le=3.2, description="max turn in a region")
     curvature_jump: float = Field(0.08, gt=0.0, le=10.0, description="curvature step (1/mm)")
@@ -59,7 +89,7 @@ class SynthesisConfig(_Section):
 class SimConfig(_Section):
     """PyBullet execution of one grip."""
 
-    timestep: float = Field(1.0 / 240.0, gt=0.0, le=0.05, description="physics step (s)")
+    timestep: float = Field(1.0 / 240.0, ge=1e-4, le=0.02, description="physics step (s)")
     solver_iterations: int = Field(50, ge=1, le=1000, description="constraint solver iterations")
     finger_force_n: float = Field(15.0, gt=0.0, le=200.0, description="fingertip force")
     finger_friction: float = Field(1.0, gt=0.0, le=3.0, description="finger pad lateral friction")
@@ -83,9 +113,16 @@ class UncertaintyConfig(_Section):
 
     position_std_mm: float = Field(2.0, ge=0.0, le=50.0, description="palm position error std")
     yaw_std_rad: float = Field(0.02, ge=0.0, le=1.0, description="palm orientation error std")
-    friction_range: tuple[float, float] = Field((0.4, 1.0), description="true friction drawn in")
+    friction_range: tuple[Friction, Friction] = Field(
+        (0.4, 1.0), description="true friction drawn in (0..3)"
+    )
     mass_rel_std: float = Field(0.2, ge=0.0, le=2.0, description="object mass relative std")
     perceived_contour: bool = Field(False, description="plan on the perceived contour")
+
+    @model_validator(mode="after")
+    def _friction_ordered(self) -> UncertaintyConfig:
+        _ordered("friction_range", self.friction_range)
+        return self
 
 
 class DatasetConfig(_Section):
@@ -148,25 +185,83 @@ def config_from_dict(data: dict[str, Any]) -> Config:
     try:
         return Config.model_validate(data)
     except ValidationError as exc:
-        problems = "; ".join(
-            f"{'.'.join(str(p) for p in err['loc'])}: {err['msg']}" for err in exc.errors()
-        )
+        problems = "; ".join(_problem(err) for err in exc.errors())
         raise ValueError(f"invalid config: {problems}") from None
 
 
+def _problem(err: Any) -> str:
+    """``section.key: message (got value)`` for one pydantic error."""
+    where = ".".join(str(p) for p in err["loc"])
+    message = err["msg"].removeprefix("Value error, ")
+    value = err.get("input")
+    if isinstance(value, dict) or err["type"] == "missing":
+        return f"{where}: {message}"
+    shown = repr(value)
+    return f"{where}: {message} (got {shown if len(shown) <= 60 else shown[:57] + '...'})"
+
+
 def load_config(path: str | Path | None = None) -> Config:
-    """Read a YAML config (the embedded default when ``path`` is None)."""
-    path = Path(path) if path is not None else DEFAULT_CONFIG_PATH
+    """Read a YAML config; with no path, the defaults ``Config()`` (no file is read)."""
+    if path is None:
+        return Config()
+    path = Path(path)
     if not path.is_file():
         raise ValueError(f"config file not found: {path}")
-    with path.open() as stream:
-        try:
-            data = yaml.safe_load(stream) or {}
-        except yaml.YAMLError as exc:
-            raise ValueError(f"config {path} is not valid YAML: {exc}") from None
+    if path.stat().st_size > MAX_CONFIG_BYTES:
+        raise ValueError(f"config {path} is larger than {MAX_CONFIG_BYTES} bytes")
+    try:
+        data = yaml.safe_load(path.read_text()) or {}
+    except yaml.YAMLError as exc:
+        raise ValueError(f"config {path} is not valid YAML: {_one_line(exc)}") from None
+    except RecursionError:
+        raise ValueError(f"config {path} is nested too deeply to be a config") from None
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"config {path} is not UTF-8 text: {exc.reason}") from None
     if not isinstance(data, dict):
         raise ValueError(f"config {path} must be a mapping of sections, got {type(data).__name__}")
-    return config_from_dict(data)
+    try:
+        return config_from_dict(data)
+    except RecursionError:
+        raise ValueError(f"config {path} is nested too deeply to be a config") from None
+
+
+def check_contour_budget(
+    name: str, vertices: int, perimeter_mm: float, extent_mm: float, perception: PerceptionConfig
+) -> None:
+    """Refuse an object too large, too detailed or too finely sampled to process.
+
+    Args:
+        name: the object's name, for the message.
+        vertices: its polygon's vertex count.
+        perimeter_mm: its contour length.
+        extent_mm: its largest bounding-box side.
+        perception: supplies ``contour_spacing_mm``.
+
+    Raises:
+        ValueError: above ``MAX_OBJECT_VERTICES``, ``MAX_OBJECT_SIZE_MM`` or
+            ``MAX_CONTOUR_POINTS`` (perimeter / spacing), naming the value and the bound.
+    """
+    if vertices > MAX_OBJECT_VERTICES:
+        raise ValueError(
+            f"object {name!r} has {vertices} vertices, more than {MAX_OBJECT_VERTICES}: "
+            "simplify the polygon or use a smaller image"
+        )
+    if not extent_mm <= MAX_OBJECT_SIZE_MM:
+        raise ValueError(
+            f"object {name!r} is {extent_mm:.4g} mm across, more than {MAX_OBJECT_SIZE_MM:g} mm "
+            "(check its units or --mm-per-px)"
+        )
+    points = perimeter_mm / perception.contour_spacing_mm
+    if not points <= MAX_CONTOUR_POINTS:
+        raise ValueError(
+            f"object {name!r}: perception.contour_spacing_mm {perception.contour_spacing_mm:g} "
+            f"would sample its {perimeter_mm:.4g} mm contour into {points:.3g} points, "
+            f"more than {MAX_CONTOUR_POINTS}"
+        )
+
+
+def _one_line(exc: Exception) -> str:
+    return " ".join(str(exc).split())
 
 
 def config_reference_markdown() -> str:

@@ -3,14 +3,90 @@
 from __future__ import annotations
 
 import pytest
+import yaml
 
 from grip_env import GraspParams
-from grip_env.config import DEFAULT_CONFIG_PATH, Config, config_reference_markdown, load_config
+from grip_env.config import (
+    DEFAULT_CONFIG_PATH,
+    MAX_CONTOUR_POINTS,
+    Config,
+    PerceptionConfig,
+    check_contour_budget,
+    config_reference_markdown,
+    load_config,
+)
 
 
 def test_default_yaml_equals_the_code_defaults():
     assert load_config(DEFAULT_CONFIG_PATH) == Config()
     assert load_config().grasp == GraspParams()
+
+
+def test_default_yaml_lists_every_field_with_its_code_default():
+    """configs/default.yaml and Config() are one source: same sections, fields and values."""
+    written = yaml.safe_load(DEFAULT_CONFIG_PATH.read_text())
+    defaults = Config().model_dump(mode="json")
+    assert list(written) == list(defaults)
+    for section, fields in defaults.items():
+        assert list(written[section]) == list(fields), section
+        for name, value in fields.items():
+            shown = written[section][name]
+            assert shown == value, f"{section}.{name}: yaml {shown!r} != Config() {value!r}"
+
+
+def test_load_config_without_a_path_reads_no_file(monkeypatch, tmp_path):
+    monkeypatch.setattr("grip_env.config.DEFAULT_CONFIG_PATH", tmp_path / "gone.yaml")
+    assert load_config() == Config()
+
+
+BAD_SETTINGS = [
+    ("uncertainty:\n  friction_range: [1.0e308, 1.0e309]\n", r"uncertainty\.friction_range"),
+    ("uncertainty:\n  friction_range: [0.1, 3.5]\n", r"uncertainty\.friction_range\.1.*3\.5"),
+    ("uncertainty:\n  friction_range: [1.0, 0.4]\n", r"friction_range must be \(low, high\)"),
+    ("perception:\n  contour_spacing_mm: 1.0e-9\n", r"perception\.contour_spacing_mm.*1e-09"),
+    ("sim:\n  timestep: 1.0e-9\n", r"sim\.timestep.*1e-09"),
+    ("sim:\n  timestep: 0.5\n", r"sim\.timestep.*0\.5"),
+    ("objects:\n  procedural_size_mm: [1.0e300, 1.0e301]\n", r"objects\.procedural_size_mm"),
+    ("objects:\n  procedural_size_mm: [100.0, 60.0]\n", r"procedural_size_mm must be \(low"),
+    ("dataset:\n  workers: 1000000000000\n", r"dataset\.workers.*1000000000000"),
+    ("objects:\n  procedural_count: 99999999999999999999\n", r"objects\.procedural_count"),
+    ("sim:\n  finger_force_n: .nan\n", r"sim\.finger_force_n"),
+]
+
+
+@pytest.mark.parametrize(("text", "message"), BAD_SETTINGS)
+def test_settings_out_of_their_physical_range_are_named(tmp_path, text, message):
+    path = tmp_path / "c.yaml"
+    path.write_text(text)
+    with pytest.raises(ValueError, match=message):
+        load_config(path)
+
+
+def test_deeply_nested_yaml_is_refused_not_a_recursion_error(tmp_path):
+    path = tmp_path / "deep.yaml"
+    path.write_text("grasp: " + "[" * 5000 + "]" * 5000 + "\n")
+    with pytest.raises(ValueError, match="nested too deeply"):
+        load_config(path)
+
+
+def test_huge_config_file_is_refused(tmp_path):
+    path = tmp_path / "big.yaml"
+    path.write_text("# padding\n" * 200_000)
+    with pytest.raises(ValueError, match="larger than"):
+        load_config(path)
+
+
+def test_contour_budget_bounds_vertices_size_and_sample_count():
+    perception = PerceptionConfig()
+    check_contour_budget("ok", 4, 400.0, 100.0, perception)
+    with pytest.raises(ValueError, match="1000000 vertices"):
+        check_contour_budget("many", 1_000_000, 400.0, 100.0, perception)
+    with pytest.raises(ValueError, match=r"1e\+09 mm across"):
+        check_contour_budget("huge", 4, 4e9, 1e9, perception)
+    fine = PerceptionConfig(contour_spacing_mm=0.1)
+    perimeter = 0.1 * (MAX_CONTOUR_POINTS + 10)
+    with pytest.raises(ValueError, match=r"contour_spacing_mm 0\.1"):
+        check_contour_budget("fine", 4, perimeter, 100.0, fine)
 
 
 def test_grasp_params_defaults_are_the_papers():
