@@ -1,7 +1,8 @@
 """A synthetic grip table with the dataset's columns, for tests and benchmarks.
 
 Success depends learnably on the features (logistic in C1, C4, S3 and S2, an object effect and
-noise), outcomes are binomial over ``trials``. Geometry is a consistent toy: each object is a disc,
+noise), outcomes are binomial over ``trials``; the graded outcome (``robustness_mean``,
+``robustness_std``, in g) is log-normal per trial about a level set by the same logit. Geometry is a consistent toy: each object is a disc,
 contacts lie on its rim and the normals point (roughly) inwards, so ε can be computed from a row.
 The real dataset (``grip_env.dataset.load``) replaces it.
 """
@@ -42,8 +43,18 @@ def synthetic_grips(
     table.update(trials=np.full(n, trials), successes=successes)
     table["success_rate"] = successes / trials
     table["success"] = table["success_rate"] >= 0.5
+    table.update(_robustness(rng, logit, trials))
     frame = pd.DataFrame(table)
     return frame[list(DATASET_COLUMNS)]
+
+
+def _robustness(rng: np.random.Generator, logit: np.ndarray, trials: int) -> dict:
+    """Per-trial levels log-normal about ``exp(logit / 2)`` g; a trial that never lifts scores 0."""
+    level = np.exp(0.5 * logit[:, None] + rng.normal(0.0, 0.4, size=(logit.size, trials)))
+    lifted = rng.random((logit.size, trials)) >= 1.0 / (1.0 + np.exp(logit[:, None] + 2.0))
+    per_trial = np.where(lifted, level, 0.0)
+    spread = per_trial.std(axis=1, ddof=1) if trials > 1 else np.zeros(logit.size)
+    return {"robustness_mean": per_trial.mean(axis=1), "robustness_std": spread}
 
 
 def _geometry(rng: np.random.Generator, n: int, radius: np.ndarray, centre: np.ndarray) -> dict:

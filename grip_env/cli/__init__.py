@@ -25,7 +25,9 @@ def _root() -> None:
     """Learn which Barrett BH8-280 grips hold: generate, train, ablate, select, study, show."""
 
 
-_COMMAND_MODULES = ("show", "study", "generate", "validate", "train", "ablate", "select")
+_COMMAND_MODULES = (
+    "show", "study", "generate", "validate", "train", "ablate", "select", "calibrate"
+)
 
 
 def _register_commands() -> None:

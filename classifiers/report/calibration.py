@@ -1,0 +1,220 @@
+"""The label-validity section, shared by ``grip-env calibrate`` and the study report.
+
+:func:`calibration_section` adds the checks of :func:`grip_env.calibration.calibrate` (and the
+dataset decile checks) to a :class:`~classifiers.report.document.Report` with their figures;
+:func:`write_calibration` writes the standalone ``calibration.md`` / ``.html``.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+
+from classifiers.report.document import Report
+from grip_env.drawing import save_figure
+
+RESULT_FILE = "calibration.json"
+TRIALS_FILE = "calibration_trials.parquet"
+
+
+def write_calibration(out: Path, result: dict[str, Any], trials: pd.DataFrame) -> Path:
+    """Write ``calibration.json``, the trials, the figures and ``calibration.md``; returns it."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / RESULT_FILE).write_text(json.dumps(result, indent=2, default=_plain))
+    trials.to_parquet(out / TRIALS_FILE, index=False)
+    report = Report("grip-env calibration: do the labels measure the grip?")
+    calibration_section(report, result, trials, out / "figures", out, level=2)
+    md, _ = report.write(out, stem="calibration")
+    return md
+
+
+def calibration_section(report: Report, result: dict[str, Any], trials: pd.DataFrame | None,
+                        fig_dir: Path, root: Path, level: int = 2) -> None:
+    """The checks as a pass/fail table, then one sub-section per check with its figure."""
+    checks = result["checks"]
+    report.heading("Label validity (calibration)", level)
+    report.text(
+        f"Measured, never tuned: reference level {result['reference_level_g']:g} g, design "
+        f"friction mu = {result['mu']:g}, {result['trials']} simulated calibration trials. "
+        "Each check states its target and whether the measured figure meets it."
+    )
+    report.table(summary_table(checks), caption="Checks against their targets.")
+    sub = level + 1
+    if "design_hold" in checks:
+        _design(report, checks["design_hold"], result["reference_level_g"], fig_dir, root, sub)
+    if "cone" in checks:
+        _cone(report, checks["cone"], fig_dir, root, sub)
+    if "retest" in checks:
+        _retest(report, checks, trials, result, fig_dir, root, sub)
+    deciles = [checks[k] for k in ("decile_Q_C", "decile_Q_G") if k in checks]
+    if deciles:
+        _deciles(report, deciles, fig_dir, root, sub)
+
+
+def summary_table(checks: dict[str, dict[str, Any]]) -> pd.DataFrame:
+    """One row per check: measured figure, interval, target, verdict."""
+    rows = {}
+    for name, check in checks.items():
+        measured = check["measured"]
+        rows[name] = {
+            "measured": _number(measured) if not isinstance(measured, dict)
+            else ", ".join(f"{k} {_number(v)}" for k, v in measured.items()),
+            "95% interval": _ci(check.get("ci")),
+            "target": check["target"],
+            "verdict": _verdict(check["passed"]),
+        }
+    return pd.DataFrame(rows).T.rename_axis("check")
+
+
+# ------------------------------------------------------------------------------- sub-sections
+def _design(report: Report, check: dict[str, Any], reference: float, fig_dir: Path, root: Path,
+            level: int) -> None:
+    report.heading("Best grip of three boxes at the design friction", level)
+    rows = pd.DataFrame(check.get("per_object", []))
+    if rows.empty:
+        report.text("No box had a feasible grip.")
+        return
+    report.table(rows.set_index("object_id"), caption="No pose error, friction = mu, nominal "
+                 "mass; robustness is the highest level held (g), held the share of trials "
+                 "holding the reference level.")
+    fig = Figure(figsize=(5.5, 3.4))
+    ax = fig.subplots()
+    ax.bar(rows["object_id"], rows["robustness"], color="tab:blue")
+    ax.axhline(reference, color="tab:red", linestyle="--", label=f"reference {reference:g} g")
+    ax.set_ylabel("robustness (g)")
+    ax.set_title("Best-Q_C grip at friction mu, no pose error")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    _figure(report, save_figure(fig, fig_dir / "calibration_design.png"), root,
+            "Robustness of each box's best grip by Q_C against the reference level.")
+
+
+def _cone(report: Report, check: dict[str, Any], fig_dir: Path, root: Path, level: int) -> None:
+    report.heading("A finger force outside the friction cone (C1's k = 3)", level)
+    rows = pd.DataFrame(check.get("per_object", []))
+    if rows.empty:
+        report.text("No object had both a grip inside and one outside the friction cone.")
+        return
+    report.text(
+        f"Per object, the best grip whose finger force leaves the cone against the best grip "
+        f"by Q_C, at friction mu: mean robustness difference {_number(check['measured'])} g, "
+        f"95% t-interval over {len(rows)} objects {_ci(check['ci'])} "
+        f"({_verdict(check['passed'])})."
+    )
+    report.table(rows.set_index("object_id"), caption="Mean robustness (g) and share of trials "
+                 "holding the reference level.")
+    fig = Figure(figsize=(5.5, 3.6))
+    ax = fig.subplots()
+    for _, row in rows.iterrows():
+        ax.plot([0, 1], [row["best_g"], row["outside_g"]], marker="o", color="tab:gray")
+        ax.annotate(str(row["object_id"]), (1.02, row["outside_g"]), fontsize=7)
+    ax.set_xticks([0, 1], ["best by Q_C", "outside the cone"])
+    ax.set_xlim(-0.2, 1.5)
+    ax.set_ylabel("mean robustness (g)")
+    ax.set_title("Paired by object, friction = mu")
+    fig.tight_layout()
+    _figure(report, save_figure(fig, fig_dir / "calibration_cone.png"), root,
+            "Each line joins an object's best grip to its best outside-cone grip.")
+
+
+def _retest(report: Report, checks: dict[str, Any], trials: pd.DataFrame | None,
+            result: dict[str, Any], fig_dir: Path, root: Path, level: int) -> None:
+    from grip_env.calibration import retest_table
+
+    retest, icc = checks["retest"], checks.get("icc", {})
+    report.heading("Test-retest and intra-class correlation", level)
+    report.text(
+        f"Per-grip mean robustness from two disjoint sets of {retest.get('trials_per_set')} "
+        f"trial seeds over {retest.get('grips')} grips (best and worst by Q_C on "
+        f"{retest.get('objects')} default objects): Spearman {_number(retest['measured'])} "
+        f"{_ci(retest['ci'])} ({_verdict(retest['passed'])}); within one object the mean "
+        f"Spearman is {_number(retest.get('within_object_mean'))}. ICC(1) of per-trial "
+        f"robustness with the grip as class: {_number(icc.get('measured'))} "
+        f"{_ci(icc.get('ci'))} ({_verdict(icc.get('passed'))})."
+    )
+    if trials is None or trials.empty:
+        return
+    table = retest_table(trials, result["settings"]["trials_per_set"])
+    if not {"A", "B"} <= set(table.columns):
+        return
+    fig = Figure(figsize=(9.5, 4))
+    left, right = fig.subplots(1, 2)
+    for end, colour in (("best", "tab:green"), ("worst", "tab:red")):
+        mine = table[table["end"] == end]
+        left.scatter(mine["A"], mine["B"], s=14, alpha=0.7, color=colour, label=f"{end} by Q_C")
+    top = float(np.nanmax(table[["A", "B"]].to_numpy())) if len(table) else 1.0
+    left.plot([0, top], [0, top], color="grey", linestyle=":", linewidth=1)
+    left.set(xlabel="mean robustness, seed set A (g)", ylabel="seed set B (g)",
+             title="Test-retest per grip")  # fmt: skip
+    left.legend(fontsize=8)
+    rows = trials[trials["part"] == "retest"]
+    stats = rows.groupby("grip")["robustness"].agg(["mean", "std"]).sort_values("mean")
+    right.errorbar(np.arange(len(stats)), stats["mean"], yerr=stats["std"], fmt="o",
+                   markersize=3, elinewidth=0.8, color="tab:blue")  # fmt: skip
+    right.set(xlabel="grip (sorted by mean)", ylabel="robustness (g), mean ± sd over trials",
+              title="Between-grip against within-grip spread")  # fmt: skip
+    fig.tight_layout()
+    _figure(report, save_figure(fig, fig_dir / "calibration_retest.png"), root,
+            "Left: grip means on two disjoint seed sets. Right: every grip's trial spread.")
+
+
+def _deciles(report: Report, checks: list[dict[str, Any]], fig_dir: Path, root: Path,
+             level: int) -> None:
+    report.heading("Mean robustness by quality-index decile (the study's dataset)", level)
+    fig = Figure(figsize=(5.2 * len(checks), 3.8))
+    axes = np.atleast_1d(fig.subplots(1, len(checks)))
+    for ax, check in zip(axes, checks, strict=True):
+        column = check["name"].removeprefix("decile_")
+        bins = pd.DataFrame(check["deciles"])
+        errors = np.vstack([bins["robustness_mean"] - bins["ci_low"],
+                            bins["ci_high"] - bins["robustness_mean"]]).clip(min=0)
+        ax.bar(bins["bin"], bins["robustness_mean"], yerr=errors, capsize=3, color="tab:blue")
+        for _, row in bins.iterrows():
+            ax.annotate(f"n={int(row['grips'])}", (row["bin"], 0), ha="center", va="bottom",
+                        fontsize=6, color="white")  # fmt: skip
+        ax.set_xticks(bins["bin"])
+        ax.set(xlabel=f"{column} decile (1 = best, lowest {column})",
+               ylabel="mean robustness (g)",
+               title=f"Spearman {_number(check['measured'])} {_ci(check['ci'])}")  # fmt: skip
+        report.text(
+            f"{column}: Spearman between decile and mean robustness {_number(check['measured'])}"
+            f" {_ci(check['ci'])} (object-cluster bootstrap over {check['objects']} objects, "
+            f"{check['grips']} grips), {check['target']}: {_verdict(check['passed'])}; "
+            f"over single grips the Spearman is {_number(check['pooled_grip_spearman'])}."
+        )
+    fig.tight_layout()
+    _figure(report, save_figure(fig, fig_dir / "calibration_deciles.png"), root,
+            "Mean robustness per decile with 95% object-bootstrap intervals and grip counts.")
+
+
+# ------------------------------------------------------------------------------------ helpers
+def _figure(report: Report, path: Path, root: Path, caption: str) -> None:
+    report.figure(str(Path(path).relative_to(root)), caption)
+
+
+def _number(value: Any) -> str:
+    if value is None or (isinstance(value, float) and not np.isfinite(value)):
+        return "n/a"
+    return f"{float(value):.3f}"
+
+
+def _ci(ci: Any) -> str:
+    if not ci or ci[0] is None:
+        return "[n/a]"
+    return f"[{float(ci[0]):.3f}, {float(ci[1]):.3f}]"
+
+
+def _verdict(passed: bool | None) -> str:
+    return {True: "pass", False: "FAIL", None: "-"}[passed]
+
+
+def _plain(value: Any) -> Any:
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"not JSON-able: {type(value).__name__}")

@@ -1,0 +1,415 @@
+"""Label validity: do the simulated outcomes measure the grip rather than the trial's draws?
+
+``calibrate(config, settings)`` runs four measured checks through the public simulation API
+(:func:`grip_env.sim.run_trial_outcomes`), one process-pool job per object
+(:func:`grip_env.dataset.backends.run_jobs`):
+
+- ``design_hold``: with no pose error, friction at the design value ``grasp.mu`` and the nominal
+  mass, the best-Q_C grip of 90×55, 70×70 and 120×40 mm boxes holds the reference level;
+- ``cone``: at friction ``grasp.mu`` (pose and mass noise as configured), the best grip whose
+  finger force leaves the friction cone (C1's k = 3) against the object's best grip by Q_C,
+  paired by object: mean robustness difference with a t-interval over objects;
+- ``retest``: per-grip mean robustness from two disjoint sets of trial seeds (trials
+  ``0..n-1`` and ``n..2n-1`` of one call, i.e. ``trial_offset = 0`` and ``n``) over the best and
+  worst grips by Q_C of default objects: Spearman with a bootstrap interval over grips;
+- ``icc``: ICC(1) of per-trial robustness with the grip as class (one-way random effects,
+  Shrout & Fleiss 1979), with its exact F-based 95% interval.
+
+:func:`decile_check` adds the dataset check (Spearman of Q_C or Q_G decile against the decile's
+mean robustness, with an object-cluster bootstrap interval). Every figure is reported as measured;
+each check states its target and whether it passes.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable, Iterable
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from grip_env.config import Config
+from grip_env.objects import PlanarObject, load_object_set
+from grip_env.objects.shapes import rectangle
+
+BOXES_MM: tuple[tuple[float, float], ...] = ((90.0, 55.0), (70.0, 70.0), (120.0, 40.0))
+RETEST_TARGET = 0.8
+ICC_TARGET = 0.5
+DECILE_TARGET = -0.8
+TRIAL_COLUMNS = ("object_id", "grip", "part", "end", "Q_C", "Q_G", "trial", "robustness",
+                 "success", "friction", "mass_kg")  # fmt: skip
+
+
+@dataclass(frozen=True)
+class CalibrationSettings:
+    """Sizes of the calibration runs (``quick()`` shrinks them to seconds, for tests)."""
+
+    retest_objects: int = 6  # default objects, in set order, with >= 2 * grips_per_end grips
+    grips_per_end: int = 8  # best and worst grips by Q_C per object
+    trials_per_set: int = 8  # trials in each of the two disjoint seed sets
+    cone_objects: int = 6  # default objects with a grip outside the friction cone
+    cone_trials: int = 8
+    design_trials: int = 2
+    bootstrap: int = 2000
+    seed: int = 0
+    workers: int = 2
+
+    def __post_init__(self) -> None:
+        for name, value in asdict(self).items():
+            minimum = 0 if name == "seed" else 1
+            if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
+                raise ValueError(f"calibration setting {name} must be an integer >= {minimum}, "
+                                 f"got {value!r}")  # fmt: skip
+
+    @classmethod
+    def quick(cls, workers: int = 1) -> CalibrationSettings:
+        """A run of a few dozen trials: every check computed, none meaningful."""
+        return cls(retest_objects=2, grips_per_end=2, trials_per_set=2, cone_objects=1,
+                   cone_trials=2, design_trials=1, bootstrap=200, workers=workers)  # fmt: skip
+
+
+# ------------------------------------------------------------------------------------ objects
+def box_objects() -> list[PlanarObject]:
+    """The three calibration boxes (their thickness and density come from the config)."""
+    return [
+        PlanarObject.from_polygon(rectangle(w, h), name=f"box_{w:.0f}x{h:.0f}").centred()
+        for w, h in BOXES_MM
+    ]
+
+
+def outside_cone(grips: pd.DataFrame, mu: float) -> np.ndarray:
+    """True where some finger force F_i leaves the friction cone about N_i (C1's k = 3)."""
+    limit = np.arctan(mu)
+    outside = np.zeros(len(grips), dtype=bool)
+    for i in "123":
+        f = grips[[f"f{i}_x", f"f{i}_y"]].to_numpy(float)
+        n = grips[[f"n{i}_x", f"n{i}_y"]].to_numpy(float)
+        cosine = np.sum(f * n, axis=1) / (np.linalg.norm(f, axis=1) * np.linalg.norm(n, axis=1))
+        outside |= np.arccos(np.clip(cosine, -1.0, 1.0)) > limit
+    return outside
+
+
+def design_config(config: Config) -> Config:
+    """``config`` with no pose error, friction fixed at ``grasp.mu`` and no mass spread."""
+    return fixed_friction_config(config).override(
+        uncertainty={"position_std_mm": 0.0, "yaw_std_rad": 0.0, "mass_rel_std": 0.0}
+    )
+
+
+def fixed_friction_config(config: Config) -> Config:
+    """``config`` with every trial's friction at the design value ``grasp.mu``."""
+    mu = float(config.grasp.mu)
+    return config.override(uncertainty={"friction_range": (mu, mu)})
+
+
+def _planned(obj: PlanarObject, config: Config) -> pd.DataFrame:
+    from grip_env.pipeline import candidates
+
+    table = candidates(obj, config.grasp, config)
+    table = table[np.isfinite(table["Q_C"].to_numpy(float))]
+    return table.sort_values("Q_C", kind="stable").set_index("grip_id", drop=False)
+
+
+def _selections(obj: PlanarObject, config: Config, parts: Iterable[str],
+                settings: CalibrationSettings) -> list[tuple[str, str, pd.DataFrame, Config]]:
+    """(part, end, grips, config) of each simulation the object takes part in."""
+    table = _planned(obj, config)
+    runs = []
+    if "design" in parts and len(table):
+        runs.append(("design", "best", table.head(1), design_config(config)))
+    if "cone" in parts:
+        outside = table[outside_cone(table, config.grasp.mu)]
+        inside = table[~outside_cone(table, config.grasp.mu)]
+        if len(outside) and len(inside):
+            fixed = fixed_friction_config(config)
+            runs += [("cone", "best", inside.head(1), fixed),
+                     ("cone", "outside", outside.head(1), fixed)]  # fmt: skip
+    if "retest" in parts:
+        n = settings.grips_per_end
+        runs += [("retest", "best", table.head(n), config),
+                 ("retest", "worst", table.tail(n), config)]  # fmt: skip
+    return runs
+
+
+def _trials_for(part: str, settings: CalibrationSettings) -> int:
+    return {"design": settings.design_trials, "cone": settings.cone_trials,
+            "retest": 2 * settings.trials_per_set}[part]  # fmt: skip
+
+
+def object_job(task: Any, parts: dict[str, tuple[str, ...]],
+               settings: CalibrationSettings) -> pd.DataFrame:
+    """One object's calibration trials (long table, :data:`TRIAL_COLUMNS`)."""
+    from grip_env.sim import run_trial_outcomes
+
+    frames = []
+    for part, end, grips, config in _selections(task.obj, task.config, parts[task.object_id],
+                                                settings):
+        outcomes = run_trial_outcomes(task.obj, grips, config, trials=_trials_for(part, settings),
+                                      seed=settings.seed)  # fmt: skip
+        quality = grips.loc[outcomes["grip"], ["Q_C", "Q_G"]].to_numpy(float)
+        frames.append(outcomes.assign(object_id=task.object_id, part=part, end=end,
+                                      Q_C=quality[:, 0], Q_G=quality[:, 1]))  # fmt: skip
+    if not frames:
+        return pd.DataFrame(columns=list(TRIAL_COLUMNS))
+    return pd.concat(frames, ignore_index=True).loc[:, list(TRIAL_COLUMNS)]
+
+
+def choose_objects(config: Config, settings: CalibrationSettings) -> dict[str, tuple[str, ...]]:
+    """Object name → calibration parts; the boxes, then default objects in set order."""
+    plan: dict[str, tuple[str, ...]] = {obj.name: ("design",) for obj in box_objects()}
+    retest = cone = 0
+    for obj in load_object_set("default"):
+        table = _planned(obj, config)
+        parts = []
+        if retest < settings.retest_objects and len(table) >= 2 * settings.grips_per_end:
+            parts.append("retest")
+            retest += 1
+        outside = outside_cone(table, config.grasp.mu)
+        if cone < settings.cone_objects and outside.any() and not outside.all():
+            parts.append("cone")
+            cone += 1
+        if parts:
+            plan[obj.name] = tuple(parts)
+    return plan
+
+
+def run_calibration_trials(
+    config: Config, settings: CalibrationSettings,
+    log: Callable[[str], None] = lambda message: None,
+) -> pd.DataFrame:
+    """Every calibration trial, one pool job per object."""
+    from grip_env.dataset.backends import run_jobs
+    from grip_env.dataset.jobs import ObjectTask
+
+    plan = choose_objects(config, settings)
+    shapes = {obj.name: obj for obj in [*box_objects(), *load_object_set("default")]}
+    tasks = [ObjectTask(i, name, shapes[name], config, settings.seed)
+             for i, name in enumerate(plan)]  # fmt: skip
+    job = functools.partial(object_job, parts=plan, settings=settings)
+    frames = []
+    for task, rows in run_jobs(job, tasks, min(settings.workers, max(len(tasks), 1))):
+        log(f"[calibrate] {task.object_id}: {len(rows)} trials ({', '.join(plan[task.object_id])})")
+        frames.append(rows)
+    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=TRIAL_COLUMNS)
+
+
+# --------------------------------------------------------------------------------- statistics
+def spearman_bootstrap(a: np.ndarray, b: np.ndarray, resamples: int = 2000,
+                       seed: int = 0) -> dict[str, Any]:
+    """Spearman of paired values with a percentile bootstrap 95% interval (resampling pairs)."""
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    if a.size < 3:
+        return {"value": None, "ci": [None, None], "n": int(a.size)}
+    value = _spearman(a, b)
+    rng = np.random.default_rng(seed)
+    draws = rng.integers(0, a.size, size=(resamples, a.size))
+    boot = np.array([_spearman(a[d], b[d]) for d in draws])
+    boot = boot[np.isfinite(boot)]
+    ci = np.percentile(boot, [2.5, 97.5]).tolist() if boot.size else [None, None]
+    return {"value": value, "ci": ci, "n": int(a.size)}
+
+
+def icc1(values: np.ndarray) -> dict[str, Any]:
+    """ICC(1) of a (classes, k) table, with the exact 95% interval from the F distribution."""
+    values = np.asarray(values, float)
+    n, k = values.shape
+    if n < 2 or k < 2:
+        raise ValueError(f"ICC(1) needs >= 2 classes and >= 2 trials each, got {n}x{k}")
+    grand = values.mean()
+    msb = k * np.sum((values.mean(axis=1) - grand) ** 2) / (n - 1)
+    msw = np.sum((values - values.mean(axis=1, keepdims=True)) ** 2) / (n * (k - 1))
+    df1, df2 = n - 1, n * (k - 1)
+    if msw == 0:
+        return {"value": 1.0 if msb > 0 else None, "ci": [None, None], "n": n, "k": k}
+    f = msb / msw
+    low = f / stats.f.ppf(0.975, df1, df2)
+    high = f * stats.f.ppf(0.975, df2, df1)
+    value = (f - 1.0) / (f + k - 1.0)
+    ci = [(low - 1.0) / (low + k - 1.0), (high - 1.0) / (high + k - 1.0)]
+    return {"value": float(value), "ci": [float(c) for c in ci], "n": n, "k": k}
+
+
+def t_interval(values: np.ndarray) -> dict[str, Any]:
+    """Mean and 95% t-interval of independent values."""
+    values = np.asarray(values, float)
+    if values.size == 0:
+        return {"mean": None, "ci": [None, None], "n": 0}
+    mean = float(values.mean())
+    if values.size == 1:
+        return {"mean": mean, "ci": [mean, mean], "n": 1}
+    half = stats.t.ppf(0.975, values.size - 1) * values.std(ddof=1) / np.sqrt(values.size)
+    return {"mean": mean, "ci": [float(mean - half), float(mean + half)], "n": int(values.size)}
+
+
+def _spearman(a: np.ndarray, b: np.ndarray) -> float:
+    if np.unique(a).size < 2 or np.unique(b).size < 2:
+        return float("nan")
+    return float(stats.spearmanr(a, b).statistic)
+
+
+# ------------------------------------------------------------------------------------- checks
+def _check(name: str, measured: Any, ci: Any, target: str, passed: bool | None,
+           **extra: Any) -> dict[str, Any]:
+    return {"name": name, "measured": measured, "ci": ci, "target": target,
+            "passed": passed, **extra}  # fmt: skip
+
+
+def design_check(trials: pd.DataFrame, reference_g: float) -> dict[str, Any]:
+    """Each box's best grip at the design friction: robustness and whether it holds."""
+    rows = trials[trials["part"] == "design"]
+    per_box = rows.groupby("object_id").agg(grip=("grip", "first"), Q_C=("Q_C", "first"),
+                                            robustness=("robustness", "mean"),
+                                            held=("success", "mean"))  # fmt: skip
+    passed = bool(len(per_box) == len(BOXES_MM) and (per_box["held"] == 1.0).all())
+    return _check("design_hold", per_box["robustness"].round(3).to_dict(), None,
+                  f"every box's best-Q_C grip holds {reference_g:g} g", passed,
+                  per_object=per_box.reset_index().to_dict(orient="records"))
+
+
+def cone_check(trials: pd.DataFrame) -> dict[str, Any]:
+    """Outside-cone grip minus best grip, mean robustness, paired by object."""
+    rows = trials[trials["part"] == "cone"]
+    means = rows.groupby(["object_id", "end"])["robustness"].mean().unstack("end")
+    held = rows.groupby(["object_id", "end"])["success"].mean().unstack("end")
+    if means.empty or not {"best", "outside"} <= set(means.columns):
+        return _check("cone", None, [None, None], "difference < 0 with its interval", None)
+    difference = t_interval((means["outside"] - means["best"]).to_numpy())
+    passed = difference["ci"][1] is not None and difference["ci"][1] < 0 and difference["n"] > 1
+    per_object = pd.DataFrame({"best_g": means["best"], "outside_g": means["outside"],
+                               "best_held": held["best"], "outside_held": held["outside"]})
+    return _check("cone", difference["mean"], difference["ci"],
+                  "outside-cone minus best < 0, 95% interval below 0", bool(passed),
+                  per_object=per_object.reset_index().to_dict(orient="records"))
+
+
+def retest_table(trials: pd.DataFrame, trials_per_set: int) -> pd.DataFrame:
+    """Per retest grip: mean robustness on seed set A (first n trials) and set B (next n)."""
+    rows = trials[trials["part"] == "retest"].assign(
+        seed_set=lambda t: np.where(t["trial"] < trials_per_set, "A", "B")
+    )
+    table = rows.pivot_table(index=["object_id", "grip", "end", "Q_C"], columns="seed_set",
+                             values="robustness", aggfunc="mean")  # fmt: skip
+    return table.reset_index().rename_axis(columns=None)
+
+
+def retest_check(trials: pd.DataFrame, settings: CalibrationSettings) -> dict[str, Any]:
+    """Spearman of set-A against set-B grip means, pooled (bootstrap) and within objects."""
+    table = retest_table(trials, settings.trials_per_set)
+    if not {"A", "B"} <= set(table.columns):
+        return _check("retest", None, [None, None], f"Spearman >= {RETEST_TARGET}", None)
+    pooled = spearman_bootstrap(table["A"], table["B"], settings.bootstrap, settings.seed)
+    within = [_spearman(g["A"].to_numpy(), g["B"].to_numpy())
+              for _, g in table.groupby("object_id")]
+    value = pooled["value"]
+    passed = None if value is None or not np.isfinite(value) else bool(value >= RETEST_TARGET)
+    return _check("retest", value, pooled["ci"], f"Spearman >= {RETEST_TARGET}", passed,
+                  grips=len(table), objects=int(table["object_id"].nunique()),
+                  trials_per_set=settings.trials_per_set,
+                  within_object_mean=float(np.nanmean(within)) if within else None)
+
+
+def icc_check(trials: pd.DataFrame) -> dict[str, Any]:
+    """ICC(1) of per-trial robustness over the retest grips (all trials of both sets)."""
+    rows = trials[trials["part"] == "retest"]
+    table = rows.pivot_table(index="grip", columns="trial", values="robustness").dropna()
+    if table.shape[0] < 2 or table.shape[1] < 2:
+        return _check("icc", None, [None, None], f"ICC(1) >= {ICC_TARGET}", None)
+    result = icc1(table.to_numpy())
+    passed = None if result["value"] is None else bool(result["value"] >= ICC_TARGET)
+    return _check("icc", result["value"], result["ci"], f"ICC(1) >= {ICC_TARGET}", passed,
+                  grips=result["n"], trials=result["k"])
+
+
+def decile_table(table: pd.DataFrame, column: str, bins: int = 10) -> pd.DataFrame:
+    """Per quantile bin of ``column`` (1 = lowest = best): grips, mean robustness, mean success."""
+    _require(table, (column, "robustness_mean", "object_id"))
+    bin_of = _bins(table, column, bins)
+    grouped = table.assign(bin=bin_of).groupby("bin")
+    frame = pd.DataFrame({"grips": grouped.size(),
+                          f"{column}_min": grouped[column].min(),
+                          f"{column}_max": grouped[column].max(),
+                          "robustness_mean": grouped["robustness_mean"].mean()})  # fmt: skip
+    if "success_rate" in table.columns:
+        frame["success_rate"] = grouped["success_rate"].mean()
+    return frame
+
+
+def decile_check(table: pd.DataFrame, column: str = "Q_C", bins: int = 10, resamples: int = 2000,
+                 seed: int = 0) -> dict[str, Any]:
+    """Spearman of bin number against the bin's mean robustness, object-cluster bootstrap CI.
+
+    Bins are fixed on the whole table; each resample draws objects with replacement and
+    recomputes the bins' means (and per-bin 95% intervals for the chart).
+    """
+    frame = decile_table(table, column, bins)
+    bin_of = _bins(table, column, bins).to_numpy() - 1
+    objects, object_of = np.unique(table["object_id"].astype(str), return_inverse=True)
+    n_bins = int(bin_of.max()) + 1
+    sums = np.zeros((objects.size, n_bins))
+    counts = np.zeros((objects.size, n_bins))
+    np.add.at(sums, (object_of, bin_of), table["robustness_mean"].to_numpy(float))
+    np.add.at(counts, (object_of, bin_of), 1.0)
+    rng = np.random.default_rng(seed)
+    weights = rng.multinomial(objects.size, np.full(objects.size, 1.0 / objects.size), resamples)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        boot_means = (weights @ sums) / (weights @ counts)
+    order = np.arange(1, n_bins + 1)
+    value = _spearman(order, frame["robustness_mean"].to_numpy())
+    boot = np.array([_spearman(order[np.isfinite(m)], m[np.isfinite(m)]) for m in boot_means])
+    boot = boot[np.isfinite(boot)]
+    frame["ci_low"] = np.nanpercentile(boot_means, 2.5, axis=0)
+    frame["ci_high"] = np.nanpercentile(boot_means, 97.5, axis=0)
+    pooled = _spearman(table[column].to_numpy(float), table["robustness_mean"].to_numpy(float))
+    passed = None if not np.isfinite(value) else bool(value <= DECILE_TARGET)
+    target = f"Spearman(decile, mean robustness) <= {DECILE_TARGET}"
+    return _check(f"decile_{column}", value,
+                  np.percentile(boot, [2.5, 97.5]).tolist() if boot.size else [None, None],
+                  target if column == "Q_C" else "for comparison with Q_C (no target)",
+                  passed if column == "Q_C" else None,
+                  pooled_grip_spearman=pooled, grips=len(table),
+                  objects=int(objects.size), deciles=frame.reset_index().to_dict(orient="records"))
+
+
+def _bins(table: pd.DataFrame, column: str, bins: int) -> pd.Series:
+    ranks = table[column].rank(method="first")
+    return pd.qcut(ranks, q=min(bins, len(table)), labels=False) + 1
+
+
+def _require(table: pd.DataFrame, columns: tuple[str, ...]) -> None:
+    missing = [c for c in columns if c not in table.columns]
+    if missing:
+        raise ValueError(f"table lacks column(s) {', '.join(missing)} (a dataset with the "
+                         "graded outcome is needed: regenerate it)")
+
+
+# -------------------------------------------------------------------------------------- entry
+def calibrate(
+    config: Config | None = None,
+    settings: CalibrationSettings | None = None,
+    dataset: pd.DataFrame | None = None,
+    log: Callable[[str], None] = lambda message: None,
+) -> tuple[dict[str, Any], pd.DataFrame]:
+    """Run the checks; returns (JSON-able result, the long table of calibration trials)."""
+    config = config or Config()
+    settings = settings or CalibrationSettings()
+    trials = run_calibration_trials(config, settings, log)
+    reference = float(config.sim.reference_level_g)
+    checks = [design_check(trials, reference), cone_check(trials),
+              retest_check(trials, settings), icc_check(trials)]  # fmt: skip
+    if dataset is not None:
+        checks += dataset_checks(dataset, settings)
+    result = {"reference_level_g": reference, "mu": float(config.grasp.mu),
+              "settings": asdict(settings), "trials": len(trials),
+              "checks": {c["name"]: c for c in checks}}  # fmt: skip
+    return result, trials
+
+
+def dataset_checks(dataset: pd.DataFrame, settings: CalibrationSettings | None = None,
+                   ) -> list[dict[str, Any]]:
+    """The decile checks (Q_C, then Q_G for comparison) on a dataset with robustness."""
+    settings = settings or CalibrationSettings()
+    return [decile_check(dataset, column, resamples=settings.bootstrap, seed=settings.seed)
+            for column in ("Q_C", "Q_G")]

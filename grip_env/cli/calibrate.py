@@ -1,0 +1,55 @@
+"""``grip-env calibrate``: measured checks that the simulated labels measure the grip."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from grip_env.cli.errors import user_errors
+from grip_env.cli.options import ConfigFile
+
+
+def calibrate(
+    config: ConfigFile = None,
+    out: Annotated[Path, typer.Option("--out", "-o", help="output folder")] = Path(
+        "runs/calibration"
+    ),
+    data: Annotated[
+        Path | None,
+        typer.Option("--data", "-d", help="dataset for the decile checks (e.g. a study's)"),
+    ] = None,
+    workers: Annotated[int, typer.Option(min=1, help="worker processes (one object each)")] = 2,
+    quick: Annotated[bool, typer.Option("--quick", help="a few dozen trials, for tests")] = False,
+) -> None:
+    """Write OUT/calibration.md (and .html, .json, figures): each check measured, pass or fail.
+
+    Checks: the best grip of three boxes holds the reference level at the design friction; a
+    grip outside the friction cone holds less than the best grip; test-retest Spearman and
+    ICC(1) of robustness; with `--data`, Spearman of Q_C (and Q_G) decile with mean robustness.
+    """
+    with user_errors():
+        from classifiers.report.calibration import write_calibration
+        from grip_env.calibration import CalibrationSettings
+        from grip_env.calibration import calibrate as run
+        from grip_env.config import load_config
+
+        dataset = None
+        if data is not None:
+            from grip_env.dataset import load
+
+            dataset = load(data)
+        settings = (CalibrationSettings.quick(workers) if quick
+                    else CalibrationSettings(workers=workers))  # fmt: skip
+        result, trials = run(load_config(config), settings, dataset, log=typer.echo)
+        md = write_calibration(out, result, trials)
+        for name, check in result["checks"].items():
+            verdict = {True: "pass", False: "FAIL", None: "-"}[check["passed"]]
+            typer.echo(f"{name:12s} {verdict:5s} {check['target']}")
+        typer.echo(f"wrote {md}")
+
+
+def register(app: typer.Typer) -> None:
+    """Add the command to the ``grip-env`` app."""
+    app.command("calibrate")(calibrate)

@@ -1,0 +1,152 @@
+"""Label-validity calibration: its statistics, its checks, and ``grip-env calibrate --quick``."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy import stats
+from typer.testing import CliRunner
+
+from classifiers.synthetic import synthetic_grips
+from grip_env.calibration import (
+    BOXES_MM,
+    CalibrationSettings,
+    box_objects,
+    choose_objects,
+    cone_check,
+    decile_check,
+    design_config,
+    icc1,
+    outside_cone,
+    retest_check,
+    spearman_bootstrap,
+)
+from grip_env.cli import _register_commands, app
+from grip_env.config import Config
+
+
+def test_icc1_matches_the_anova_definition_and_its_interval_brackets_it():
+    rng = np.random.default_rng(0)
+    grips, trials = 40, 6
+    values = rng.normal(0, 2.0, size=(grips, 1)) + rng.normal(0, 1.0, size=(grips, trials))
+    result = icc1(values)
+    # from scipy's one-way ANOVA F over the same table
+    f_value = stats.f_oneway(*values).statistic
+    assert result["value"] == pytest.approx((f_value - 1) / (f_value + trials - 1))
+    assert result["ci"][0] < result["value"] < result["ci"][1]
+    # population ICC is 4 / (4 + 1) = 0.8: the 95% interval covers it about 95% of the time
+    covered = []
+    for seed in range(300):
+        rng = np.random.default_rng(seed)
+        draw = rng.normal(0, 2.0, size=(grips, 1)) + rng.normal(0, 1.0, size=(grips, trials))
+        low, high = icc1(draw)["ci"]
+        covered.append(low < 0.8 < high)
+    assert 0.91 <= np.mean(covered) <= 0.99
+
+
+def test_icc1_is_near_zero_when_the_class_explains_nothing():
+    values = np.random.default_rng(1).normal(size=(60, 8))
+    result = icc1(values)
+    assert abs(result["value"]) < 0.1 and result["ci"][0] < 0 < result["ci"][1]
+    with pytest.raises(ValueError, match="1x8"):
+        icc1(values[:1])
+
+
+def test_spearman_bootstrap_interval_contains_the_estimate():
+    rng = np.random.default_rng(2)
+    a = rng.normal(size=100)
+    result = spearman_bootstrap(a, a + rng.normal(0, 0.5, size=100), resamples=300)
+    assert result["ci"][0] < result["value"] < result["ci"][1] and result["value"] > 0.7
+    assert spearman_bootstrap(a[:2], a[:2])["value"] is None
+
+
+def test_outside_cone_flags_a_force_beyond_arctan_mu():
+    row = {f"{k}{i}_{a}": 0.0 for k in "fn" for i in "123" for a in "xy"}
+    for i in "123":
+        row[f"n{i}_x"] = row[f"f{i}_x"] = 1.0
+    inside = pd.DataFrame([row])
+    tilted = dict(row, f2_x=np.cos(0.5), f2_y=np.sin(0.5))  # 0.5 rad > arctan(0.4) = 0.38
+    frame = pd.concat([inside, pd.DataFrame([tilted])], ignore_index=True)
+    assert outside_cone(frame, 0.4).tolist() == [False, True]
+    assert outside_cone(frame, 0.6).tolist() == [False, False]  # arctan(0.6) = 0.54 > 0.5
+
+
+def test_design_config_removes_pose_error_and_fixes_friction():
+    config = design_config(Config())
+    u = config.uncertainty
+    assert u.position_std_mm == 0 and u.yaw_std_rad == 0 and u.mass_rel_std == 0
+    assert u.friction_range == (config.grasp.mu, config.grasp.mu)
+
+
+def test_objects_cover_the_boxes_and_enough_retest_grips():
+    boxes = box_objects()
+    assert [b.name for b in boxes] == [f"box_{w:.0f}x{h:.0f}" for w, h in BOXES_MM]
+    assert boxes[0].area == pytest.approx(90 * 55)
+    plan = choose_objects(Config(), CalibrationSettings())
+    assert sum("retest" in parts for parts in plan.values()) == 6  # 6 x 16 = 96 grips >= 90
+    assert sum("cone" in parts for parts in plan.values()) >= 3
+
+
+def _trials(part: str, grips: dict[str, float], n: int, rng: np.random.Generator,
+            obj: str = "o") -> pd.DataFrame:
+    rows = [{"object_id": obj, "grip": g, "part": part, "end": end, "Q_C": 1.0, "Q_G": 1.0,
+             "trial": k, "robustness": max(level + rng.normal(0, 0.3), 0.0),
+             "success": level >= 4.0, "friction": 0.4, "mass_kg": 0.2}
+            for g, (end, level) in grips.items() for k in range(n)]  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def test_cone_and_retest_checks_pass_on_separated_grips_and_fail_on_noise():
+    rng = np.random.default_rng(3)
+    cone = pd.concat([_trials("cone", {f"{o}/a": ("best", 6.0), f"{o}/b": ("outside", 2.0)}, 4,
+                              rng, obj=o) for o in "uvw"])  # fmt: skip
+    assert cone_check(cone)["passed"] and cone_check(cone)["measured"] == pytest.approx(-4, 0.1)
+    levels = {f"g{i}": ("best", float(i)) for i in range(30)}
+    settings = CalibrationSettings(trials_per_set=4, bootstrap=200)
+    assert retest_check(_trials("retest", levels, 8, rng), settings)["passed"]
+    flat = {f"g{i}": ("best", 3.0) for i in range(30)}
+    assert not retest_check(_trials("retest", flat, 8, rng), settings)["passed"]
+
+
+def test_decile_check_sees_a_monotone_trend_and_its_absence():
+    table = synthetic_grips(n_objects=30, seed=4)
+    result = decile_check(table, "Q_C", resamples=200)
+    assert result["measured"] < -0.8 and result["passed"]
+    assert len(result["deciles"]) == 10 and sum(d["grips"] for d in result["deciles"]) == len(table)
+    shuffled = table.assign(robustness_mean=np.random.default_rng(5).permutation(
+        table["robustness_mean"].to_numpy()))  # fmt: skip
+    assert abs(decile_check(shuffled, "Q_C", resamples=200)["measured"]) < 0.8
+    assert decile_check(table, "Q_G", resamples=200)["passed"] is None
+    with pytest.raises(ValueError, match="robustness_mean"):
+        decile_check(table.drop(columns="robustness_mean"), "Q_C")
+
+
+def test_settings_reject_bad_sizes():
+    with pytest.raises(ValueError, match="grips_per_end"):
+        CalibrationSettings(grips_per_end=0)
+
+
+def test_calibrate_quick_writes_a_report_from_real_trials(tmp_path: Path):
+    """A tiny real run: planning, PyBullet trials through the public sim API, the report."""
+    _register_commands()
+    out = tmp_path / "cal"
+    result = CliRunner().invoke(app, ["calibrate", "--quick", "--out", str(out), "--workers", "1"])
+    assert result.exit_code == 0, result.output
+    saved = json.loads((out / "calibration.json").read_text())
+    assert set(saved["checks"]) == {"design_hold", "cone", "retest", "icc"}
+    trials = pd.read_parquet(out / "calibration_trials.parquet")
+    assert set(trials["part"]) == {"design", "cone", "retest"}
+    assert trials["robustness"].ge(0).all()
+    retest = trials[trials["part"] == "retest"]
+    assert retest.groupby("grip")["trial"].nunique().eq(4).all()  # two disjoint sets of 2
+    text = (out / "calibration.md").read_text()
+    assert "Label validity" in text and "figures/calibration_retest.png" in text
+    assert (out / "figures" / "calibration_design.png").is_file()
+    for name in ("design_hold", "retest", "icc"):
+        assert name in text
+    bad = CliRunner().invoke(app, ["calibrate", "--quick", "--workers", "0"])
+    assert bad.exit_code == 2
