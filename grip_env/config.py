@@ -30,6 +30,8 @@ MAX_OBJECT_VERTICES = 5_000
 """Most polygon vertices an object may have (its size, not its vertex count, matters here)."""
 MAX_OBJECT_SIZE_MM = 2_000.0
 """Largest object extent: the open hand spans about 0.3 m; a 2 m part is not a grasp problem."""
+MAX_IMAGE_PIXELS = 4096 * 4096
+"""Largest object image read (as ``perception.resolution_px`` at most 4096)."""
 
 Friction = Annotated[float, Field(ge=0.0, le=3.0)]
 ObjectSize = Annotated[float, Field(ge=5.0, le=1000.0)]
@@ -140,6 +142,7 @@ class LearningConfig(_Section):
 
     models: tuple[str, ...] = Field(
         ("svm", "mlp_torch", "mlp_sklearn", "knn", "logreg", "rank_qc", "rank_qg", "random"),
+        min_length=1,
         description="models trained and compared",
     )
     folds: int = Field(5, ge=2, le=100, description="grouped CV folds")
@@ -178,6 +181,23 @@ class Config(_Section):
                 raise ValueError(f"unknown config section {name!r}")
             data[name] = {**data[name], **fields}
         return config_from_dict(data)
+
+
+def check_setting(section: str, key: str, value: Any, label: str | None = None) -> Any:
+    """``value`` validated as config key ``section.key`` is, e.g. a CLI flag that overrides it.
+
+    Returns the validated value; a bad one raises ``ValueError`` naming ``label`` (default
+    ``section.key``), the bound and the value, so ``--workers 10**12`` is refused like
+    ``dataset.workers: 10**12`` in a file.
+    """
+    model = type(getattr(Config(), section, None))
+    if model is type(None) or key not in model.model_fields:
+        raise ValueError(f"unknown config key {section}.{key}")
+    try:
+        return getattr(model.model_validate({key: value}), key)
+    except ValidationError as exc:
+        problems = "; ".join(_problem(err).removeprefix(f"{key}: ") for err in exc.errors())
+        raise ValueError(f"{label or f'{section}.{key}'}: {problems}") from None
 
 
 def config_from_dict(data: dict[str, Any]) -> Config:

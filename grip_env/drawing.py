@@ -82,8 +82,11 @@ def object_figure(
 
 
 def save_figure(fig: Figure, path: str | Path, dpi: int = 120) -> Path:
-    """Write a figure to PNG, creating the folder (figures here never touch pyplot's state)."""
+    """Write a figure as PNG exactly at ``path`` (no suffix added), creating the folder.
+
+    Figures here never touch pyplot's state.
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi)
+    fig.savefig(path, dpi=dpi, format="png")
     return path

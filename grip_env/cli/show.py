@@ -9,6 +9,7 @@ import typer
 
 from grip_env.cli.errors import user_errors
 from grip_env.cli.options import ConfigFile
+from grip_env.cli.paths import output_file
 
 if TYPE_CHECKING:
     from grip_env.config import Config
@@ -17,7 +18,9 @@ if TYPE_CHECKING:
 
 def show(
     obj: Annotated[str, typer.Argument(help="shape name, image file, or vertex file (.json/.csv)")],
-    out: Annotated[Path, typer.Option("--out", "-o", help="PNG file to write")] = Path("show.png"),
+    out: Annotated[
+        Path, typer.Option("--out", "-o", help="PNG file to write (its name ends in .png)")
+    ] = Path("show.png"),
     grips: Annotated[int, typer.Option(help="draw the best N grips by Q_C (0: regions only)")] = 0,
     config: ConfigFile = None,
     mm_per_px: Annotated[float, typer.Option(help="scale of an image object")] = 1.0,
@@ -29,12 +32,46 @@ def show(
         if grips < 0:
             raise ValueError(f"--grips must be >= 0, got {grips}")
         from grip_env.config import load_config
-        from grip_env.objects import object_from_spec
 
+        output_file(out, ".png")
         cfg = load_config(config)
-        planar = object_from_spec(obj, mm_per_px)
+        planar = _load_object(obj, mm_per_px, cfg)
         path = _render_trial(planar, cfg, seed, out) if sim else _draw(planar, cfg, grips, out)
     typer.echo(f"wrote {path}")
+
+
+def _load_object(spec: str, mm_per_px: float, cfg: Config) -> PlanarObject:
+    """The object of ``spec``, refused when too large or too detailed to process."""
+    from grip_env.config import check_contour_budget
+    from grip_env.objects import object_from_spec
+    from grip_env.objects.sources import IMAGE_SUFFIXES
+
+    if Path(spec).suffix.lower() in IMAGE_SUFFIXES and Path(spec).is_file():
+        _check_image_size(Path(spec))
+    planar = object_from_spec(spec, mm_per_px)
+    low, high = planar.contour.min(axis=0), planar.contour.max(axis=0)
+    perimeter = float(planar.polygon.length)
+    extent = float((high - low).max())
+    check_contour_budget(planar.name, len(planar.contour), perimeter, extent, cfg.perception)
+    return planar
+
+
+def _check_image_size(path: Path) -> None:
+    """Refuse an image with more than ``MAX_IMAGE_PIXELS`` before decoding it."""
+    from PIL import Image, UnidentifiedImageError
+
+    from grip_env.config import MAX_IMAGE_PIXELS
+
+    try:
+        with Image.open(path) as image:
+            width, height = image.size
+    except (OSError, UnidentifiedImageError, Image.DecompressionBombError) as exc:
+        raise ValueError(f"cannot read image file {path}: {exc}") from None
+    if width * height > MAX_IMAGE_PIXELS:
+        raise ValueError(
+            f"image {path} is {width} x {height} pixels, more than {MAX_IMAGE_PIXELS} in all; "
+            "downscale it (and raise --mm-per-px to match)"
+        )
 
 
 def _draw(planar: PlanarObject, cfg: Config, grips: int, out: Path) -> Path:

@@ -8,6 +8,7 @@ import typer
 
 from grip_env.cli.errors import user_errors
 from grip_env.cli.options import ConfigFile, DatasetDir, OutputDir
+from grip_env.cli.paths import output_dir
 
 
 def train(
@@ -16,24 +17,47 @@ def train(
     config: ConfigFile = None,
     models: Annotated[
         str | None,
-        typer.Option(help="comma-separated model names [default: config learning.models]"),
+        typer.Option(help="comma-separated model names, from svm, mlp_torch, mlp_sklearn, knn, "
+                          "logreg, rank_qc, rank_qg, random [default: config learning.models]"),
     ] = None,
 ) -> None:
     """Write OUT/metrics.json (grouped CV), roc.png, calibration.png and OUT/models/."""
     with user_errors():
-        from classifiers.training import train_and_save
         from grip_env.config import load_config
-        from grip_env.dataset import load
 
         settings = load_config(config)
         if models is not None:
-            names = tuple(name.strip() for name in models.split(",") if name.strip())
-            settings = settings.override(learning={"models": names})
+            settings = settings.override(learning={"models": model_names(models)})
+        check_model_names(settings.learning.models)
+        output_dir(out)
+        from classifiers.training import train_and_save
+        from grip_env.dataset import load
+
         metrics = train_and_save(load(data), out, settings)
         for name, summary in metrics["models"].items():
             auc = summary["roc_auc"]["mean"]
             typer.echo(f"{name:12s} ROC-AUC {auc:.3f}" if auc is not None else name)
         typer.echo(f"wrote {out / 'metrics.json'}")
+
+
+def model_names(text: str) -> tuple[str, ...]:
+    """The names of a comma-separated ``--models`` value; refused when it names none."""
+    names = tuple(name.strip() for name in text.split(",") if name.strip())
+    if not names:
+        raise ValueError(f"--models {text!r} names no model; give e.g. svm,knn")
+    return names
+
+
+def check_model_names(names: tuple[str, ...]) -> None:
+    """Refuse an unknown or repeated model name before any work starts."""
+    from classifiers.models import MODEL_NAMES
+
+    unknown = [name for name in names if name not in MODEL_NAMES]
+    if unknown:
+        raise ValueError(f"unknown model {unknown[0]!r}; choose from {', '.join(MODEL_NAMES)}")
+    repeated = sorted({name for name in names if names.count(name) > 1})
+    if repeated:
+        raise ValueError(f"model {repeated[0]!r} is named twice")
 
 
 def register(app: typer.Typer) -> None:

@@ -1,0 +1,176 @@
+"""Bad inputs from the command line: each ends in one ``error:`` line and exit code 2, fast.
+
+Every case of the reliability review that used to crash (traceback), run without end, or mislead
+is here; each must be refused before any heavy work (planning, physics, training) starts.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import stat
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+from typer.testing import CliRunner
+
+from grip_env.cli import _register_commands, app
+
+_register_commands()
+RUNNER = CliRunner()
+
+
+def run(*args: str) -> tuple[int, str]:
+    result = RUNNER.invoke(app, [str(a) for a in args])
+    return result.exit_code, result.output
+
+
+def assert_refused(code: int, output: str, *fragments: str) -> None:
+    """Exit code 2, one ``error:`` line naming every fragment, no traceback."""
+    lines = [line for line in output.splitlines() if line.strip()]
+    assert code == 2, output
+    assert len(lines) == 1 and lines[0].startswith("error: "), output
+    for fragment in fragments:
+        assert fragment in lines[0], output
+
+
+def read_only_dir(tmp_path: Path) -> Path:
+    """A directory nothing can be written into: chmod for users, a read-only mount for root."""
+    folder = tmp_path / "locked"
+    folder.mkdir()
+    folder.chmod(stat.S_IRUSR | stat.S_IXUSR)
+    if os.access(folder, os.W_OK):  # root ignores modes: use a read-only file system instead
+        try:
+            Path("/sys/.grip-env-probe").touch()
+        except OSError:
+            return Path("/sys")
+        pytest.skip("no read-only directory available")
+    return folder
+
+
+# ----------------------------------------------------------------- config files
+BAD_CONFIGS = {
+    "friction_huge": ("uncertainty:\n  friction_range: [1.0e308, 1.0e309]\n",
+                      "uncertainty.friction_range"),
+    "spacing_tiny": ("perception:\n  contour_spacing_mm: 1.0e-9\n",
+                     "perception.contour_spacing_mm"),
+    "timestep_tiny": ("sim:\n  timestep: 1.0e-9\n", "sim.timestep"),
+    "size_huge": ("objects:\n  procedural_size_mm: [1.0e300, 1.0e301]\n",
+                  "objects.procedural_size_mm"),
+    "deep": ("grasp: " + "[" * 5000 + "]" * 5000 + "\n", "nested too deeply"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD_CONFIGS))
+def test_bad_config_values_are_refused_in_one_line(tmp_path, case):
+    text, fragment = BAD_CONFIGS[case]
+    config = tmp_path / "bad.yaml"
+    config.write_text(text)
+    out = tmp_path / "x.png"
+    assert_refused(*run("show", "star", "--config", config, "--out", out), fragment)
+    assert not out.exists()
+
+
+# ----------------------------------------------------------------- show
+def test_show_out_directory_is_refused_not_written_beside(tmp_path):
+    folder = tmp_path / "figs"
+    folder.mkdir()
+    assert_refused(*run("show", "star", "--out", folder), "is a directory")
+    assert not (tmp_path / "figs.png").exists()
+
+
+def test_show_writes_exactly_where_told_or_refuses(tmp_path):
+    assert_refused(*run("show", "star", "--out", tmp_path / "noext"), "must end in .png")
+    assert not list(tmp_path.iterdir())
+    code, output = run("show", "star", "--out", tmp_path / "star.png")
+    assert code == 0, output
+    assert output.strip() == f"wrote {tmp_path / 'star.png'}"
+    assert (tmp_path / "star.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_show_out_on_a_read_only_file_system(tmp_path):
+    assert_refused(*run("show", "star", "--out", read_only_dir(tmp_path) / "x.png"),
+                   "cannot write there")
+
+
+def test_show_out_under_a_file(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    assert_refused(*run("show", "star", "--out", blocker / "x.png"), "is a file")
+
+
+def test_show_of_a_huge_square_is_refused(tmp_path):
+    side = 1e9
+    path = tmp_path / "huge.json"
+    path.write_text(json.dumps([[0, 0], [side, 0], [side, side], [0, side]]))
+    assert_refused(*run("show", path, "--out", tmp_path / "x.png"), "mm across")
+
+
+def test_show_of_a_million_vertex_polygon_is_refused(tmp_path):
+    angle = np.linspace(0, 2 * np.pi, 1_000_000, endpoint=False)
+    path = tmp_path / "many.csv"
+    np.savetxt(path, 60 * np.column_stack([np.cos(angle), np.sin(angle)]), delimiter=",",
+               fmt="%.6f")
+    assert_refused(*run("show", path, "--out", tmp_path / "x.png"), "1000000 vertices")
+
+
+def test_show_of_an_oversized_image_is_refused_before_decoding(tmp_path):
+    path = tmp_path / "big.png"
+    Image.new("L", (5000, 4000)).save(path)
+    assert_refused(*run("show", path, "--out", tmp_path / "x.png"), "5000 x 4000 pixels")
+
+
+def test_show_of_a_fine_spacing_on_a_large_object_is_refused(tmp_path):
+    config = tmp_path / "fine.yaml"
+    config.write_text("perception:\n  contour_spacing_mm: 0.1\n")
+    teeth = [[x, y] for i in range(20) for x, y in
+             ((40.0 * i, 1900.0), (40.0 * i + 20, 1900.0), (40.0 * i + 20, 10.0),
+              (40.0 * i + 40, 10.0))]
+    path = tmp_path / "comb.json"  # 1.9 m teeth: a 76 m contour inside a 0.8 x 1.9 m box
+    path.write_text(json.dumps([[0.0, 0.0], [800.0, 0.0], *teeth[::-1]]))
+    assert_refused(*run("show", path, "--config", config, "--out", tmp_path / "x.png"),
+                   "contour_spacing_mm 0.1")
+
+
+# ----------------------------------------------------------------- train
+def test_train_out_naming_an_existing_file(tmp_path):
+    blocker = tmp_path / "metrics"
+    blocker.write_text("")
+    assert_refused(*run("train", "--data", tmp_path, "--out", blocker), "existing file")
+
+
+def test_train_out_on_a_read_only_file_system(tmp_path):
+    assert_refused(*run("train", "--data", tmp_path, "--out", read_only_dir(tmp_path) / "m"),
+                   "cannot")
+
+
+@pytest.mark.parametrize(("models", "fragment"), [
+    (",", "names no model"),
+    (" , ,", "names no model"),
+    ("svm,nosuch", "unknown model 'nosuch'"),
+    ("svm,svm", "named twice"),
+])
+def test_train_models_are_checked_before_the_data(tmp_path, models, fragment):
+    code, output = run("train", "--data", tmp_path / "none", "--out", tmp_path / "m",
+                       "--models", models)
+    assert_refused(code, output, fragment)
+    assert not (tmp_path / "m").exists()
+
+
+# ----------------------------------------------------------------- generate
+@pytest.mark.xfail(strict=True, reason="generate.py must bound them with check_setting (lead)")
+@pytest.mark.parametrize(("flag", "value"), [
+    ("--objects", "99999999999999999999"), ("--workers", "1000000000000"),
+])
+def test_generate_huge_counts_are_refused(tmp_path, flag, value):
+    args = {"--objects": "1", "--workers": "1", flag: value}
+    assert_refused(*run("generate", "--out", tmp_path / "g", "--trials", "1",
+                        *[item for pair in args.items() for item in pair]), flag, value)
+
+
+@pytest.mark.xfail(strict=True, reason="generate.py must refuse --address without ray (lead)")
+def test_generate_address_needs_the_ray_backend(tmp_path):
+    assert_refused(*run("generate", "--out", tmp_path / "g", "--objects", "1",
+                        "--backend", "process", "--address", "ray://host:10001"), "--address")
