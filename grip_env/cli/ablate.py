@@ -8,6 +8,7 @@ import typer
 
 from grip_env.cli.errors import user_errors
 from grip_env.cli.options import ConfigFile, DatasetDir, OutputDir
+from grip_env.cli.paths import output_dir
 
 
 def ablate(
@@ -18,6 +19,7 @@ def ablate(
 ) -> None:
     """Write OUT/ablation.json (metrics, paired differences, importances) and OUT/ablation.png."""
     with user_errors():
+        output_dir(out)
         from classifiers.ablation import run_ablation
         from grip_env.config import load_config
         from grip_env.dataset import load

@@ -8,6 +8,7 @@ import typer
 
 from grip_env.cli.errors import user_errors
 from grip_env.cli.options import ConfigFile, DatasetDir, OutputDir
+from grip_env.cli.paths import output_dir
 
 
 def select(
@@ -35,6 +36,7 @@ def select(
     TensorBoard logs OUT/tb and OUT/learning_curve.png.
     """
     with user_errors():
+        output_dir(out)
         from classifiers.selector import REPORT_FILE, run_selector
         from grip_env.config import load_config
 

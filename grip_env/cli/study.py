@@ -9,6 +9,7 @@ import typer
 
 from grip_env.cli.errors import user_errors
 from grip_env.cli.options import ConfigFile
+from grip_env.cli.paths import output_dir
 
 
 def study(
@@ -22,6 +23,7 @@ def study(
     evaluates the RL selector, then writes the report. Rerunning reuses every finished stage.
     """
     with user_errors():
+        output_dir(out)
         from classifiers.study import run_study
         from grip_env.config import load_config
 
