@@ -174,3 +174,11 @@ def test_generate_huge_counts_are_refused(tmp_path, flag, value):
 def test_generate_address_needs_the_ray_backend(tmp_path):
     assert_refused(*run("generate", "--out", tmp_path / "g", "--objects", "1",
                         "--backend", "process", "--address", "ray://host:10001"), "--address")
+
+
+@pytest.mark.parametrize("command", [["ablate", "--data", "."], ["select", "--data", "."],
+                                     ["study"]])
+def test_every_out_folder_is_checked_before_the_work(tmp_path, command):
+    blocker = tmp_path / "result"
+    blocker.write_text("")
+    assert_refused(*run(*command, "--out", blocker), "existing file")
