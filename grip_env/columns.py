@@ -19,7 +19,9 @@ OBJECT = ("area", "centroid_x", "centroid_y", "semi_major", "semi_minor")
 FEATURES = ("S1", "S2", "S3", "S4", "G1", "G2", "C1", "C2", "C3", "C4", "C5", "C6")
 INDEXES = ("Q_G", "Q_C")
 OUTCOMES = ("trials", "successes", "success_rate", "success")
+#: Graded outcome: the highest disturbance (g) held per trial, mean and spread over trials.
+ROBUSTNESS = ("robustness_mean", "robustness_std")
 
 DESCRIPTORS = CONTACTS + NORMALS + FORCES + REGIONS + CURVATURES + FOCI + HAND + OBJECT
 CANDIDATE_COLUMNS = IDENTITY + DESCRIPTORS + FEATURES + INDEXES
-DATASET_COLUMNS = CANDIDATE_COLUMNS + OUTCOMES
+DATASET_COLUMNS = CANDIDATE_COLUMNS + OUTCOMES + ROBUSTNESS

@@ -134,7 +134,13 @@ class DatasetConfig(_Section):
     seed: int = Field(0, ge=0, description="run seed")
     workers: int = Field(2, ge=1, le=1024, description="parallel workers")
     backend: Literal["process", "ray"] = Field("process", description="parallel backend")
-    max_grips_per_object: int = Field(30, ge=1, le=10_000, description="best grips by Q_C")
+    max_grips_per_object: int = Field(30, ge=1, le=10_000, description="grips kept per object")
+    sampling: Literal["stratified", "best", "uniform"] = Field(
+        "stratified",
+        description="which grips an object keeps: stratified (a quarter best by Q_C, the rest "
+        "one seeded pick per equal-rank stratum of the Q_C ranking), best (lowest Q_C) or "
+        "uniform (a seeded sample)",
+    )
 
 
 class LearningConfig(_Section):

@@ -14,21 +14,27 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 
 from grip_env.columns import DATASET_COLUMNS, DESCRIPTORS
 from grip_env.config import Config
 from grip_env.dataset import (
+    FORMAT_VERSION,
     DatasetMismatchError,
+    FormatVersionError,
     ObjectTask,
     WorkerLost,
     generate,
+    keep_grips,
+    kept_ranks,
     load,
     load_objects,
     validate,
     with_outcomes,
 )
+from grip_env.dataset.files import sha256_of
 from grip_env.dataset.jobs import object_seeds
 from grip_env.features import compute_features
 from grip_env.objects import load_object_set
@@ -57,7 +63,12 @@ def toy_job(task: ObjectTask) -> pd.DataFrame:
     grips.insert(3, "two_finger", False)
     grips = pd.concat([grips, compute_features(grips, task.config.grasp)], axis=1)
     trials = np.full(count, task.config.dataset.trials)
-    return with_outcomes(grips, trials, rng.binomial(trials, 0.5), task.object_id)
+    robustness = rng.uniform(0.0, 3.0, (count, trials[0]))
+    outcome = pd.DataFrame({
+        "trials": trials, "successes": (robustness >= 1.5).sum(axis=1),
+        "robustness_mean": robustness.mean(axis=1), "robustness_std": robustness.std(axis=1),
+    })
+    return with_outcomes(grips, outcome, task.object_id)
 
 
 def empty_job(task: ObjectTask) -> pd.DataFrame:
@@ -122,6 +133,59 @@ def test_empty_object_is_a_valid_empty_shard(tmp_path: Path) -> None:
     assert grips.empty and list(grips.columns) == list(DATASET_COLUMNS)
     assert grips["trials"].dtype == np.int64
     assert validate(path) == []
+
+
+# ----------------------------------------------------------------- which grips a dataset keeps
+def test_stratified_keeps_the_best_quarter_and_one_pick_per_stratum() -> None:
+    ranks = kept_ranks(200, 30, "stratified", seed=11)
+    assert len(ranks) == len(set(ranks)) == 30 and (np.diff(ranks) > 0).all()
+    np.testing.assert_array_equal(ranks[:8], np.arange(8))  # ceil(30 / 4) from the best end
+    # the other 22: one in each of 22 equal-rank strata of ranks 8..199, down to the worst end
+    edges = 8 + np.arange(23) * 192 // 22
+    strata = np.searchsorted(edges, ranks[8:], side="right") - 1
+    np.testing.assert_array_equal(strata, np.arange(22))
+    assert (ranks >= 150).sum() >= 5  # the worst quartile is covered
+    np.testing.assert_array_equal(ranks, kept_ranks(200, 30, "stratified", seed=11))
+    assert not np.array_equal(ranks, kept_ranks(200, 30, "stratified", seed=12))
+
+
+@pytest.mark.parametrize("method", ["stratified", "best", "uniform"])
+def test_every_method_keeps_all_when_there_are_few(method: str) -> None:
+    np.testing.assert_array_equal(kept_ranks(5, 30, method, seed=0), np.arange(5))
+    assert len(kept_ranks(0, 30, method, seed=0)) == 0
+
+
+def test_best_and_uniform_sampling() -> None:
+    np.testing.assert_array_equal(kept_ranks(100, 10, "best", seed=3), np.arange(10))
+    uniform = kept_ranks(100, 10, "uniform", seed=3)
+    assert len(set(uniform)) == 10 and (np.diff(uniform) > 0).all() and uniform.max() < 100
+    np.testing.assert_array_equal(uniform, kept_ranks(100, 10, "uniform", seed=3))
+    with pytest.raises(ValueError, match="unknown sampling 'top'"):
+        kept_ranks(100, 10, "top", seed=3)
+
+
+def test_stratified_grips_of_a_real_object_span_its_q_c_ranking() -> None:
+    pentagon = next(o for o in load_object_set("default") if o.name == "pentagon")
+    table = candidates(pentagon, CONFIG.grasp, CONFIG)
+    dataset = Config().dataset
+    assert dataset.sampling == "stratified" and len(table) > 2 * dataset.max_grips_per_object
+    kept = keep_grips(table, dataset, seed=5)
+    assert len(kept) == dataset.max_grips_per_object and kept["Q_C"].is_monotonic_increasing
+    assert kept["Q_C"].iloc[0] == table["Q_C"].min()
+    assert (kept["Q_C"] >= table["Q_C"].quantile(0.75)).sum() >= 5
+    best = keep_grips(table, dataset.model_copy(update={"sampling": "best"}), seed=5)
+    assert best["Q_C"].max() < table["Q_C"].quantile(0.5)
+    pd.testing.assert_frame_equal(kept, keep_grips(table, dataset, seed=5))
+
+
+def test_manifest_records_the_sampling_and_a_change_is_refused(tmp_path: Path) -> None:
+    out = run(tmp_path / "d")
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["sampling"] == {"method": "stratified", "max_grips_per_object": 5,
+                                    "best_fraction": 0.25, "ranked_by": "Q_C"}
+    best = CONFIG.override(dataset={"sampling": "best"})
+    with pytest.raises(DatasetMismatchError, match=r"dataset\.sampling: 'stratified' -> 'best'"):
+        generate(best, out, objects=5, workers=1, progress=False, job=toy_job)
 
 
 # ----------------------------------------------------------------------------- parallel, resume
@@ -274,18 +338,67 @@ def test_unwritable_or_file_output_is_refused(tmp_path: Path) -> None:
         run(blocker / "sub")
 
 
+def _set_format_version(out: Path, version: int) -> None:
+    manifest = json.loads((out / "manifest.json").read_text())
+    manifest["format_version"] = version
+    (out / "manifest.json").write_text(json.dumps(manifest))
+
+
 def test_other_format_version_and_non_dataset_are_refused(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="not a grip-env dataset"):
         load(tmp_path)
     out = run(tmp_path / "d")
-    manifest = json.loads((out / "manifest.json").read_text())
-    manifest["format_version"] = 999
-    (out / "manifest.json").write_text(json.dumps(manifest))
+    _set_format_version(out, 999)
     for call in (load, validate):
-        with pytest.raises(ValueError, match="format version 999"):
+        with pytest.raises(FormatVersionError, match=r"format version 999.*upgrade grip-env"):
             call(out)
-    with pytest.raises(ValueError, match="format version 999"):
+    with pytest.raises(DatasetMismatchError, match=r"format_version: 999 -> 2.*--overwrite"):
         run(out)
+
+
+def test_too_old_dataset_says_regenerate_in_one_line(tmp_path: Path) -> None:
+    out = run(tmp_path / "d")
+    _set_format_version(out, 1)
+    for call in (load, validate):
+        with pytest.raises(FormatVersionError) as caught:
+            call(out)
+        message = str(caught.value)
+        assert "format version 1" in message and "reads version 2" in message
+        assert "regenerate" in message and "\n" not in message
+    with pytest.raises(DatasetMismatchError, match=r"format_version: 1 -> 2"):
+        run(out)
+    run(out, overwrite=True)
+    assert load(out).attrs["manifest"]["format_version"] == FORMAT_VERSION == 2
+
+
+def test_validate_accepts_large_string_columns(tmp_path: Path) -> None:
+    out = run(tmp_path / "d")
+    shard = next((out / "grips").glob("part-000001-*"))
+    table = pq.read_table(shard)
+    for name in ("object_id", "grip_id"):
+        position = table.schema.get_field_index(name)
+        table = table.set_column(position, name, table[name].cast(pa.large_string()))
+    pq.write_table(table, shard)
+    manifest = json.loads((out / "manifest.json").read_text())
+    record = next(r for r in manifest["shards"].values() if r["file"].endswith(shard.name))
+    record["sha256"] = sha256_of(shard)
+    (out / "manifest.json").write_text(json.dumps(manifest))
+    assert pq.read_schema(shard).field("grip_id").type == pa.large_string()
+    assert validate(out) == []
+    assert len(load(out)) == 9
+
+
+def test_validate_flags_negative_or_missing_robustness(tmp_path: Path) -> None:
+    out = run(tmp_path / "d")
+
+    def tamper(frame: pd.DataFrame) -> None:
+        frame.loc[0, "robustness_mean"] = -0.5
+        frame.loc[1, "robustness_std"] = np.nan
+
+    _rewrite_shard(out, 2, tamper)
+    problems = validate(out)
+    assert any("robustness_mean not a finite value >= 0 g in 1 row(s)" in p for p in problems)
+    assert any("robustness_std not a finite value >= 0 g in 1 row(s)" in p for p in problems)
 
 
 def test_missing_shard_is_refused_by_load(tmp_path: Path) -> None:
@@ -302,21 +415,26 @@ REAL = Config().override(dataset={"max_grips_per_object": 2, "trials": 2, "seed"
 
 @pytest.mark.slow
 def test_real_job_same_dataset_from_one_and_two_workers(tmp_path: Path) -> None:
-    serial = generate(REAL, tmp_path / "one", objects="basic", workers=1, progress=False)
-    pooled = generate(REAL, tmp_path / "two", objects="basic", workers=2, progress=False)
+    config = REAL.override(dataset={"max_grips_per_object": 5})
+    serial = generate(config, tmp_path / "one", objects="basic", workers=1, progress=False)
+    pooled = generate(config, tmp_path / "two", objects="basic", workers=2, progress=False)
     grips = load(serial)
     pd.testing.assert_frame_equal(grips, load(pooled))
     assert validate(serial) == []
     assert set(grips["object_id"]) <= {"rectangle", "triangle", "hexagon", "l_shape"}
-    assert (grips.groupby("object_id").size() <= 2).all()
+    assert (grips.groupby("object_id").size() <= 5).all()
     assert (grips["trials"] == 2).all()
     assert grips["grip_id"].str.count("/").eq(2).all()  # object/grasp/thumb, one object prefix
-    # within an object, rows are the best (lowest) candidates by Q_C, best first
-    for object_id, rows in grips.groupby("object_id", sort=False):
+    assert (grips["robustness_mean"] >= 0).all() and (grips["robustness_std"] >= 0).all()
+    # within an object, rows are the stratified sample of its Q_C ranking, best first
+    manifest = grips.attrs["manifest"]
+    for entry, obj in zip(manifest["objects"], load_object_set("basic"), strict=True):
+        rows = grips[grips["object_id"] == entry["object_id"]]
+        task = ObjectTask(entry["index"], entry["object_id"], obj, config, entry["seed"])
+        ranked = candidates(obj, config.grasp, config).sort_values("Q_C", kind="stable")
+        ranks = kept_ranks(len(ranked), 5, "stratified", task.sampling_seed())
+        np.testing.assert_allclose(rows["Q_C"].to_numpy(), ranked["Q_C"].to_numpy()[ranks])
         assert rows["Q_C"].is_monotonic_increasing
-        obj = next(o for o in load_object_set("basic") if o.name == object_id)
-        best = candidates(obj, REAL.grasp, REAL)["Q_C"].head(2).to_numpy()
-        np.testing.assert_allclose(rows["Q_C"].to_numpy(), best)
 
 
 @pytest.mark.slow

@@ -10,18 +10,22 @@ from grip_env.dataset.catalog import load_objects, read_objects
 from grip_env.dataset.generation import DatasetMismatchError, generate
 from grip_env.dataset.jobs import ObjectJob, ObjectTask, simulate_object, with_outcomes
 from grip_env.dataset.loading import dataset_manifest, load
-from grip_env.dataset.manifest import FORMAT_VERSION
+from grip_env.dataset.manifest import FORMAT_VERSION, FormatVersionError
+from grip_env.dataset.sampling import keep_grips, kept_ranks
 from grip_env.dataset.validation import validate
 
 __all__ = [
     "BACKENDS",
     "FORMAT_VERSION",
     "DatasetMismatchError",
+    "FormatVersionError",
     "ObjectJob",
     "ObjectTask",
     "WorkerLost",
     "dataset_manifest",
     "generate",
+    "keep_grips",
+    "kept_ranks",
     "load",
     "load_objects",
     "read_objects",

@@ -19,7 +19,9 @@ from grip_env.dataset.catalog import OBJECTS_FILE, DatasetObject, resolve_object
 from grip_env.dataset.files import check_writable, sha256_of
 from grip_env.dataset.jobs import ObjectJob, ObjectTask, object_seeds, simulate_object
 from grip_env.dataset.manifest import (
+    FORMAT_VERSION,
     MANIFEST_FILE,
+    FormatVersionError,
     Manifest,
     identity_differences,
     new_manifest,
@@ -108,9 +110,8 @@ def _open_run(
 ) -> Manifest:
     """The manifest to continue: the existing one if it is the same run, else a fresh one."""
     if (directory / MANIFEST_FILE).exists():
-        old = read_manifest(directory)
-        differences = identity_differences(old["identity"], run_identity(config, entries))
-        if not differences:
+        old, differences = _compare_with_existing(directory, config, entries)
+        if old is not None and not differences:
             return old
         if not overwrite:
             raise DatasetMismatchError(
@@ -125,6 +126,17 @@ def _open_run(
                             objects_sha)
     write_manifest(directory, manifest)
     return manifest
+
+
+def _compare_with_existing(
+    directory: Path, config: Config, entries: list[DatasetObject]
+) -> tuple[Manifest | None, list[str]]:
+    """The dataset already in ``directory`` and how its run differs from this one."""
+    try:
+        old = read_manifest(directory)
+    except FormatVersionError as exc:
+        return None, [f"format_version: {exc.version!r} -> {FORMAT_VERSION}"]
+    return old, identity_differences(old["identity"], run_identity(config, entries))
 
 
 def _remove_dataset(directory: Path) -> None:

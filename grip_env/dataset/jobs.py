@@ -1,4 +1,4 @@
-"""The per-object job: plan grips on an object, simulate the best ones, label the outcomes.
+"""The per-object job: plan grips on an object, keep a sample of them, simulate and label them.
 
 A job is a plain function ``job(task) -> DataFrame`` of dataset rows. It depends only on its task
 (object, config, seed), so a dataset is the same whatever runs the jobs and in what order.
@@ -6,16 +6,18 @@ A job is a plain function ``job(task) -> DataFrame`` of dataset rows. It depends
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
+from numpy.typing import ArrayLike
 
-from grip_env.columns import DATASET_COLUMNS
+from grip_env.columns import DATASET_COLUMNS, ROBUSTNESS
 from grip_env.config import Config
 from grip_env.objects import PlanarObject
 
+#: ``success``: the grip held the reference disturbance in at least this share of its trials.
 SUCCESS_THRESHOLD = 0.5
 
 
@@ -34,6 +36,10 @@ class ObjectTask:
         perception, trials = np.random.SeedSequence(self.seed).spawn(2)
         return int(perception.generate_state(1)[0]), int(trials.generate_state(1)[0])
 
+    def sampling_seed(self) -> int:
+        """Seed of the choice of kept grips, independent of the perception and trial seeds."""
+        return int(np.random.SeedSequence(self.seed, spawn_key=(2,)).generate_state(1)[0])
+
 
 ObjectJob = Callable[[ObjectTask], pd.DataFrame]
 
@@ -47,7 +53,9 @@ def object_seeds(run_seed: int, count: int) -> list[int]:
 
 
 def simulate_object(task: ObjectTask) -> pd.DataFrame:
-    """The real job: candidates on the (perceived) contour, best by Q_C, trials on the true one."""
+    """The real job: candidates on the (perceived) contour, the ones ``dataset.sampling`` keeps,
+    trials on the true contour."""
+    from grip_env.dataset.sampling import keep_grips
     from grip_env.pipeline import candidates
     from grip_env.sim import run_trials
 
@@ -61,18 +69,19 @@ def simulate_object(task: ObjectTask) -> pd.DataFrame:
             task.obj, config.perception, config.objects.thickness_mm, seed=perception_seed
         )
     table = candidates(planned_on, config.grasp, config)
-    # Q_C sums penalties: lower is better, and candidates come best first
-    best = table.sort_values("Q_C", kind="stable").head(config.dataset.max_grips_per_object)
-    outcome = run_trials(task.obj, best, config, config.dataset.trials, trials_seed)
-    return with_outcomes(best, outcome["trials"], outcome["successes"], task.object_id)
+    kept = keep_grips(table, config.dataset, task.sampling_seed())
+    outcome = run_trials(task.obj, kept, config, config.dataset.trials, trials_seed)
+    return with_outcomes(kept, outcome, task.object_id)
 
 
 def with_outcomes(
-    grips: pd.DataFrame, trials: pd.Series | np.ndarray, successes: pd.Series | np.ndarray,
-    object_id: str,
+    grips: pd.DataFrame, outcome: pd.DataFrame | Mapping[str, ArrayLike], object_id: str
 ) -> pd.DataFrame:
     """Dataset rows: candidates with the object's id, unique grip ids and the outcome columns.
 
+    ``outcome`` holds ``trials``, ``successes``, ``robustness_mean`` and ``robustness_std`` per
+    grip, in the order of ``grips`` (as :func:`grip_env.sim.run_trials` returns them);
+    ``success_rate = successes / trials`` and ``success = success_rate >= 0.5``.
     ``grip_id`` becomes ``"<object_id>/<grip id within the object>"``, unique across a dataset
     (a leading ``"<candidate object_id>/"`` in the candidate's grip id is replaced).
     """
@@ -83,9 +92,11 @@ def with_outcomes(
     ]
     rows["object_id"] = object_id
     rows["grip_id"] = [f"{object_id}/{grip}" for grip in local_ids]
-    rows["trials"] = np.asarray(trials, dtype=np.int64)
-    rows["successes"] = np.asarray(successes, dtype=np.int64)
+    for name in ("trials", "successes"):
+        rows[name] = np.asarray(outcome[name], dtype=np.int64)
     with np.errstate(divide="ignore", invalid="ignore"):
         rows["success_rate"] = rows["successes"] / rows["trials"]
     rows["success"] = rows["success_rate"] >= SUCCESS_THRESHOLD
+    for name in ROBUSTNESS:
+        rows[name] = np.asarray(outcome[name], dtype=np.float64)
     return rows.loc[:, list(DATASET_COLUMNS)]

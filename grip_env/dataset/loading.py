@@ -24,7 +24,8 @@ def load(path: str | Path, verify: bool = True, allow_partial: bool = False) -> 
         ``attrs["params"]`` holds the GraspParams as a dict and ``attrs["manifest"]`` the manifest.
 
     Raises:
-        ValueError: not a dataset, other format version, missing or corrupt shard, unfinished run.
+        ValueError: not a dataset, missing or corrupt shard, unfinished run, or another format
+            version (:class:`~grip_env.dataset.manifest.FormatVersionError`: regenerate it).
     """
     directory = Path(path)
     manifest = read_manifest(directory)

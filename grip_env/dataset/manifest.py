@@ -19,16 +19,35 @@ import grip_env
 from grip_env.config import Config
 from grip_env.dataset.catalog import DatasetObject
 from grip_env.dataset.files import write_text_atomically
+from grip_env.dataset.sampling import sampling_record
 from grip_env.dataset.shards import ShardRecord
 
 FORMAT = "grip-env-dataset"
-FORMAT_VERSION = 1
+#: 2: outcome columns robustness_mean and robustness_std; kept grips chosen by dataset.sampling.
+FORMAT_VERSION = 2
 MANIFEST_FILE = "manifest.json"
 #: Config fields that change how a dataset is computed, not what it holds.
 EXECUTION_FIELDS = ("workers", "backend")
 _VERSIONED_PACKAGES = ("numpy", "pandas", "pyarrow", "pybullet", "scipy", "shapely", "pydantic")
 
 Manifest = dict[str, Any]
+
+
+class FormatVersionError(ValueError):
+    """A dataset written in another format version than this grip-env reads."""
+
+    def __init__(self, directory: Path, version: object) -> None:
+        self.version = version
+        if isinstance(version, int) and version < FORMAT_VERSION:
+            advice = "it is too old: regenerate it (grip-env generate --overwrite into it)"
+        elif isinstance(version, int):
+            advice = "it is newer: upgrade grip-env to read it"
+        else:
+            advice = "regenerate it (grip-env generate --overwrite into it)"
+        super().__init__(
+            f"dataset {directory} has format version {version!r}, this grip-env reads version "
+            f"{FORMAT_VERSION}; {advice}"
+        )
 
 
 def run_identity(config: Config, entries: list[DatasetObject]) -> dict[str, Any]:
@@ -58,6 +77,7 @@ def new_manifest(
         "versions": _versions(),
         "seed": config.dataset.seed,
         "trials": config.dataset.trials,
+        "sampling": sampling_record(config.dataset),
         "params": config.grasp.model_dump(mode="json"),
         "feature_cap": config.grasp.feature_cap,
         "config": config.model_dump(mode="json"),
@@ -79,7 +99,8 @@ def read_manifest(directory: Path) -> Manifest:
     """Read and check the manifest of a dataset directory.
 
     Raises:
-        ValueError: no manifest, not JSON, not a grip-env dataset, or another format version.
+        ValueError: no manifest, not JSON, or not a grip-env dataset.
+        FormatVersionError: a dataset of another format version (a ``ValueError``).
     """
     path = Path(directory) / MANIFEST_FILE
     if not path.is_file():
@@ -92,9 +113,7 @@ def read_manifest(directory: Path) -> Manifest:
         raise ValueError(f"{path} is not a grip-env dataset manifest")
     version = manifest.get("format_version")
     if version != FORMAT_VERSION:
-        raise ValueError(
-            f"{path} has format version {version!r}; this grip-env reads version {FORMAT_VERSION}"
-        )
+        raise FormatVersionError(directory, version)
     return manifest
 
 

@@ -9,7 +9,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from grip_env.columns import FEATURES, INDEXES
+from grip_env.columns import FEATURES, INDEXES, ROBUSTNESS
 from grip_env.dataset.files import sha256_of
 from grip_env.dataset.jobs import SUCCESS_THRESHOLD
 from grip_env.dataset.manifest import Manifest, read_manifest, shard_records
@@ -25,11 +25,13 @@ def validate(path: str | Path) -> list[str]:
 
     Checks the objects table and each shard against the manifest (presence, SHA-256, row count),
     the schema (columns and types), every feature and index recomputed from its row's descriptors,
-    outcome consistency (1 <= trials, 0 <= successes <= trials, rates and labels) and that grip ids
-    are unique.
+    outcome consistency (1 <= trials, 0 <= successes <= trials, rates and labels, robustness
+    finite and >= 0) and that grip ids are unique. String columns may be ``string`` or the
+    equivalent ``large_string``.
 
     Raises:
-        ValueError: ``path`` is not a grip-env dataset of this format version.
+        ValueError: ``path`` is not a grip-env dataset, or one of another format version
+            (:class:`~grip_env.dataset.manifest.FormatVersionError`, which says to regenerate).
     """
     directory = Path(path)
     manifest = read_manifest(directory)
@@ -84,12 +86,27 @@ def _shard_problems(directory: Path, record: ShardRecord) -> tuple[list[str], pd
     return problems, table.to_pandas()
 
 
+def _equivalent_types() -> dict[pa.DataType, pa.DataType]:
+    """Arrow types that hold the same values as the schema's (pandas 3 writes large_string)."""
+    found = {pa.large_string(): pa.string()}
+    if hasattr(pa, "string_view"):
+        found[pa.string_view()] = pa.string()
+    return found
+
+
+_EQUIVALENT_TYPES = _equivalent_types()
+
+
+def _same_type(found: pa.DataType, expected: pa.DataType) -> bool:
+    return _EQUIVALENT_TYPES.get(found, found) == expected
+
+
 def _schema_problems(name: str, schema: pa.Schema) -> list[str]:
     problems = []
     for field in GRIP_SCHEMA:
         if field.name not in schema.names:
             problems.append(f"{name}: column {field.name} missing")
-        elif schema.field(field.name).type != field.type:
+        elif not _same_type(schema.field(field.name).type, field.type):
             problems.append(
                 f"{name}: column {field.name} has type {schema.field(field.name).type}, "
                 f"expected {field.type}"
@@ -141,6 +158,9 @@ def _outcome_problems(name: str, grips: pd.DataFrame) -> list[str]:
         f"success != (success_rate >= {SUCCESS_THRESHOLD})":
             grips["success"].to_numpy() != (rate >= SUCCESS_THRESHOLD),
     }
+    for column in ROBUSTNESS:
+        values = grips[column].to_numpy(dtype=np.float64)
+        checks[f"{column} not a finite value >= 0 g"] = ~(np.isfinite(values) & (values >= 0))
     ids = grips["grip_id"]
     return [
         f"{name}: {what} in {int(bad.sum())} row(s), e.g. grip {ids.iloc[int(np.argmax(bad))]}"
