@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
+from sklearn.base import BaseEstimator, ClassifierMixin, RegressorMixin, TransformerMixin
 from sklearn.isotonic import IsotonicRegression
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
@@ -103,6 +103,49 @@ class RandomClassifier(RankingClassifier):
 
     The score depends only on ``random_state`` and the row's position, so repeated calls agree.
     """
+
+    def __init__(self, random_state: int = 0):
+        self.random_state = random_state
+
+    def _score(self, X: np.ndarray) -> np.ndarray:
+        return np.random.default_rng(self.random_state).random(X.shape[0])
+
+
+class RankingRegressor(RegressorMixin, BaseEstimator):
+    """Regressor whose ranking is one column's, ``sign * x``; only the units are fitted.
+
+    ``predict`` is ``a + b * sign * x`` with the least-squares slope ``b`` clipped to be
+    positive, so the predictions order the rows exactly as the column does (the rank baselines
+    of the regression task) while living on the target's scale.
+    """
+
+    def __init__(self, sign: float = -1.0):
+        self.sign = sign
+
+    def fit(self, X: Any, y: Any) -> RankingRegressor:
+        """Fit the affine map from score to target."""
+        X, y = validate_data(self, X, y, dtype=np.float64, y_numeric=True)
+        score = self._score(X)
+        spread = score.var()
+        slope = float(np.cov(score, y, bias=True)[0, 1] / spread) if spread > 0 else 0.0
+        self.slope_ = max(slope, 1e-9)
+        self.intercept_ = float(np.mean(y) - self.slope_ * score.mean())
+        return self
+
+    def predict(self, X: Any) -> np.ndarray:
+        """Predicted targets, monotone increasing in the score."""
+        check_is_fitted(self, "slope_")
+        score = self._score(validate_data(self, X, dtype=np.float64, reset=False))
+        return self.intercept_ + self.slope_ * score
+
+    def _score(self, X: np.ndarray) -> np.ndarray:
+        if X.shape[1] != 1:
+            raise ValueError(f"a ranking baseline scores one column, got {X.shape[1]}")
+        return float(self.sign) * X[:, 0]
+
+
+class RandomRegressor(RankingRegressor):
+    """The chance baseline of the regression task: a seeded uniform score per row."""
 
     def __init__(self, random_state: int = 0):
         self.random_state = random_state

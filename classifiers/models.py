@@ -8,6 +8,11 @@ as ``pipeline.set_params(model__C=...)``. The baselines ignore ``features``: ``r
 "svm" is an RBF ``SVC`` with Platt (sigmoid) probabilities fitted by internal 5-fold CV:
 ``CalibratedClassifierCV(SVC(), ensemble=False)``, the replacement scikit-learn 1.9 gives for the
 deprecated ``SVC(probability=True)``.
+
+``make_regressor(name, seed, features)`` is the same for the regression task (predicting a grip's
+``robustness_mean``): "svr" (RBF ``SVR`` on standardised features), "mlp_torch"
+(:class:`~classifiers.torch_mlp.TorchMLPRegressor`), "knn", "ridge", and the rank baselines
+"rank_qc", "rank_qg" and "random" (:class:`~classifiers.baselines.RankingRegressor`).
 """
 
 from __future__ import annotations
@@ -16,15 +21,21 @@ from collections.abc import Callable, Sequence
 
 from sklearn.base import BaseEstimator
 from sklearn.calibration import CalibratedClassifierCV
-from sklearn.linear_model import LogisticRegression
-from sklearn.neighbors import KNeighborsClassifier
+from sklearn.linear_model import LogisticRegression, Ridge
+from sklearn.neighbors import KNeighborsClassifier, KNeighborsRegressor
 from sklearn.neural_network import MLPClassifier
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
-from sklearn.svm import SVC
+from sklearn.svm import SVC, SVR
 
-from classifiers.baselines import ColumnSelector, RandomClassifier, RankingClassifier
-from classifiers.torch_mlp import TorchMLPClassifier
+from classifiers.baselines import (
+    ColumnSelector,
+    RandomClassifier,
+    RandomRegressor,
+    RankingClassifier,
+    RankingRegressor,
+)
+from classifiers.torch_mlp import TorchMLPClassifier, TorchMLPRegressor
 from grip_env.columns import FEATURES
 
 EXTRA_FEATURES = ("eps",)
@@ -52,6 +63,19 @@ _BASELINE_STEPS: dict[str, Callable[[int], tuple[tuple[str, ...], BaseEstimator]
     "random": lambda seed: (("Q_C",), RandomClassifier(random_state=seed)),
 }
 MODEL_NAMES = tuple(_LEARNERS) + tuple(_BASELINE_STEPS)
+
+_REGRESSORS: dict[str, Callable[[int], list[tuple[str, BaseEstimator]]]] = {
+    "svr": lambda seed: _scaled(SVR(C=1.0, epsilon=0.1)),
+    "mlp_torch": lambda seed: [("model", TorchMLPRegressor(random_state=seed))],
+    "knn": lambda seed: _scaled(KNeighborsRegressor(n_neighbors=15, weights="distance")),
+    "ridge": lambda seed: _scaled(Ridge(alpha=1.0)),
+}
+_RANK_REGRESSORS: dict[str, Callable[[int], tuple[tuple[str, ...], BaseEstimator]]] = {
+    "rank_qc": lambda seed: (("Q_C",), RankingRegressor(sign=-1.0)),
+    "rank_qg": lambda seed: (("Q_G",), RankingRegressor(sign=-1.0)),
+    "random": lambda seed: (("Q_C",), RandomRegressor(random_state=seed)),
+}
+REGRESSOR_NAMES = tuple(_REGRESSORS) + tuple(_RANK_REGRESSORS)
 
 
 def check_features(features: Sequence[str]) -> tuple[str, ...]:
@@ -84,3 +108,14 @@ def make_models(
     if not names:
         raise ValueError("no model names given")
     return {name: make_model(name, seed, features) for name in names}
+
+
+def make_regressor(name: str, seed: int = 0, features: Sequence[str] = FEATURES) -> Pipeline:
+    """A fresh, unfitted regression pipeline; unknown ``name`` → ValueError listing the known."""
+    features = check_features(features)
+    if name in _REGRESSORS:
+        return Pipeline([("select", ColumnSelector(features)), *_REGRESSORS[name](seed)])
+    if name in _RANK_REGRESSORS:
+        columns, estimator = _RANK_REGRESSORS[name](seed)
+        return Pipeline([("select", ColumnSelector(columns)), ("model", estimator)])
+    raise ValueError(f"unknown regressor name {name!r}; known: {list(REGRESSOR_NAMES)}")

@@ -23,15 +23,18 @@ import torch
 from sklearn.pipeline import Pipeline
 
 from classifiers.baselines import ColumnSelector
-from classifiers.torch_mlp import TorchMLPClassifier
+from classifiers.torch_mlp import TorchMLPClassifier, TorchMLPRegressor
 
 TRUSTED_TYPES = frozenset(
     {
         "classifiers.baselines.ColumnSelector",
         "classifiers.baselines.RankingClassifier",
         "classifiers.baselines.RandomClassifier",
+        "classifiers.baselines.RankingRegressor",
+        "classifiers.baselines.RandomRegressor",
     }
 )
+_TORCH_MODELS = {cls.__name__: cls for cls in (TorchMLPClassifier, TorchMLPRegressor)}
 
 TRUSTED_PREFIXES = ("sklearn.",)
 
@@ -54,9 +57,10 @@ def save_model(
     if not isinstance(selector, ColumnSelector):
         raise ValueError(f"model {name!r} must start with a ColumnSelector step")
     info = {"name": name, "columns": list(selector.columns), **(metadata or {})}
-    if isinstance(estimator, TorchMLPClassifier) and len(model) == 2:
+    if type(estimator).__name__ in _TORCH_MODELS and len(model) == 2:
         torch.save(estimator.state_dict(), directory / f"{name}.pt")
-        info |= {"format": "torch_state_dict", "params": _jsonable(estimator.get_params()),
+        info |= {"format": "torch_state_dict", "estimator": type(estimator).__name__,
+                 "params": _jsonable(estimator.get_params()),
                  "fitted": estimator.fitted_metadata()}  # fmt: skip
     else:
         sio.dump(model, directory / f"{name}.skops")
@@ -75,7 +79,10 @@ def load_model(directory: str | Path, name: str) -> tuple[Pipeline, dict[str, An
     info = json.loads(meta_path.read_text())
     if info.get("format") == "torch_state_dict":
         state = torch.load(directory / f"{name}.pt", weights_only=True)
-        estimator = TorchMLPClassifier.from_state_dict(info["params"], info["fitted"], state)
+        kind = info.get("estimator", "TorchMLPClassifier")
+        if kind not in _TORCH_MODELS:
+            raise ValueError(f"{meta_path}: unknown torch estimator {kind!r}")
+        estimator = _TORCH_MODELS[kind].from_state_dict(info["params"], info["fitted"], state)
         selector = ColumnSelector(tuple(info["columns"]))
         selector.n_features_out_ = len(selector.columns)
         return Pipeline([("select", selector), ("model", estimator)]), info

@@ -2,8 +2,9 @@
 
 Success depends learnably on the features (logistic in C1, C4, S3 and S2, an object effect and
 noise), outcomes are binomial over ``trials``; the graded outcome (``robustness_mean``,
-``robustness_std``, in g) is log-normal per trial about a level set by the same logit. Geometry is a consistent toy: each object is a disc,
-contacts lie on its rim and the normals point (roughly) inwards, so ε can be computed from a row.
+``robustness_std``, in g) is log-normal per trial about a level set by the same logit. Geometry
+is a consistent toy: each object is a disc, contacts lie on its rim and the normals point
+(roughly) inwards, so ε can be computed from a row.
 The real dataset (``grip_env.dataset.load``) replaces it.
 """
 

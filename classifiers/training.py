@@ -7,7 +7,10 @@
 - ``roc.png``, ``calibration.png``: curves on a held-out share of objects (``test_fraction``),
   with the models fitted on the other objects;
 - ``models/<name>.{json,skops|pt}``: each model refitted on the whole table, with its metadata
-  (feature list, parameters, dataset checksum, seed).
+  (feature list, parameters, dataset checksum, seed);
+- when the table has the graded outcome: ``regression.json`` (grouped CV of
+  ``learning.regressors`` on ``robustness_mean``, see :mod:`classifiers.regression`) and
+  ``models/regressor_<name>.*``.
 """
 
 from __future__ import annotations
@@ -21,9 +24,10 @@ import pandas as pd
 from sklearn.model_selection import GroupShuffleSplit
 
 from classifiers.evaluation import GROUP_COLUMN, LABEL_COLUMN, evaluate_models, positive_probability
-from classifiers.models import make_model
+from classifiers.models import make_model, make_regressor
 from classifiers.persistence import dataset_checksum, save_model
 from classifiers.plots import plot_calibration, plot_roc
+from classifiers.regression import TARGET_COLUMN, evaluate_regressors, has_target
 from grip_env.columns import FEATURES
 from grip_env.config import Config
 
@@ -46,7 +50,26 @@ def train_and_save(
         model = make_model(name, learning.seed, FEATURES).fit(table, labels)
         meta = {"features": list(FEATURES), "dataset_sha256": checksum, "seed": learning.seed}
         save_model(model, out_dir / "models", name, meta)
+    if has_target(table):
+        train_regressors(table, out_dir, config, checksum)
     return metrics
+
+
+def train_regressors(
+    table: pd.DataFrame, out_dir: Path, config: Config, checksum: str
+) -> dict[str, Any]:
+    """Cross-validate the regressors into ``regression.json``, refit and save each one."""
+    learning = config.learning
+    result = evaluate_regressors(table, learning.regressors, FEATURES, learning)
+    result["dataset"] = {"sha256": checksum, "rows": len(table)}
+    (out_dir / "regression.json").write_text(json.dumps(result, indent=2))
+    target = table[TARGET_COLUMN].to_numpy(float)
+    for name in learning.regressors:
+        model = make_regressor(name, learning.seed, FEATURES).fit(table, target)
+        meta = {"features": list(FEATURES), "target": TARGET_COLUMN, "dataset_sha256": checksum,
+                "seed": learning.seed}  # fmt: skip
+        save_model(model, out_dir / "models", f"regressor_{name}", meta)
+    return result
 
 
 def _held_out_plots(table: pd.DataFrame, config: Config, out_dir: Path) -> None:

@@ -8,10 +8,11 @@ import pytest
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from classifiers.evaluation import evaluate_models, grouped_folds, top1
-from classifiers.models import MODEL_NAMES, make_model
+from classifiers.models import MODEL_NAMES, REGRESSOR_NAMES, make_model, make_regressor
 from classifiers.persistence import load_model, save_model
+from classifiers.regression import evaluate_regressors, regression_fold_metrics, spearman
 from classifiers.synthetic import synthetic_grips
-from classifiers.torch_mlp import TorchMLPClassifier
+from classifiers.torch_mlp import TorchMLPClassifier, TorchMLPRegressor
 from grip_env.config import LearningConfig
 
 FAST = {"mlp_torch": {"model__max_epochs": 30}, "mlp_sklearn": {"model__max_iter": 60}}
@@ -30,6 +31,12 @@ def fast_model(name: str, seed: int = 0):
 @pytest.mark.slow
 @parametrize_with_checks([TorchMLPClassifier((16,), max_epochs=60, random_state=0)])
 def test_torch_mlp_passes_all_sklearn_estimator_checks(estimator, check):
+    check(estimator)
+
+
+@pytest.mark.slow
+@parametrize_with_checks([TorchMLPRegressor((16,), max_epochs=60, random_state=0)])
+def test_torch_mlp_regressor_passes_all_sklearn_estimator_checks(estimator, check):
     check(estimator)
 
 
@@ -150,7 +157,8 @@ def test_train_cli_writes_metrics_models_and_plots(synthetic_grips_table, tmp_pa
 
     monkeypatch.setattr(grip_env.dataset, "load", lambda path: synthetic_grips_table)
     config = tmp_path / "config.yaml"
-    config.write_text(yaml.safe_dump({"learning": {"folds": 2, "repeats": 1}}))
+    config.write_text(yaml.safe_dump({"learning": {"folds": 2, "repeats": 1,
+                                                   "regressors": ["ridge", "rank_qc"]}}))
     _register_commands()
     out = tmp_path / "out"
     args = ["train", "--data", str(tmp_path), "--out", str(out), "--config", str(config),
@@ -164,5 +172,77 @@ def test_train_cli_writes_metrics_models_and_plots(synthetic_grips_table, tmp_pa
     assert {p.name for p in (out / "models").iterdir()} >= {"logreg.skops", "mlp_torch.pt"}
     loaded, info = load_model(out / "models", "mlp_torch")
     assert info["features"] == list(loaded[0].columns) and info["dataset_sha256"]
+    regression = json.loads((out / "regression.json").read_text())
+    assert set(regression["models"]) == {"ridge", "rank_qc"}
+    assert set(regression["paired_difference"]["ridge"]) == {"vs_rank_qc"}
+    assert (out / "models" / "regressor_ridge.skops").is_file()
     bad = CliRunner().invoke(app, [*args[:-1], "forest"])
-    assert bad.exit_code == 2 and "unknown model name" in bad.output
+    assert bad.exit_code == 2 and "unknown model" in bad.output and "forest" in bad.output
+
+
+# ------------------------------------------------------------------------ regression task
+FAST_REGRESSORS = {"mlp_torch": {"model__max_epochs": 30}}
+
+
+def fast_regressor(name: str, seed: int = 0):
+    return make_regressor(name, seed).set_params(**FAST_REGRESSORS.get(name, {}))
+
+
+@pytest.mark.parametrize("name", REGRESSOR_NAMES)
+def test_every_regressor_fits_predicts_and_reloads(synthetic_grips_table, tmp_path, name):
+    table = synthetic_grips_table
+    model = fast_regressor(name).fit(table, table["robustness_mean"])
+    predicted = model.predict(table)
+    assert predicted.shape == (len(table),) and np.isfinite(predicted).all()
+    save_model(model, tmp_path, f"regressor_{name}")
+    loaded, _ = load_model(tmp_path, f"regressor_{name}")
+    np.testing.assert_allclose(loaded.predict(table), predicted, rtol=1e-6)
+
+
+def test_rank_regressors_order_rows_exactly_as_their_column(synthetic_grips_table):
+    table = synthetic_grips_table
+    for name, column in (("rank_qc", "Q_C"), ("rank_qg", "Q_G")):
+        predicted = make_regressor(name).fit(table, table["robustness_mean"]).predict(table)
+        assert spearman(predicted, -table[column].to_numpy()) == pytest.approx(1.0)
+    # even when the target rises with Q_C, the baseline keeps Q_C's order (it is not learned)
+    flipped = make_regressor("rank_qc").fit(table, table["Q_C"]).predict(table)
+    assert spearman(flipped, -table["Q_C"].to_numpy()) == pytest.approx(1.0)
+
+
+def test_regression_metrics_on_a_known_fold():
+    test = pd.DataFrame({"object_id": [0, 0, 0, 1, 1, 1], "robustness_mean": [1, 2, 3, 3, 2, 1.0],
+                         "x": [1, 2, 3, 1, 2, 3.0]})  # fmt: skip
+
+    class Column:
+        def predict(self, frame):
+            return frame["x"].to_numpy()
+
+    metrics = regression_fold_metrics(Column(), test)
+    assert metrics["spearman_object"] == pytest.approx(0.0)  # +1 on object 0, -1 on object 1
+    assert metrics["spearman"] == pytest.approx(0.0)
+    assert metrics["top1_robustness"] == pytest.approx((3 + 1) / 2)
+    assert metrics["mae"] == pytest.approx(np.mean([0, 0, 0, 2, 0, 2]))
+
+
+def test_learned_regressors_beat_random_and_the_rank_baselines_are_paired(synthetic_grips_table):
+    config = LearningConfig(folds=3, repeats=1, seed=0)
+    models = {name: fast_regressor(name) for name in ("svr", "mlp_torch", "rank_qc", "rank_qg",
+                                                      "random")}  # fmt: skip
+    result = evaluate_regressors(synthetic_grips_table, models, config=config)
+    rho = {name: result["models"][name]["spearman"] for name in models}
+    assert abs(rho["random"]["mean"]) < 0.1 and rho["random"]["ci"][0] < 0 < rho["random"]["ci"][1]
+    assert rho["svr"]["mean"] > 0.5 and rho["mlp_torch"]["mean"] > 0.5
+    assert result["models"]["svr"]["spearman_object"]["n"] == 3
+    paired = result["paired_difference"]["svr"]
+    assert set(paired) == {"vs_rank_qc", "vs_rank_qg"}
+    direct = rho["svr"]["mean"] - rho["rank_qc"]["mean"]
+    assert paired["vs_rank_qc"]["spearman"]["mean"] == pytest.approx(direct)
+    assert set(result["paired_difference"]["rank_qc"]) == {"vs_rank_qg"}
+
+
+def test_regression_needs_the_graded_outcome(synthetic_grips_table):
+    with pytest.raises(ValueError, match="robustness_mean"):
+        evaluate_regressors(synthetic_grips_table.drop(columns="robustness_mean"), ["ridge"],
+                            config=LearningConfig(folds=3))  # fmt: skip
+    with pytest.raises(ValueError, match="unknown regressor name 'forest'"):
+        make_regressor("forest")
