@@ -6,6 +6,10 @@ seeds of :mod:`classifiers.evaluation`, so the per-fold metric differences to th
 permutation importance of each of the twelve features (drop of ROC-AUC when the feature is
 shuffled in the held-out fold, ``sklearn.inspection.permutation_importance``) is summarised the
 same way. ``eps`` is the Ferrari–Canny ε of :mod:`grip_env.epsilon`, added when missing.
+
+When the table has the graded outcome, the regression task runs alongside on the same folds:
+one regressor (default ``"svr"``) of ``robustness_mean`` per feature set, scored by Spearman
+(pooled and within object, :mod:`classifiers.regression`), with the same paired differences.
 """
 
 from __future__ import annotations
@@ -31,6 +35,13 @@ from classifiers.evaluation import (
 )
 from classifiers.models import make_model
 from classifiers.plots import plot_ablation
+from classifiers.regression import (
+    REGRESSION_METRICS,
+    cross_validate_regressors,
+    has_target,
+    paired_regression_difference,
+    summarise_regression,
+)
 from grip_env.columns import FEATURES
 from grip_env.config import Config, LearningConfig
 from grip_env.epsilon import EPSILON_COLUMN, add_epsilon
@@ -62,8 +73,10 @@ def ablation_study(
     model: str = "svm",
     sets: dict[str, Sequence[str]] | None = None,
     importance_repeats: int = 5,
+    regressor: str = "svr",
 ) -> dict[str, Any]:
-    """Run the study; returns the ``ablation.json`` content."""
+    """Run the study; returns the ``ablation.json`` content (``"regression"``: the graded task,
+    present when the table has ``robustness_mean``)."""
     config = config or Config()
     learning = config.learning
     sets = dict(sets or feature_sets())
@@ -85,12 +98,42 @@ def ablation_study(
         }
         for name, frame in per_fold.items()
     }
-    return {
+    output = {
         "model": model,
         "reference": REFERENCE,
         "feature_sets": results,
         "permutation_importance": importance(table, model, learning, importance_repeats),
         "cv": cv_description(table, FEATURES, learning),
+    }
+    if has_target(table):
+        output["regression"] = regression_ablation(table, learning, regressor, sets)
+    return output
+
+
+def regression_ablation(
+    table: pd.DataFrame, learning: LearningConfig, regressor: str,
+    sets: dict[str, Sequence[str]],
+) -> dict[str, Any]:
+    """The regression task on every feature set, paired against the reference set."""
+    per_fold = {
+        name: cross_validate_regressors(table, [regressor], features, learning)
+        for name, features in sets.items()
+    }
+    reference = per_fold[REFERENCE]
+    return {
+        "model": regressor,
+        "reference": REFERENCE,
+        "metrics": list(REGRESSION_METRICS),
+        "feature_sets": {
+            name: {
+                "features": list(sets[name]),
+                "models": summarise_regression(frame, learning.folds),
+                "paired_difference": {
+                    regressor: paired_regression_difference(frame, reference, learning.folds)
+                },
+            }
+            for name, frame in per_fold.items()
+        },
     }
 
 
@@ -132,12 +175,16 @@ def importance(
 
 
 def run_ablation(
-    table: pd.DataFrame, out_dir: str | Path, config: Config | None = None, model: str = "svm"
+    table: pd.DataFrame, out_dir: str | Path, config: Config | None = None, model: str = "svm",
+    regressor: str = "svr",
 ) -> dict[str, Any]:
-    """Run the study; write ``ablation.json`` and ``ablation.png`` (ROC-AUC bars) to ``out_dir``."""
+    """Run the study; write ``ablation.json``, ``ablation.png`` (ROC-AUC bars) and, with the
+    graded outcome, ``ablation_regression.png`` (Spearman bars) to ``out_dir``."""
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    result = ablation_study(table, config, model)
+    result = ablation_study(table, config, model, regressor=regressor)
     (out_dir / "ablation.json").write_text(json.dumps(result, indent=2))
     plot_ablation(result, "roc_auc", out_dir / "ablation.png")
+    if "regression" in result:
+        plot_ablation(result["regression"], "spearman", out_dir / "ablation_regression.png")
     return result

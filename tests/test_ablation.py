@@ -48,6 +48,24 @@ def test_ablation_json_shape_and_paired_differences(grips, tmp_path):
     json.dumps(result)  # JSON-able
 
 
+def test_ablation_reports_the_regression_task_on_the_same_sets(grips):
+    sets = {REFERENCE: FEATURES, "without_hand": FEATURES[:6], "hand_only": FEATURES[6:]}
+    result = ablation_study(grips, CONFIG, model="logreg", sets=sets, importance_repeats=1,
+                            regressor="ridge")  # fmt: skip
+    regression = result["regression"]
+    assert regression["model"] == "ridge" and set(regression["feature_sets"]) == set(sets)
+    reference = regression["feature_sets"][REFERENCE]["models"]["ridge"]["spearman"]["mean"]
+    no_hand = regression["feature_sets"]["without_hand"]
+    diff = no_hand["paired_difference"]["ridge"]["spearman"]
+    assert diff["mean"] == pytest.approx(no_hand["models"]["ridge"]["spearman"]["mean"] - reference)
+    # the synthetic robustness follows C1 and C4: without the hand features the ranking is worse
+    assert diff["mean"] < 0 and diff["ci"][1] < 0
+    assert "regression" not in ablation_study(
+        grips.drop(columns="robustness_mean"), CONFIG, model="logreg",
+        sets={REFERENCE: FEATURES}, importance_repeats=1,
+    )  # fmt: skip
+
+
 @pytest.mark.slow
 def test_run_ablation_writes_json_and_chart(grips, tmp_path):
     result = run_ablation(grips, tmp_path, CONFIG.override(learning={"folds": 2}), model="logreg")
@@ -55,6 +73,8 @@ def test_run_ablation_writes_json_and_chart(grips, tmp_path):
     assert saved["reference"] == REFERENCE and len(saved["feature_sets"]) == 18
     assert saved["feature_sets"].keys() == result["feature_sets"].keys()
     assert (tmp_path / "ablation.png").stat().st_size > 1000
+    assert len(saved["regression"]["feature_sets"]) == 18
+    assert (tmp_path / "ablation_regression.png").stat().st_size > 1000
 
 
 def test_ablation_rejects_bad_input(grips):
