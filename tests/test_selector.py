@@ -18,7 +18,12 @@ from typer.testing import CliRunner
 from classifiers.selector import REPORT_FILE, run_selector
 from classifiers.selector.evaluation import attempt_metrics, random_metrics
 from classifiers.selector.policy import CandidateSetPolicy, masked_pool
-from classifiers.selector.training import make_selector_model, torch_threads, train_selector
+from classifiers.selector.training import (
+    make_selector_env,
+    make_selector_model,
+    torch_threads,
+    train_selector,
+)
 from classifiers.synthetic import synthetic_grips
 from grip_env.config import load_config
 
@@ -218,3 +223,36 @@ def test_live_training_executes_grips_in_pybullet(tmp_path):
     assert list(timesteps) == list(range(1, 33))  # one attempt per episode: each step ends one
     assert set(rewards) <= {0.0, 1.0}
     assert (tmp_path / "model.zip").exists()
+
+
+def test_robustness_reward_pays_the_picked_grips_robustness(grips, small_config):
+    config = small_config.override(selector={"reward": "robustness"})
+    reference = config.sim.reference_level_g
+    env = make_selector_env(grips, config, "train", n_envs=1, seed=3).envs[0]
+    expected = dict(zip(grips["grip_id"], grips["robustness_mean"] / reference, strict=True))
+    rewards = []
+    for episode in range(5):
+        env.reset(seed=episode)
+        _, reward, _, _, info = env.step(0)
+        assert reward == pytest.approx(expected[info["grip_id"]])
+        rewards.append(reward)
+    assert len(set(rewards)) > 1 and not set(rewards) <= {0.0, 1.0}
+    with pytest.raises(ValueError, match="replay"):
+        make_selector_env(None, config, "train", n_envs=1)
+    with pytest.raises(ValueError, match="robustness_mean"):
+        make_selector_env(grips.drop(columns="robustness_mean"), config, "train", n_envs=1)
+
+
+@pytest.mark.slow
+def test_selector_trained_on_robustness_reports_first_pick_robustness(grips, small_config,
+                                                                       tmp_path):
+    config = small_config.override(selector={"reward": "robustness", "max_attempts": 1})
+    report = run_selector(grips, tmp_path, config, timesteps=64, progress=False)
+    assert report["reward"] == "robustness"
+    policies = report["policies"]
+    oracle = policies["oracle"]["first_pick_robustness"]["mean"]
+    for scores in policies.values():
+        assert 0.0 <= scores["first_pick_robustness"]["mean"] <= oracle + 1e-12
+    best_possible = grips.groupby("object_id")["robustness_mean"].max()
+    test_ids = report["split"]["test"]
+    assert oracle <= best_possible[best_possible.index.astype(str).isin(test_ids)].mean() + 1e-9

@@ -18,6 +18,10 @@ random orders, by elementary symmetric polynomials), ``best_qc`` (lowest ``Q_C``
 reported, so nothing is chosen on the test objects) and ``oracle`` (highest ``success_rate``
 first: it holds whenever a holding grip exists).
 
+When the dataset has the graded outcome, each selector also gets ``first_pick_robustness``: the
+recorded ``robustness_mean`` (g) of its first pick (random: the mean over the candidates). With
+``selector.reward = "robustness"`` the oracle orders by ``robustness_mean`` instead.
+
 Interval: 95% percentile bootstrap over test objects (the unit of generalisation), the same
 resampled objects for every selector; ``n_boot`` resamples from a generator seeded with
 ``config.learning.seed``.
@@ -40,6 +44,7 @@ from grip_env.envs.split import split_objects
 
 CLASSIFIER_CHOICES: tuple[str, ...] = ("logreg", "svm")
 METRICS: tuple[str, ...] = ("success_rate", "success_within_attempts", "expected_attempts")
+ROBUSTNESS_METRIC = "first_pick_robustness"
 Ranker = Callable[[CandidateSet], NDArray[np.intp]]
 
 
@@ -82,6 +87,10 @@ def _ascending(column: str) -> Ranker:
 
 def _oracle(found: CandidateSet) -> NDArray[np.intp]:
     return np.argsort(-found.success_rate[: found.count], kind="stable")
+
+
+def _robustness_oracle(found: CandidateSet) -> NDArray[np.intp]:
+    return np.argsort(-found.rows["robustness_mean"].to_numpy(float), kind="stable")
 
 
 def _classifier_ranker(model: Any) -> Ranker:
@@ -149,19 +158,26 @@ def evaluate_selectors(
     }
     fitted = fit_classifiers(table[ids.isin(train_ids).to_numpy()], config, classifiers)
     rankers.update({f"classifier_{name}": _classifier_ranker(m) for name, m in fitted.items()})
-    rankers["oracle"] = _oracle
-    scores = {name: _score(sets, rank, selector.max_attempts) for name, rank in rankers.items()}
-    scores["random"] = np.array(
-        [random_metrics(s.success_rate[: s.count], selector.max_attempts) for s in sets]
-    )
+    robust = "robustness_mean" in table.columns
+    by_robustness = robust and selector.reward == "robustness"
+    rankers["oracle"] = _robustness_oracle if by_robustness else _oracle
+    scores = {name: _score(sets, rank, selector.max_attempts, robust)
+              for name, rank in rankers.items()}  # fmt: skip
+    scores["random"] = np.array([
+        [*random_metrics(s.success_rate[: s.count], selector.max_attempts),
+         *([float(s.rows["robustness_mean"].mean())] if robust else [])]
+        for s in sets
+    ])  # fmt: skip
     resamples = np.random.default_rng(learning.seed).integers(len(sets), size=(n_boot, len(sets)))
-    policies = {name: _summary(values, resamples) for name, values in scores.items()}
+    metrics = (*METRICS, ROBUSTNESS_METRIC) if robust else METRICS
+    policies = {name: _summary(values, resamples, metrics) for name, values in scores.items()}
     return {
         "policies": policies,
         "split": {"train": list(train_ids), "test": [s.object_id for s in sets],
                   "test_fraction": learning.test_fraction, "seed": learning.seed},
         "max_attempts": selector.max_attempts,
         "max_candidates": selector.max_candidates,
+        "reward": selector.reward,
         "interval": f"95% percentile bootstrap over test objects, {n_boot} resamples",
     }  # fmt: skip
 
@@ -178,16 +194,24 @@ def _test_candidate_sets(
     return [found for found in sets if found.count]
 
 
-def _summary(values: NDArray[np.float64], resamples: NDArray[np.intp]) -> dict[str, Any]:
+def _summary(values: NDArray[np.float64], resamples: NDArray[np.intp],
+             metrics: Sequence[str] = METRICS) -> dict[str, Any]:
     """Each metric's mean and interval, and the per-object first-pick success."""
     summary: dict[str, Any] = {
-        metric: bootstrap_interval(values[:, k], resamples) for k, metric in enumerate(METRICS)
+        metric: bootstrap_interval(values[:, k], resamples) for k, metric in enumerate(metrics)
     }
     summary["per_object"] = values[:, 0].round(6).tolist()
     return summary
 
 
-def _score(sets: list[CandidateSet], rank: Ranker, max_attempts: int) -> NDArray[np.float64]:
-    """(objects, metrics) array of :func:`attempt_metrics` for each object's order."""
-    rows = [attempt_metrics(found.success_rate[rank(found)], max_attempts) for found in sets]
+def _score(sets: list[CandidateSet], rank: Ranker, max_attempts: int,
+           robust: bool = False) -> NDArray[np.float64]:
+    """(objects, metrics) array of :func:`attempt_metrics` (and the first pick's robustness)."""
+    rows = []
+    for found in sets:
+        order = rank(found)
+        row = list(attempt_metrics(found.success_rate[order], max_attempts))
+        if robust:
+            row.append(float(found.rows["robustness_mean"].to_numpy(float)[order[0]]))
+        rows.append(row)
     return np.array(rows)

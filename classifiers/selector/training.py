@@ -7,6 +7,10 @@ per candidate, permutation-equivariant); ``policy="flat"`` is MaskablePPO's stoc
 The replay backend trains on the training objects of the object-level split that the classifiers
 use (``config.learning.test_fraction`` and ``config.learning.seed``); ``live=True`` executes the
 grips in PyBullet instead (slow: one simulated trial per step).
+
+``config.selector.reward`` chooses what a pick earns: ``"success"`` (the environment's 0/1 draw)
+or ``"robustness"`` (:class:`RobustnessReward`: the picked grip's recorded ``robustness_mean``
+divided by ``sim.reference_level_g``, so 1 means holding the reference level on average).
 """
 
 from __future__ import annotations
@@ -72,6 +76,36 @@ def _read_table(path: Path) -> pd.DataFrame:
     return load(path)
 
 
+class RobustnessReward(gymnasium.Wrapper):
+    """Replace a valid pick's reward by its grip's ``robustness_mean / reference_g``."""
+
+    def __init__(self, env: gymnasium.Env, table: pd.DataFrame, reference_g: float) -> None:
+        super().__init__(env)
+        if "robustness_mean" not in table.columns:
+            raise ValueError("selector.reward 'robustness' needs a dataset with robustness_mean "
+                             "(regenerate it with the graded outcome)")  # fmt: skip
+        if not reference_g > 0:
+            raise ValueError(f"reference level must be positive, got {reference_g!r}")
+        values = table["robustness_mean"].to_numpy(float) / float(reference_g)
+        self._reward = dict(zip(table["grip_id"].tolist(), values.tolist(), strict=True))
+
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        """The wrapped step with the pick's robustness as its reward."""
+        observation, reward, terminated, truncated, info = self.env.step(action)
+        if not info.get("invalid_action"):
+            reward = self._reward[info["grip_id"]]
+        return observation, float(reward), terminated, truncated, info
+
+
+def check_reward(config: Config, live: bool) -> str:
+    """The configured reward; robustness needs recorded outcomes (replay)."""
+    reward = config.selector.reward
+    if reward == "robustness" and live:
+        raise ValueError("selector.reward 'robustness' needs the replay backend (live trials "
+                         "report success only)")  # fmt: skip
+    return reward
+
+
 def make_selector_env(
     data: pd.DataFrame | None,
     config: Config,
@@ -79,11 +113,16 @@ def make_selector_env(
     n_envs: int = N_ENVS,
     seed: int = 0,
 ) -> DummyVecEnv:
-    """``n_envs`` monitored ``GripSelect-v0`` copies in a DummyVecEnv (replay, or live if None)."""
+    """``n_envs`` monitored ``GripSelect-v0`` copies in a DummyVecEnv (replay, or live if None),
+    rewarded as ``config.selector.reward`` says."""
+
+    robust = check_reward(config, data is None) == "robustness"
 
     def factory(rank: int) -> Any:
         def build() -> gymnasium.Env:
             env = gymnasium.make(ENV_ID, data=data, config=config, split=split)
+            if robust:
+                env = RobustnessReward(env, data, config.sim.reference_level_g)
             env.reset(seed=seed + rank)
             return Monitor(env)
 
