@@ -151,6 +151,11 @@ class LearningConfig(_Section):
         min_length=1,
         description="models trained and compared",
     )
+    regressors: tuple[str, ...] = Field(
+        ("svr", "mlp_torch", "ridge", "rank_qc", "rank_qg", "random"),
+        min_length=1,
+        description="regressors of robustness_mean trained and compared",
+    )
     folds: int = Field(5, ge=2, le=100, description="grouped CV folds")
     repeats: int = Field(3, ge=1, le=100, description="CV repeats over seeds")
     seed: int = Field(0, ge=0, description="learning seed")
@@ -163,6 +168,9 @@ class SelectorConfig(_Section):
     timesteps: int = Field(20_000, ge=1, le=100_000_000, description="training timesteps")
     max_candidates: int = Field(64, ge=2, le=4096, description="K, candidates per observation")
     max_attempts: int = Field(1, ge=1, le=100, description="attempts per episode")
+    reward: Literal["success", "robustness"] = Field(
+        "success", description="reward of a pick: success (0/1) or robustness / reference level"
+    )
     seed: int = Field(0, ge=0, description="training seed")
 
 
