@@ -335,6 +335,52 @@ def test_rgb_array_frames_have_a_fixed_size_and_show_the_outcome(data):
     assert greenish(after) > 50 and greenish(pending) == 0
 
 
+def test_render_style_is_checked_and_the_scene_needs_the_live_backend(data):
+    assert select_env(data).render_style == "sketch"
+    with pytest.raises(ValueError, match="live backend"):
+        select_env(data, render_style="scene")
+    with pytest.raises(ValueError, match="render_style"):
+        select_env(data, render_style="movie")
+
+
+@pytest.mark.slow
+def test_live_render_shows_the_pybullet_scene_and_the_sketch_on_request():
+    env = GripSelectEnv(objects=["square"], max_candidates=4, render_mode="rgb_array")
+    assert env.render_style == "scene"
+    obs, _ = env.reset(seed=0)
+    empty = env.render()
+    env.step(int(np.argmax(obs["mask"])))
+    holding = env.render()
+    assert empty.shape == holding.shape == (400, 400, 3) and holding.dtype == np.uint8
+    # the scene is shaded 3-D (many grey levels), the hand appears once a grip is executed
+    assert len(np.unique(holding.reshape(-1, 3), axis=0)) > 100
+    assert np.mean(np.any(empty != holding, axis=-1)) > 0.05
+    env.close()
+    sketch = GripSelectEnv(objects=["square"], max_candidates=4, render_mode="rgb_array",
+                           render_style="sketch")
+    sketch.reset(seed=0)
+    assert sketch.render().shape == (400, 400, 3)
+    sketch.close()
+
+
+@pytest.mark.parametrize("env_class", [GripSelectEnv, GripAcceptEnv])
+def test_is_success_is_reported_for_sb3_monitor(data, env_class):
+    from stable_baselines3.common.monitor import Monitor
+
+    env = Monitor(env_class(data, max_candidates=8, max_attempts=2),
+                  info_keywords=("is_success",))
+    for seed in range(5):
+        obs, _ = env.reset(seed=seed)
+        done = False
+        while not done:
+            action = int(np.argmax(obs["mask"])) if "mask" in obs else 1
+            obs, reward, terminated, truncated, info = env.step(action)
+            assert info["is_success"] is info["success"]
+            done = terminated or truncated
+        assert info["episode"]["is_success"] == (reward == 1.0)
+    env.close()
+
+
 def test_human_mode_is_harmless_when_headless(data, monkeypatch):
     monkeypatch.delenv("DISPLAY", raising=False)
     monkeypatch.delenv("WAYLAND_DISPLAY", raising=False)

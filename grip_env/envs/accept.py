@@ -31,8 +31,8 @@ class GripAcceptEnv(GripEnvBase):
     max_attempts, the object's candidate count / K). Action: ``Discrete(2)``.
 
     ``info`` holds ``object_id``, ``grip_id``, ``Q_C``, ``success_rate`` (recorded rate; None
-    live) of the candidate acted on, ``attempts``, ``executed``, ``success`` and
-    ``invalid_action`` (always False). Options are those of
+    live) of the candidate acted on, ``attempts``, ``executed``, ``success``, ``is_success`` (the
+    same flag, for SB3's ``Monitor``) and ``invalid_action`` (always False). Options are those of
     :class:`~grip_env.envs.select.GripSelectEnv`.
     """
 
@@ -86,7 +86,8 @@ class GripAcceptEnv(GripEnvBase):
         self._shown = row if terminated else int(self._slots[self._position])
         self._outcome = success if execute and terminated else None
         info.update(
-            attempts=self._attempts, executed=execute, success=success, invalid_action=False
+            attempts=self._attempts, executed=execute, success=success, is_success=success,
+            invalid_action=False,
         )
         if self.render_mode == "human":
             self.render()

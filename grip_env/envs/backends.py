@@ -122,6 +122,10 @@ class LiveBackend:
     def contour(self, object_id: str) -> NDArray[np.float64] | None:
         return self._objects[object_id].contour
 
+    def object(self, object_id: str) -> PlanarObject:
+        """The object simulated under ``object_id``."""
+        return self._objects[object_id]
+
     def execute(self, candidates: CandidateSet, slot: int, rng: np.random.Generator) -> bool:
         from grip_env.sim import run_trials
 

@@ -23,7 +23,7 @@ from grip_env.envs.observation import (
     feature_subset,
     raw_features,
 )
-from grip_env.envs.rendering import HumanWindow, draw_candidates
+from grip_env.envs.rendering import RENDER_STYLES, HumanWindow, SceneCamera, draw_candidates
 from grip_env.envs.split import objects_in_split
 
 CANDIDATE_ORDERS: tuple[str, ...] = ("q_c", "shuffled")
@@ -52,6 +52,7 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         normalize: str = "log",
         candidate_order: str = "q_c",
         render_mode: str | None = None,
+        render_style: str | None = None,
     ) -> None:
         self.config = config if config is not None else load_config()
         selector = self.config.selector
@@ -78,6 +79,8 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         self.backend: OutcomeBackend = (
             LiveBackend(objects, self.config) if data is None else ReplayBackend(data, objects)
         )
+        self.render_style = self._checked_style(render_style)
+        self._camera = SceneCamera(self.config) if self.render_style == "scene" else None
         self.object_ids = objects_in_split(
             self.backend.object_ids,
             split,
@@ -93,6 +96,17 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         self._window: HumanWindow | None = None
         self._identity = np.arange(self.max_candidates)
         self._identity.flags.writeable = False
+
+    def _checked_style(self, style: str | None) -> str:
+        """``"scene"`` (PyBullet, live only; the live default) or ``"sketch"`` (2-D)."""
+        live = isinstance(self.backend, LiveBackend)
+        if style is None:
+            return "scene" if live else "sketch"
+        if style not in RENDER_STYLES:
+            raise ValueError(f"render_style must be one of {RENDER_STYLES}, got {style!r}")
+        if style == "scene" and not live:
+            raise ValueError("render_style='scene' needs the live backend (data=None)")
+        return style
 
     # ------------------------------------------------------------------ candidates
     def _fit_scaler(self, normalize: str) -> FeatureScaler:
@@ -159,8 +173,11 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
     def render(self) -> NDArray[np.uint8] | None:
         """The episode drawn as an RGB array (``"rgb_array"``) or in a window (``"human"``).
 
-        The object's contour (when known), its candidates' contact triangles, and the chosen or
-        current candidate highlighted: green held, red dropped, blue not executed yet.
+        ``render_style="scene"`` (the live default): the PyBullet scene through TinyRenderer, the
+        hand holding the chosen or current candidate (executed without noise). ``"sketch"`` (the
+        replay default): the object's contour (when known), its candidates' contact triangles,
+        and the chosen or current candidate highlighted: green held, red dropped, blue not
+        executed yet.
         """
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode= to make()")
@@ -182,6 +199,9 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         """Draw ``found``'s real candidates, slot ``chosen`` highlighted."""
         if found is None:  # before the first reset
             return draw_candidates(None, np.zeros((0, 3, 2)), title="no episode yet")
+        if self._camera is not None and isinstance(self.backend, LiveBackend):
+            grip = None if chosen is None else found.rows.iloc[chosen]
+            return self._camera.frame(self.backend.object(found.object_id), grip)
         contacts = found.contacts[: found.count]
         contour = self.backend.contour(found.object_id)
         return draw_candidates(contour, contacts, chosen, outcome, title)
@@ -191,6 +211,8 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         if self._window is not None:
             self._window.close()
             self._window = None
+        if self._camera is not None:
+            self._camera.close()
         self.backend.close()
 
 

@@ -1,20 +1,37 @@
-"""Drawing an episode: the object's contour, its candidate contact triangles, the chosen one.
+"""Drawing an episode: the PyBullet scene, or a 2-D sketch of the candidates.
 
-``draw_candidates`` renders off-screen with matplotlib's Agg canvas (no pyplot, no display) into a
-fixed-size ``uint8`` RGB array. :class:`HumanWindow` shows such frames in a matplotlib window when a
-display exists and does nothing (one warning) when headless.
+Two styles, both fixed-size ``uint8`` RGB frames:
+
+- ``"scene"`` (:class:`SceneCamera`): the PyBullet scene through its TinyRenderer (no display
+  needed), seen obliquely: table, object and Barrett hand; with a chosen grip, the hand holding it
+  at the end of a noise-free execution (the episode's own trial had noise: its outcome colours the
+  sketch's highlight and the env's ``info``, not this picture).
+- ``"sketch"`` (:func:`draw_candidates`): the object's contour, every candidate's contact triangle
+  and the chosen one highlighted, drawn with matplotlib's Agg canvas (no pyplot, no display).
+
+:class:`HumanWindow` shows frames in a matplotlib window when a display exists and does nothing
+(one warning) when headless.
 """
 
 from __future__ import annotations
 
 import os
 import sys
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from gymnasium import logger
 from numpy.typing import NDArray
 
+if TYPE_CHECKING:
+    import pandas as pd
+
+    from grip_env.config import Config
+    from grip_env.objects import PlanarObject
+
+RENDER_STYLES: tuple[str, ...] = ("scene", "sketch")
 FRAME_SIZE_PX = 400
+_CAMERA_OFFSET_MM = np.array([300.0, -300.0, 220.0])
 _DPI = 100
 _HIGHLIGHT = {None: "tab:blue", True: "tab:green", False: "tab:red"}
 
@@ -73,6 +90,58 @@ def _frame_limits(axes: object, contour: NDArray | None, contacts: NDArray) -> N
     centre, half = (low + high) / 2, max(float((high - low).max()) / 2, 1.0) * 1.1
     axes.set_xlim(centre[0] - half, centre[0] + half)
     axes.set_ylim(centre[1] - half, centre[1] + half)
+
+
+class SceneCamera:
+    """Frames of the PyBullet scene of one object at a time (its world is kept between frames)."""
+
+    def __init__(self, config: Config, size_px: int = FRAME_SIZE_PX) -> None:
+        self._config = config
+        self._size = size_px
+        self._scene: Any = None
+        self._name: str | None = None
+
+    def frame(self, obj: PlanarObject, grip: pd.Series | None = None) -> NDArray[np.uint8]:
+        """The scene of ``obj``: the hand above it, or holding ``grip`` (a candidate row)."""
+        scene = self._scene_of(obj)
+        frames: list[NDArray[np.uint8]] = []
+
+        def capture(_phase: str, current: Any) -> None:
+            palm, _ = current.hand.palm_pose_mm()
+            frames.append(self._shot(current, np.array([*palm[:2], 0.5 * palm[2]])))
+
+        if grip is not None:
+            import pandas as pd
+
+            from grip_env.sim import grip_plans
+            from grip_env.sim.uncertainty import zero_noise
+
+            try:
+                plan = grip_plans(pd.DataFrame([dict(grip)]))[0]
+                scene.run(plan, zero_noise(scene.config), on_phase=capture)
+            except ValueError as exc:  # out of the hand's reach: show the scene as it is
+                logger.warn(f"cannot show grip {grip.get('grip_id')!r} in the scene: {exc}")
+        if frames:
+            return frames[-1]
+        return self._shot(scene, np.array([*obj.centroid, 0.5 * self._config.objects.thickness_mm]))
+
+    def _scene_of(self, obj: PlanarObject) -> Any:
+        if self._scene is None or self._name != obj.name:
+            from grip_env.sim import TrialScene
+
+            self.close()
+            self._scene, self._name = TrialScene(obj, self._config), obj.name
+        return self._scene
+
+    def _shot(self, scene: Any, target_mm: NDArray[np.float64]) -> NDArray[np.uint8]:
+        eye = target_mm + _CAMERA_OFFSET_MM
+        return scene.world.render(eye, target_mm, self._size, self._size)
+
+    def close(self) -> None:
+        """Release the PyBullet world (idempotent)."""
+        if self._scene is not None:
+            self._scene.close()
+            self._scene, self._name = None, None
 
 
 def display_available() -> bool:

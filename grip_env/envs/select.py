@@ -31,7 +31,9 @@ class GripSelectEnv(GripEnvBase):
 
     The episode terminates on success, when ``max_attempts`` grips were executed, after an invalid
     action, or when no valid candidate remains. ``info`` holds ``object_id``, ``grip_id``, ``Q_C``,
-    ``success_rate`` (recorded rate; None live), ``attempts``, ``success`` and ``invalid_action``.
+    ``success_rate`` (recorded rate; None live), ``attempts``, ``success``, ``is_success`` (the
+    same flag, under the name SB3's ``Monitor`` and ``EvalCallback`` read: on the last step it is
+    whether the episode succeeded) and ``invalid_action``.
 
     Args:
         data: a dataset path or DataFrame (replay backend); None runs grips live in PyBullet.
@@ -49,6 +51,8 @@ class GripSelectEnv(GripEnvBase):
             or ``"none"``.
         candidate_order: ``"q_c"`` (best first) or ``"shuffled"`` (a new order each episode).
         render_mode: ``None``, ``"rgb_array"`` or ``"human"``.
+        render_style: ``"scene"`` (PyBullet through TinyRenderer; live only, its default) or
+            ``"sketch"`` (2-D contour and contact triangles; the replay default).
     """
 
     def __init__(self, data: Any = None, objects: Any = None, **options: Any) -> None:
@@ -98,7 +102,8 @@ class GripSelectEnv(GripEnvBase):
         info = self._grip_info(found, row)
         if not self._mask[slot]:
             self._chosen, self._outcome = None, None
-            info.update(attempts=self._attempts, success=False, invalid_action=True)
+            info.update(attempts=self._attempts, success=False, is_success=False,
+                        invalid_action=True)
             return self._observation(), self.invalid_action_reward, True, False, info
         success = self.backend.execute(found, row, self.np_random)
         self._attempts += 1
@@ -107,7 +112,8 @@ class GripSelectEnv(GripEnvBase):
         self._chosen, self._outcome = row, success
         reward = self.success_reward if success else self.failure_reward
         terminated = success or self._attempts >= self.max_attempts or not self._remaining
-        info.update(attempts=self._attempts, success=success, invalid_action=False)
+        info.update(attempts=self._attempts, success=success, is_success=success,
+                    invalid_action=False)
         if self.render_mode == "human":
             self.render()
         return self._observation(), reward, terminated, False, info
