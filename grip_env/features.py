@@ -8,7 +8,9 @@ Choices the paper leaves open follow DESIGN: interior angles of the contact tria
 two-finger form S1'' has alpha at the thumb contact P3), consecutive angles around the circle for
 G1, unsigned deviation angles for C1, ``eta*mu/2`` in C2, C6 in millimetres, and any feature that is
 infinite, undefined or above ``params.feature_cap`` stored as ``feature_cap``. Two-finger rows have
-G1 = C2 = 0 and use the contact triangle's centroid C_T in G2 and C5.
+G1 = C2 = 0 and use the contact triangle's centroid C_T in G2 and C5. C1's cone edge: a deviation
+counts as outside the friction cone only beyond ``grip_env.params.CONE_EDGE_TOLERANCE_RAD``, the
+same rule the thumb search and ``validate`` use.
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from grip_env.columns import (
     OBJECT,
     REGIONS,
 )
-from grip_env.params import GraspParams
+from grip_env.params import DEFAULT_PARAMS, GraspParams, outside_cone
 
 FEATURE_NAMES: tuple[str, ...] = FEATURES
 INDEX_NAMES: tuple[str, ...] = INDEXES
@@ -47,7 +49,6 @@ FOCUS_COLUMNS: tuple[str, ...] = GRASP_FOCUS + REAL_FOCUS
 #: Every column the features are computed from.
 REQUIRED_COLUMNS: tuple[str, ...] = FINITE_COLUMNS + FOCUS_COLUMNS + (TWO_FINGER,)
 
-DEFAULT_PARAMS = GraspParams()
 _FINGERS = ("1", "2", "3")
 _TWO_PI = 2.0 * np.pi
 _CHUNK_ROWS = 8192
@@ -208,8 +209,18 @@ def centring(centre: Vectors, object_centre: Vectors, size: Array, weight: float
 
 def force_line(f: Sequence[Vectors], n: Sequence[Vectors], friction_angle: float) -> Array:
     """C1 = (4k/3) sum(delta_i^2) / arctan^2(mu), k = 3 if any delta_i > arctan(mu) else 1."""
-    d0, d1, d2 = (_angle_between(fi, ni) for fi, ni in zip(f, n, strict=True))
-    outside = (d0 > friction_angle) | (d1 > friction_angle) | (d2 > friction_angle)
+    deltas = [_angle_between(fi, ni) for fi, ni in zip(f, n, strict=True)]
+    return force_line_from_deviations(deltas, friction_angle)
+
+
+def force_line_from_deviations(deltas: Sequence[Array], friction_angle: float) -> Array:
+    """C1 from the three deviations delta_i (rad); the cone edge is decided by ``outside_cone``.
+
+    A delta within ``CONE_EDGE_TOLERANCE_RAD`` of arctan(mu) counts as inside (k = 1).
+    """
+    d0, d1, d2 = deltas
+    outside = (outside_cone(d0, friction_angle) | outside_cone(d1, friction_angle)
+               | outside_cone(d2, friction_angle))
     k = np.where(outside, 3.0, 1.0)
     return (4.0 / (3.0 * friction_angle**2)) * k * (d0 * d0 + d1 * d1 + d2 * d2)
 

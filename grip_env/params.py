@@ -1,10 +1,25 @@
-"""The paper's grasping parameters (mu, lambda, W) and the normalisation constants DESIGN fixes."""
+"""The paper's grasping parameters (mu, lambda, W) and the normalisation constants DESIGN fixes.
+
+``DEFAULT_PARAMS`` is the one default instance every module's signature uses.
+``CONE_EDGE_TOLERANCE_RAD`` decides the friction-cone edge: a force deviation delta counts as
+outside the cone only when delta > arctan(mu) + CONE_EDGE_TOLERANCE_RAD. The thumb search often
+lands a force exactly on the edge, where two equivalent computations of delta differ by a rounding
+error (about 1e-16 rad); without a margin C1's factor k would flip between 1 and 3 on that noise.
+1e-9 rad is far above float64 rounding of angles and far below any angle the search resolves (its
+grid step is about 1e-2 rad). Features, ``validate`` (which recomputes them) and the thumb search
+all decide the edge with :func:`outside_cone`.
+"""
 
 from __future__ import annotations
 
 import math
 
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, ConfigDict, Field
+
+#: Margin on the friction-cone edge (rad); see the module docstring.
+CONE_EDGE_TOLERANCE_RAD = 1e-9
 
 
 class GraspParams(BaseModel):
@@ -29,3 +44,11 @@ class GraspParams(BaseModel):
     def friction_angle(self) -> float:
         """Half-angle of the friction cone, arctan(mu) (rad)."""
         return math.atan(self.mu)
+
+
+DEFAULT_PARAMS = GraspParams()
+
+
+def outside_cone(delta: ArrayLike, friction_angle: float) -> NDArray[np.bool_]:
+    """Whether deviations ``delta`` (rad) exceed ``friction_angle`` by more than the tolerance."""
+    return np.asarray(delta) > friction_angle + CONE_EDGE_TOLERANCE_RAD

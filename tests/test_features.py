@@ -17,9 +17,10 @@ from grip_env.features import (
     REQUIRED_COLUMNS,
     compute_features,
     features_from_arrays,
+    force_line_from_deviations,
 )
 from grip_env.objects import make_shape
-from grip_env.params import GraspParams
+from grip_env.params import CONE_EDGE_TOLERANCE_RAD, GraspParams, outside_cone
 from tests.benchmarks.reference_features import random_grip_table, reference_features
 
 PARAMS = GraspParams()
@@ -177,6 +178,33 @@ def test_force_line_halfway_and_threshold_jump() -> None:
     outside = rotated_force(ideal_triangle_row(), 2, -1.01 * NU)
     assert feature(inside, "C1") == pytest.approx(4 / 3 * 0.99**2)
     assert feature(outside, "C1") == pytest.approx(4 * 1.01**2)  # k = 3
+
+
+@pytest.mark.parametrize(
+    ("excess", "k"),
+    [(0.0, 1), (-1e-12, 1), (1e-16, 1), (0.5 * CONE_EDGE_TOLERANCE_RAD, 1),
+     (2 * CONE_EDGE_TOLERANCE_RAD, 3), (1e-6, 3)],
+    ids=["at", "just-inside", "at+rounding", "within-tolerance", "beyond-tolerance", "outside"],
+)
+def test_cone_edge_is_decided_by_one_tolerance(excess: float, k: int) -> None:
+    delta = NU + excess
+    assert bool(outside_cone(delta, NU)) == (k == 3)
+    value = force_line_from_deviations([np.array([delta]), np.zeros(1), np.zeros(1)], NU)
+    assert value[0] == pytest.approx(4 * k / 3 * delta**2 / NU**2, rel=1e-12)
+
+
+@pytest.mark.parametrize(("scale", "k"), [(1.0, 1), (1.0 - 1e-7, 1), (1.0 + 1e-7, 3)])
+def test_force_exactly_on_the_cone_edge_counts_inside(scale: float, k: int) -> None:
+    """F turned by arctan(mu) from N (delta equal to the edge up to rounding) gives k = 1, both
+    in the features and in the thumb search's value; just beyond the tolerance gives k = 3."""
+    from grip_env.barrett import force_line_value
+
+    row = rotated_force(ideal_triangle_row(), 2, scale * NU)
+    expected = 4 * k / 3 * scale**2
+    assert feature(row, "C1") == pytest.approx(expected, rel=1e-9)
+    forces = np.array([[[row[f"f{i}_x"], row[f"f{i}_y"]] for i in (1, 2, 3)]])
+    normals = np.array([[[row[f"n{i}_x"], row[f"n{i}_y"]] for i in (1, 2, 3)]])
+    assert force_line_value(forces, normals, NU)[0] == pytest.approx(expected, rel=1e-9)
 
 
 def test_real_focus_deviation_and_centring() -> None:
