@@ -7,6 +7,7 @@ one-line message and exit code 2, never a traceback.
 from __future__ import annotations
 
 import importlib
+from typing import Annotated
 
 import typer
 
@@ -20,8 +21,32 @@ app = typer.Typer(
 )
 
 
+def package_version() -> str:
+    """The installed distribution's version (the package's own when run from a bare checkout)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("grip-env")
+    except PackageNotFoundError:
+        from grip_env import __version__
+
+        return __version__
+
+
+def _print_version(value: bool) -> None:
+    if value:
+        typer.echo(f"grip-env {package_version()}")
+        raise typer.Exit()
+
+
 @app.callback()
-def _root() -> None:
+def _root(
+    version: Annotated[
+        bool,
+        typer.Option("--version", callback=_print_version, is_eager=True,
+                     help="print the version and exit"),
+    ] = False,
+) -> None:
     """Learn which Barrett BH8-280 grips hold: generate, train, ablate, select, study, show."""
 
 

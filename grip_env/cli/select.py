@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from enum import StrEnum
 from typing import Annotated
 
 import typer
@@ -9,6 +10,13 @@ import typer
 from grip_env.cli.errors import user_errors
 from grip_env.cli.options import ConfigFile, DatasetDir, OutputDir
 from grip_env.cli.paths import output_dir
+
+
+class Policy(StrEnum):
+    """Selector policies: ``set`` (one shared scorer per candidate) or ``flat`` (a plain MLP)."""
+
+    set = "set"
+    flat = "flat"
 
 
 def select(
@@ -20,9 +28,9 @@ def select(
         typer.Option(help="training timesteps [default: config selector.timesteps]"),
     ] = None,
     policy: Annotated[
-        str,
+        Policy,
         typer.Option(help="set (one shared scorer per candidate, order-free) or flat (plain MLP)"),
-    ] = "set",
+    ] = Policy.set,
     live: Annotated[
         bool,
         typer.Option("--live", help="train on live PyBullet trials instead of replaying (slow)"),
@@ -41,7 +49,7 @@ def select(
         from grip_env.config import load_config
 
         cfg = load_config(config)
-        report = run_selector(data, out, cfg, policy, timesteps, live, progress)
+        report = run_selector(data, out, cfg, policy.value, timesteps, live, progress)
     for name, scores in report["policies"].items():
         rate = scores["success_rate"]
         low, high = rate["ci"]

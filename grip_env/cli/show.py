@@ -17,7 +17,9 @@ if TYPE_CHECKING:
 
 
 def show(
-    obj: Annotated[str, typer.Argument(help="shape name, image file, or vertex file (.json/.csv)")],
+    obj: Annotated[str, typer.Argument(
+        help="shape name (listed below), image file, or vertex file (.json/.csv)"
+    )],
     out: Annotated[
         Path, typer.Option("--out", "-o", help="PNG file to write (its name ends in .png)")
     ] = Path("show.png"),
@@ -104,5 +106,7 @@ def _render_trial(planar: PlanarObject, cfg: Config, seed: int, out: Path) -> Pa
 
 
 def register(app: typer.Typer) -> None:
-    """Add the command to the CLI."""
-    app.command("show")(show)
+    """Add the command to the CLI, with the shape names in its help."""
+    from grip_env.objects.shapes import SHAPE_NAMES
+
+    app.command("show", epilog=f"Shape names: {', '.join(SHAPE_NAMES)}.")(show)

@@ -26,8 +26,15 @@ def study(
         output_dir(out)
         from classifiers.study import run_study
         from grip_env.config import load_config
+        from grip_env.dataset import DatasetMismatchError
 
-        report = run_study(load_config(config), out, quick=quick, log=typer.echo)
+        try:
+            report = run_study(load_config(config), out, quick=quick, log=typer.echo)
+        except DatasetMismatchError as exc:  # its advice names generate's --overwrite
+            reason = str(exc).split("; use --overwrite", 1)[0]
+            raise ValueError(
+                f"{reason}; choose another --out, or delete {out / 'dataset'} to regenerate it"
+            ) from None
     typer.echo(f"report: {report}")
 
 

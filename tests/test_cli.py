@@ -1,0 +1,86 @@
+"""The command line as a whole: version, help that lists choices, advice that names real options."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+import typer
+from typer.testing import CliRunner
+
+import grip_env
+from grip_env.cli import _register_commands, app
+
+ROOT = Path(__file__).resolve().parents[1]
+_register_commands()
+RUNNER = CliRunner()
+COMMANDS = typer.main.get_command(app).commands
+
+
+def test_version_is_the_packages():
+    result = RUNNER.invoke(app, ["--version"])
+    declared = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
+    assert result.exit_code == 0
+    assert result.output.strip() == f"grip-env {declared}"
+    assert grip_env.__version__ == declared
+
+
+@pytest.mark.parametrize(("command", "choices"), [
+    ("select", ["set", "flat"]),
+    ("show", ["star", "rectangle", "bean"]),
+    ("train", ["svm", "mlp_torch", "rank_qc", "random"]),
+])
+def test_help_lists_the_choices(command, choices):
+    result = RUNNER.invoke(app, [command, "--help"], terminal_width=200)
+    assert result.exit_code == 0
+    for choice in choices:
+        assert choice in result.output, (command, choice)
+
+
+def test_a_bad_choice_is_refused_with_exit_code_2(tmp_path):
+    result = RUNNER.invoke(app, ["select", "--data", ".", "--out", str(tmp_path),
+                                 "--policy", "deep"])
+    assert result.exit_code == 2
+    assert "deep" in result.output
+
+
+@pytest.mark.parametrize("name", sorted(COMMANDS))
+def test_help_names_only_options_the_command_has(name):
+    command = COMMANDS[name]
+    own = {opt for param in command.params for opt in getattr(param, "opts", [])}
+    own |= {opt for param in command.params for opt in getattr(param, "secondary_opts", [])}
+    texts = [command.help or "", command.epilog or ""]
+    texts += [getattr(param, "help", None) or "" for param in command.params]
+    named = set(re.findall(r"(?<![\w-])--[a-z][a-z-]*", " ".join(texts)))
+    assert named <= own, f"{name} --help names {sorted(named - own)}, which it lacks"
+
+
+@pytest.mark.slow
+def test_study_does_not_advise_an_option_it_lacks(generated_dataset_dir, tmp_path):
+    out = tmp_path / "study"
+    shutil.copytree(generated_dataset_dir, out / "dataset")  # made with other settings
+    result = RUNNER.invoke(app, ["study", "--out", str(out)])
+    assert result.exit_code == 2, result.output
+    message = result.output.strip().splitlines()[-1]
+    assert message.startswith("error: ") and "other settings" in message
+    assert "--overwrite" not in message
+    assert "--out" in message
+
+
+def test_registering_the_commands_loads_no_learning_code():
+    script = (
+        "import sys\n"
+        "from grip_env.cli import _register_commands\n"
+        "_register_commands()\n"
+        "heavy = sorted(m for m in sys.modules if m.split('.')[0] in "
+        "('classifiers', 'torch', 'sklearn', 'stable_baselines3', 'pybullet'))\n"
+        "print(heavy)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          check=True, cwd=ROOT)
+    assert done.stdout.strip() == "[]"
