@@ -55,6 +55,13 @@ class ObjectsConfig(_Section):
         (50.0, 150.0), description="size range across (5..1000 mm)"
     )
     thickness_mm: float = Field(30.0, gt=0.0, le=500.0, description="extrusion height")
+    sim_tolerance_mm: float = Field(
+        0.5, ge=0.0, le=10.0,
+        description="largest distance between an object's contour and its simulated body",
+    )
+    density_kg_m3: float = Field(
+        500.0, ge=10.0, le=20_000.0, description="density for W = 1 (household object)"
+    )
 
     @model_validator(mode="after")
     def _sizes_ordered(self) -> ObjectsConfig:
@@ -89,25 +96,57 @@ class SynthesisConfig(_Section):
 
 
 class SimConfig(_Section):
-    """PyBullet execution of one grip."""
+    """PyBullet execution of one grip (figures and their sources: BENCHMARKS.md, "Simulator")."""
 
     timestep: float = Field(1.0 / 240.0, ge=1e-4, le=0.02, description="physics step (s)")
-    solver_iterations: int = Field(50, ge=1, le=1000, description="constraint solver iterations")
+    solver_iterations: int = Field(
+        150, ge=1, le=1000, description="constraint solver iterations (chosen by convergence)"
+    )
     finger_force_n: float = Field(15.0, gt=0.0, le=200.0, description="fingertip force")
     finger_friction: float = Field(1.0, gt=0.0, le=3.0, description="finger pad lateral friction")
+    pad_torsion_mm: float = Field(
+        3.0, ge=0.0, le=50.0, description="pad torsional friction (torque per normal force)"
+    )
     lift_height_mm: float = Field(60.0, gt=0.0, le=1000.0, description="lift distance")
-    shake_amplitude_mm: float = Field(15.0, ge=0.0, le=200.0, description="shake amplitude")
-    shake_frequency_hz: float = Field(5.0, ge=0.0, le=50.0, description="shake frequency")
-    hold_tolerance_mm: float = Field(20.0, gt=0.0, le=500.0, description="drift still held")
-    mass_per_weight_kg: float = Field(1.0, gt=0.0, le=50.0, description="object mass for W = 1")
+    lift_time_s: float = Field(0.25, gt=0.0, le=10.0, description="lift duration")
+    hold_time_s: float = Field(0.15, ge=0.0, le=10.0, description="hold after the lift")
+    hold_tolerance_mm: float = Field(
+        5.0, gt=0.0, le=500.0, description="drift in the palm frame still held"
+    )
+    hold_rotation_deg: float = Field(
+        10.0, gt=0.0, le=180.0, description="rotation in the palm frame still held"
+    )
+    ramp_levels_g: tuple[float, float] = Field(
+        (0.5, 64.0), description="disturbance ramp: first and last level (g)"
+    )
+    ramp_ratio: float = Field(
+        2.0**0.5, gt=1.0, le=4.0, description="ratio between ramp levels"
+    )
+    ramp_steps_per_level: int = Field(3, ge=1, le=1000, description="steps each level is held")
+    reference_level_g: float = Field(
+        4.0, gt=0.0, le=1000.0, description="success: holds this disturbance level"
+    )
     fingertip_clearance_mm: float = Field(
         4.0, ge=0.0, le=100.0, description="lowest finger point above the table while closing"
+    )
+    contact_plane_rise_mm: float = Field(
+        8.0, ge=0.0, le=100.0,
+        description="contact plane may rise this far above mid-thickness (curled tips' backs)",
+    )
+    palm_clearance_mm: float = Field(
+        5.0, ge=0.0, le=100.0, description="palm above the object's top face"
     )
     preshape_gap_mm: float = Field(
         12.0, ge=0.0, le=100.0, description="pre-shape opening beyond contact"
     )
     max_close_steps: int = Field(90, ge=1, le=10_000, description="step cap while closing")
-    lift_time_s: float = Field(0.25, gt=0.0, le=10.0, description="lift duration")
+
+    @model_validator(mode="after")
+    def _ramp_ordered(self) -> SimConfig:
+        _ordered("ramp_levels_g", self.ramp_levels_g)
+        if self.ramp_levels_g[0] <= 0:
+            raise ValueError(f"ramp_levels_g must be positive, got {self.ramp_levels_g}")
+        return self
 
 
 class UncertaintyConfig(_Section):
@@ -116,7 +155,7 @@ class UncertaintyConfig(_Section):
     position_std_mm: float = Field(2.0, ge=0.0, le=50.0, description="palm position error std")
     yaw_std_rad: float = Field(0.02, ge=0.0, le=1.0, description="palm orientation error std")
     friction_range: tuple[Friction, Friction] = Field(
-        (0.4, 1.0), description="true friction drawn in (0..3)"
+        (0.4, 0.9), description="true pad-object friction drawn in (0..3)"
     )
     mass_rel_std: float = Field(0.2, ge=0.0, le=2.0, description="object mass relative std")
     perceived_contour: bool = Field(False, description="plan on the perceived contour")

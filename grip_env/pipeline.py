@@ -3,6 +3,11 @@
 ``candidates(obj)`` returns one row per Barrett configuration with DESIGN's candidate columns
 (``grip_env.columns.CANDIDATE_COLUMNS``), best first by Q_C. The features come from
 ``grip_env.features`` (its array form, so the table is built in one go).
+
+One source for the grasping parameters: the ``params`` argument when given, else
+``config.grasp``. Both may be given only when they agree (a ``config`` whose ``grasp`` differs
+from ``params`` raises ``ValueError``), so no table is planned with one mu and labelled with
+another.
 """
 
 from __future__ import annotations
@@ -14,18 +19,18 @@ from grip_env.barrett import Configurations, configurations
 from grip_env.columns import CANDIDATE_COLUMNS
 from grip_env.config import Config
 from grip_env.features import OUTPUT_NAMES, features_from_arrays
+from grip_env.finger import executable, finger_reaches
 from grip_env.grasps import synthesize_grasps
 from grip_env.objects import PlanarObject
 from grip_env.params import GraspParams
 from grip_env.perception.regions import Regions
 
-DEFAULT_PARAMS = GraspParams()
 _FINGERS = ("1", "2", "3")
 
 
 def candidates(
     obj: PlanarObject,
-    params: GraspParams = DEFAULT_PARAMS,
+    params: GraspParams | None = None,
     config: Config | None = None,
     regions: Regions | None = None,
 ) -> pd.DataFrame:
@@ -33,9 +38,10 @@ def candidates(
 
     Args:
         obj: the object as the planner sees it (polygon, mask or perceived contour).
-        params: parameters of the quality measures (and of friction-dependent synthesis).
-        config: synthesis and perception settings (defaults when None); ``params`` is used
-            instead of ``config.grasp``.
+        params: parameters of the quality measures (and of friction-dependent synthesis);
+            ``config.grasp`` when None.
+        config: synthesis and perception settings (defaults when None). Its ``grasp`` must
+            equal ``params`` when both are given.
         regions: grasping regions to plan on; found from ``obj`` with ``config.perception`` when
             None.
 
@@ -47,23 +53,50 @@ def candidates(
     """
     if not isinstance(obj, PlanarObject):
         raise ValueError(f"obj must be a PlanarObject, got {type(obj).__name__}")
-    if not isinstance(params, GraspParams):
-        raise ValueError(f"params must be GraspParams, got {type(params).__name__}")
-    config = config or Config()
+    config, params = _settings(params, config)
     if regions is None:
         from grip_env.perception.regions import find_regions
 
         regions = find_regions(obj, config.perception, params)
     grasps = synthesize_grasps(regions, obj, params, config.synthesis)
     confs = configurations(grasps, obj, params, config.synthesis)
-    columns = descriptor_columns(obj, confs)
-    if len(confs):
+    columns = _executable_only(descriptor_columns(obj, confs), config)
+    if len(columns["hand_x"]):
         features = features_from_arrays(columns, params)
     else:
         features = np.zeros((0, len(OUTPUT_NAMES)))
     columns.update(zip(OUTPUT_NAMES, features.T, strict=True))
     order = np.argsort(columns["Q_C"], kind="stable")
     return pd.DataFrame({name: columns[name][order] for name in CANDIDATE_COLUMNS})
+
+
+def _executable_only(columns: dict[str, np.ndarray], config: Config) -> dict[str, np.ndarray]:
+    """The configurations whose three pads the hand can put in one plane of the object.
+
+    The executor plans every contact in that one plane (``grip_env.finger.planar_contacts``);
+    a configuration it cannot reach there is not a candidate, so what is planned is executed.
+    """
+    if not len(columns["hand_x"]):
+        return columns
+    sim = config.sim
+    keep = executable(finger_reaches(columns), config.objects.thickness_mm,
+                      sim.contact_plane_rise_mm, sim.fingertip_clearance_mm,
+                      sim.palm_clearance_mm, sim.preshape_gap_mm)
+    return {name: values[keep] for name, values in columns.items()}
+
+
+def _settings(params: GraspParams | None, config: Config | None) -> tuple[Config, GraspParams]:
+    """The config and the grasping parameters a call plans with (see the module docstring)."""
+    if params is not None and not isinstance(params, GraspParams):
+        raise ValueError(f"params must be GraspParams, got {type(params).__name__}")
+    if config is not None and not isinstance(config, Config):
+        raise ValueError(f"config must be a Config, got {type(config).__name__}")
+    if config is None:
+        config = Config() if params is None else Config(grasp=params)
+    elif params is not None and params != config.grasp:
+        raise ValueError(f"params {params!r} differ from config.grasp {config.grasp!r}; "
+                         "give one of them")
+    return config, config.grasp
 
 
 def descriptor_columns(obj: PlanarObject, confs: Configurations) -> dict[str, np.ndarray]:

@@ -2,14 +2,15 @@
 
 # world first: it imports pybullet with the native start-up banner silenced
 from grip_env.sim.world import MM, Body, World  # isort: skip
-from grip_env.sim.execution import run_trials
+from grip_env.sim.execution import OUTCOME_COLUMNS, run_trial_outcomes, run_trials
 from grip_env.sim.hand import HAND_URDF, Hand
 from grip_env.sim.trial import GripPlan, TrialResult, TrialScene, grip_plans, render_trial_strip
-from grip_env.sim.uncertainty import TrialNoise, sample_noise
+from grip_env.sim.uncertainty import TrialNoise, object_mass_kg, sample_noise, zero_noise
 
 __all__ = [
     "HAND_URDF",
     "MM",
+    "OUTCOME_COLUMNS",
     "Body",
     "GripPlan",
     "Hand",
@@ -18,7 +19,10 @@ __all__ = [
     "TrialScene",
     "World",
     "grip_plans",
+    "object_mass_kg",
     "render_trial_strip",
+    "run_trial_outcomes",
     "run_trials",
     "sample_noise",
+    "zero_noise",
 ]

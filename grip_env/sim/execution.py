@@ -1,4 +1,4 @@
-"""``run_trials``: simulated outcome labels (trials, successes) for a table of grips."""
+"""``run_trials`` and ``run_trial_outcomes``: simulated outcome labels for a table of grips."""
 
 from __future__ import annotations
 
@@ -11,6 +11,9 @@ from grip_env.config import Config
 from grip_env.objects import PlanarObject
 from grip_env.sim.trial import TrialScene, grip_plans
 from grip_env.sim.uncertainty import sample_noise, trial_rng
+
+OUTCOME_COLUMNS = ("grip", "trial", "robustness", "success", "held", "friction", "mass_kg",
+                   "drift_mm", "rotation_deg", "steps")
 
 
 def grip_keys(grips: pd.DataFrame) -> list[int]:
@@ -25,40 +28,83 @@ def _stable_int(label: object) -> int:
     return zlib.crc32(str(label).encode())
 
 
-def run_trials(
+def _count(name: str, value: object, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < minimum:
+        kind = "a positive" if minimum > 0 else "a non-negative"
+        raise ValueError(f"{name} must be {kind} integer, got {value!r}")
+    return int(value)
+
+
+def run_trial_outcomes(
     obj: PlanarObject,
     grips: pd.DataFrame,
     config: Config | None = None,
-    trials: int = 5,
+    trials: int = 4,
     seed: int = 0,
+    trial_offset: int = 0,
 ) -> pd.DataFrame:
-    """Execute every grip ``trials`` times in PyBullet under sampled execution noise.
+    """Execute every grip ``trials`` times in PyBullet; one row per (grip, trial).
 
-    The noise of trial k of a grip is drawn from ``SeedSequence([seed, key, k])`` where ``key``
-    comes from the grip's ``grip_id`` (or its index label), so results do not depend on how the
-    grips are chunked or ordered. Each call owns one headless PyBullet client.
+    Trial k of a grip draws its noise from ``SeedSequence([seed, key, trial_offset + k])``,
+    ``key`` from the grip's ``grip_id`` (or its index label). Every trial starts from the same
+    saved world with deterministic contact ordering, so an outcome depends on (seed, key, trial)
+    only: never on the order, chunking or number of workers the grips are run in. Two disjoint
+    seed sets are ``trial_offset=0`` and ``trial_offset=trials``.
 
     Returns:
-        DataFrame indexed like ``grips`` with integer columns ``trials`` and ``successes``.
+        Columns ``grip`` (the grips' index label), ``trial``, ``robustness`` (g: the highest
+        disturbance level held; 0 when the object was not held after the lift), ``success``
+        (held the reference level ``sim.reference_level_g``), ``held``, ``friction``,
+        ``mass_kg``, ``drift_mm``, ``rotation_deg``, ``steps``.
+
+    Raises:
+        ValueError: bad arguments, or a grip the hand cannot reach (never clipped).
     """
     if not isinstance(obj, PlanarObject):
         raise ValueError(f"obj must be a PlanarObject, got {type(obj).__name__}")
     if not isinstance(grips, pd.DataFrame):
         raise ValueError(f"grips must be a pandas DataFrame, got {type(grips).__name__}")
-    if isinstance(trials, bool) or not isinstance(trials, (int, np.integer)) or trials < 1:
-        raise ValueError(f"trials must be a positive integer, got {trials!r}")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    trials = _count("trials", trials, 1)
+    seed = _count("seed", seed, 0)
+    trial_offset = _count("trial_offset", trial_offset, 0)
     config = config if config is not None else Config()
     plans = grip_plans(grips)
-    successes = np.zeros(len(plans), dtype=np.int64)
+    rows: list[tuple] = []
     if plans:
         with TrialScene(obj, config) as scene:
-            for j, (plan, key) in enumerate(zip(plans, grip_keys(grips), strict=True)):
-                for k in range(trials):
+            for label, plan, key in zip(grips.index, plans, grip_keys(grips), strict=True):
+                for k in range(trial_offset, trial_offset + trials):
                     noise = sample_noise(trial_rng(seed, key, k), config)
-                    successes[j] += scene.run(plan, noise).success
+                    r = scene.run(plan, noise)
+                    rows.append((label, k, r.robustness_g, r.success, r.held, noise.friction,
+                                 scene.mass_kg * noise.mass_scale, r.drift_mm, r.rotation_deg,
+                                 r.steps))
+    return pd.DataFrame(rows, columns=list(OUTCOME_COLUMNS))
+
+
+def run_trials(
+    obj: PlanarObject,
+    grips: pd.DataFrame,
+    config: Config | None = None,
+    trials: int = 4,
+    seed: int = 0,
+) -> pd.DataFrame:
+    """Per-grip labels from ``run_trial_outcomes``: outcomes depend on (seed, grip, trial) only.
+
+    Returns:
+        DataFrame indexed like ``grips`` with ``trials``, ``successes`` (trials that held the
+        reference level), ``robustness_mean`` and ``robustness_std`` (g, over the trials;
+        the std is the population std, 0 for one trial).
+    """
+    outcomes = run_trial_outcomes(obj, grips, config, trials, seed)
+    n = len(grips)
+    trials = int(trials)
+    robust = outcomes["robustness"].to_numpy(float).reshape(n, trials) if n else np.zeros((0, 1))
+    success = outcomes["success"].to_numpy(bool).reshape(n, trials) if n else np.zeros((0, 1))
     return pd.DataFrame(
-        {"trials": np.full(len(plans), int(trials), dtype=np.int64), "successes": successes},
+        {"trials": np.full(n, trials, dtype=np.int64),
+         "successes": success.sum(axis=1).astype(np.int64),
+         "robustness_mean": robust.mean(axis=1) if n else np.zeros(0),
+         "robustness_std": robust.std(axis=1) if n else np.zeros(0)},
         index=grips.index,
     )

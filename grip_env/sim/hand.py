@@ -2,16 +2,19 @@
 
 The palm hangs from a fixed constraint to the world that is moved with ``changeConstraint``
 (never teleported while in contact). The two spread joints are both position-controlled to the
-same angle (mirrored axes in the URDF). Each finger is one finite-torque "motor":
+same angle (mirrored axes in the URDF). Each finger is one finite-torque motor behind a worm gear:
 
-* free closing: joint 2 is velocity-controlled towards closing with torque limit ``tau2``, joint 3
-  is position-controlled to ``q2 / 3`` (the Barrett clutch before breakaway);
-* once the finger is stopped by the object (in contact, joint 2 no longer advancing), joint 3 is
-  released from the coupling and closes on its own with torque limit ``tau3`` (breakaway). A
-  stalled finger keeps pressing with its motor torques: the real hand's worm gears would lock it
-  instead, so this model is a little softer than the real hand under load.
+* joint 2 is velocity-controlled towards closing with torque limit ``tau2``; joint 3 follows
+  ``q3_0 + (q2 - q2_0) / 3`` through the gear train (the Barrett clutch before breakaway);
+* the worm gear is not backdrivable: a joint pushed back more than ``BACKLASH_RAD`` behind the
+  furthest it has closed is held there with ``HOLD_FACTOR`` times its motor torque. (A joint
+  limit raised to that peak would let the solver solve the lock with the contacts, but
+  PyBullet's joint limits yield under an active joint motor: measured 47 mrad at 40 N on a
+  thumb, see BENCHMARKS.md; so the lock is still this hold mode.)
+* once the proximal link is stopped by the object, joint 3 is released from the coupling and
+  closes on its own with torque limit ``tau3`` (breakaway), locked behind by its own worm gear.
 
-The torques of each finger are chosen from its planned closing posture so that the fingertip
+The torques of each finger are chosen from its planned contact posture so that the fingertip
 presses horizontally with ``SimConfig.finger_force_n`` (tau_k = F times the height of the
 fingertip above joint k in the finger's closing plane).
 
@@ -30,73 +33,38 @@ from numpy.typing import NDArray
 
 from grip_env import barrett
 from grip_env.config import SimConfig
+from grip_env.finger import (  # noqa: F401  (re-exported: the hand's kinematics)
+    COUPLING,
+    DISTAL_PAD_MM,
+    JOINT2_MAX,
+    JOINT3_MAX,
+    KNUCKLE_HEIGHT_MM,
+    PROXIMAL_MM,
+    ContactPosture,
+    closing_posture,
+    contact_posture,
+    contact_postures,
+    fingertip_depth,
+    fingertip_in_plane,
+    opening_posture,
+    sweep_depth,
+)
 from grip_env.sim.world import MM, World
 
 HAND_URDF = Path(__file__).resolve().parents[1] / "assets" / "barrett_bh8_280.urdf"
 
 # Finger geometry in its closing plane (mm, rad): grip_env.barrett's figures, as in the URDF.
 SPREAD_AXIS_OFFSET_MM = barrett.SPREAD_AXIS_OFFSET_MM
-KNUCKLE_RADIUS_MM = barrett.KNUCKLE_RADIAL_MM  # knuckle from the finger's line origin (S_i or O)
-KNUCKLE_HEIGHT_MM = 75.4  # knuckle height along the palm normal (41.5 + 33.9)
-PROXIMAL_MM = barrett.PROXIMAL_LINK_MM
-DISTAL_MM = barrett.DISTAL_LINK_MM
-DISTAL_PAD_MM = 8.0  # half thickness of the distal link: the pad face is this far inside
-DISTAL_BEND_RAD = np.deg2rad(42.0)
-COUPLING = 1.0 / 3.0
+GEAR_FACTOR = 5.0  # joint 3's gear-train torque before breakaway, relative to tau3
+GEAR_GAIN = 0.5  # position gain of the gear train (stiff, still stable at 240 Hz)
+PALM_LEAD_STEPS = 4
 BACKLASH_RAD = 0.005  # a joint pushed back further than this is held by its worm gear
 HOLD_FACTOR = 5.0  # worm-gear holding torque relative to the motor torque
-HOLD_GAIN = 0.5  # position gain of a held joint (stiff, still stable at 240 Hz)
-JOINT3_MAX = barrett.JOINT3_RANGE_RAD[1]
 
 # URDF joint indices, listed in planar finger order (planar 1 = URDF finger 2, see module doc).
 SPREAD_JOINTS = (3, 0)
 FLEX_JOINTS = ((4, 5), (1, 2), (6, 7))
 FINGER_LINKS = ((3, 4, 5), (0, 1, 2), (6, 7))
-
-
-def fingertip_in_plane(q2: NDArray, q3: NDArray) -> tuple[NDArray, NDArray]:
-    """Fingertip pad corner in a finger's closing plane: (reach r, height h) in mm.
-
-    ``r`` is measured outwards from the finger's line origin (its spread axis; O for the thumb),
-    ``h`` along the palm normal from the palm base.
-    """
-    q2, q3 = np.asarray(q2, float), np.asarray(q3, float)
-    a = q2 + DISTAL_BEND_RAD + q3
-    r = (KNUCKLE_RADIUS_MM + PROXIMAL_MM * np.cos(q2) + DISTAL_MM * np.cos(a)
-         - DISTAL_PAD_MM * np.sin(a))
-    h = (KNUCKLE_HEIGHT_MM + PROXIMAL_MM * np.sin(q2) + DISTAL_MM * np.sin(a)
-         + DISTAL_PAD_MM * np.cos(a))
-    return r, h
-
-
-def fingertip_depth(q2: NDArray, q3: NDArray) -> NDArray:
-    """How far the distal link reaches along the palm normal (mm): its deeper tip corner."""
-    a = np.asarray(q2, float) + DISTAL_BEND_RAD + np.asarray(q3, float)
-    _, pad_h = fingertip_in_plane(q2, q3)
-    return pad_h + np.maximum(0.0, -2 * DISTAL_PAD_MM * np.cos(a))
-
-
-_Q2_GRID = np.linspace(0.0, 1.5, 601)
-_R_GRID, _H_GRID = fingertip_in_plane(_Q2_GRID, COUPLING * _Q2_GRID)
-_DEPTH_GRID = fingertip_depth(_Q2_GRID, COUPLING * _Q2_GRID)
-
-
-def closing_depth(q2_from: NDArray, q2_to: NDArray) -> NDArray:
-    """Deepest reach of each finger along the palm normal while closing from q2_from to q2_to."""
-    lo, hi = np.minimum(q2_from, q2_to), np.maximum(q2_from, q2_to)
-    inside = (lo[..., None] <= _Q2_GRID) & (hi[..., None] >= _Q2_GRID)
-    ends = np.maximum(np.interp(lo, _Q2_GRID, _DEPTH_GRID), np.interp(hi, _Q2_GRID, _DEPTH_GRID))
-    return np.maximum(ends, np.where(inside, _DEPTH_GRID, -np.inf).max(axis=-1))
-
-
-def closing_posture(reach_mm: NDArray) -> tuple[NDArray, NDArray]:
-    """Joint-2 angle (coupled closing) at which the fingertip reaches ``reach_mm``, and its height.
-
-    ``reach`` decreases monotonically with q2 on the grid used; reaches outside it are clipped.
-    """
-    reach = np.asarray(reach_mm, float)
-    q2 = np.interp(-reach, -_R_GRID, _Q2_GRID)
-    return q2, np.interp(q2, _Q2_GRID, _H_GRID)
 
 
 def palm_quaternion(yaw: float) -> tuple[float, float, float, float]:
@@ -125,6 +93,16 @@ class _Finger:
     broken_away: bool = False
 
 
+@dataclass(frozen=True)
+class HandState:
+    """What the controller remembers beyond PyBullet's state: locks, gear origin, breakaway."""
+
+    peak: NDArray[np.float64]
+    origin: NDArray[np.float64]
+    broken_away: tuple[bool, ...]
+    palm_target: tuple[tuple[float, ...], float]
+
+
 @dataclass
 class Hand:
     """The hand loaded into ``world``; positions in mm, the palm frame at the palm base centre."""
@@ -136,37 +114,57 @@ class Hand:
 
     def __post_init__(self) -> None:
         c = self.world.client
-        self.uid = c.loadURDF(
-            str(HAND_URDF), basePosition=[0, 0, 1], flags=pybullet.URDF_USE_INERTIA_FROM_FILE
-        )
-        self._com_offset = np.asarray(c.getDynamicsInfo(self.uid, -1)[3])
+        flags = (pybullet.URDF_USE_INERTIA_FROM_FILE | pybullet.URDF_USE_SELF_COLLISION
+                 | pybullet.URDF_USE_SELF_COLLISION_EXCLUDE_ALL_PARENTS)
+        self.uid = c.loadURDF(str(HAND_URDF), basePosition=[0, 0, 1], flags=flags)
+        self._com_offset = np.asarray(c.getDynamicsInfo(self.uid, -1)[3]) / MM
         pairs = zip(FLEX_JOINTS, FINGER_LINKS, strict=True)
         self.fingers = [_Finger(joints, links) for joints, links in pairs]
+        self._flex = [j for f in self.fingers for j in f.joints]
+        torsion = self.config.pad_torsion_mm * MM
         for link in range(c.getNumJoints(self.uid)):
             c.changeDynamics(self.uid, link, lateralFriction=self.config.finger_friction,
-                             spinningFriction=0.002, frictionAnchor=1)
+                             spinningFriction=torsion, frictionAnchor=1)
         self.constraint = c.createConstraint(
             self.uid, -1, -1, -1, pybullet.JOINT_FIXED, [0, 0, 0], [0, 0, 0], [0, 0, 1]
         )
         self.spread = 0.0
+        self._peak = np.zeros((3, 2))
+        self._origin = np.zeros((3, 2))
+        self._target: tuple[tuple[float, ...], float] = ((0.0, 0.0, 0.0), 0.0)
+        self._get_states = c.getJointStates
+        self._limit = c.changeDynamics
+        self._motors = c.setJointMotorControlArray
 
     # ------------------------------------------------------------------ palm
     def _com_target(self, position_mm: NDArray, yaw: float) -> tuple[list[float], tuple]:
-        com = np.asarray(position_mm, float) * MM + palm_to_world(yaw, self._com_offset)
+        com = (np.asarray(position_mm, float) + palm_to_world(yaw, self._com_offset)) * MM
         return com.tolist(), palm_quaternion(yaw)
 
     def teleport(self, position_mm: NDArray, yaw: float) -> None:
-        """Put the palm base at ``position_mm`` (world) with ``yaw``; only when not in contact."""
+        """Put the palm base at ``position_mm`` (world) with ``yaw``; only when not in contact.
+
+        PyBullet places a body by its centre of mass, so the base is shifted by the hand's
+        centre-of-mass offset to land exactly at ``position_mm``.
+        """
         c = self.world.client
-        c.resetBasePositionAndOrientation(
-            self.uid, (np.asarray(position_mm, float) * MM).tolist(), palm_quaternion(yaw)
-        )
+        com, orn = self._com_target(position_mm, yaw)
+        c.resetBasePositionAndOrientation(self.uid, com, orn)
         c.resetBaseVelocity(self.uid, [0, 0, 0], [0, 0, 0])
+        self._target = (tuple(float(v) for v in position_mm), float(yaw))
         self.move(position_mm, yaw)
 
     def move(self, position_mm: NDArray, yaw: float) -> None:
-        """Drive the palm constraint towards a new pose (the solver moves it within its force)."""
-        com, orn = self._com_target(position_mm, yaw)
+        """Drive the palm constraint towards a new pose (the solver moves it within its force).
+
+        The constraint's pivot reaches the body ``PALM_LEAD_STEPS`` steps late (measured: a
+        pure delay, whatever its erp), so the pivot leads the target by that many steps of the
+        target's own motion: the palm then follows the commanded path (within 0.1 mm on the lift).
+        """
+        position = np.asarray(position_mm, float)
+        lead = PALM_LEAD_STEPS * (position - np.asarray(self._target[0]))
+        self._target = (tuple(float(v) for v in position), float(yaw))
+        com, orn = self._com_target(position + lead, yaw)
         self.world.client.changeConstraint(
             self.constraint, jointChildPivot=com, jointChildFrameOrientation=orn,
             maxForce=self.max_palm_force_n,
@@ -174,40 +172,47 @@ class Hand:
 
     def palm_pose_mm(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Palm base position (mm) and quaternion."""
-        return self.world.pose_mm(self.uid)
+        com, orn = self.world.pose_mm(self.uid)
+        yaw = self._target[1]
+        return com - palm_to_world(yaw, self._com_offset), orn
+
+    def palm_target_mm(self) -> NDArray[np.float64]:
+        """Where the palm base is being driven to (mm)."""
+        return np.asarray(self._target[0])
 
     # ------------------------------------------------------------------ fingers
-    def preshape(self, spread: float, joint2: NDArray) -> None:
-        """Set the spread and each finger's joint 2 (joint 3 coupled) at once, then hold them."""
+    def preshape(self, spread: float, joint2: NDArray, joint3: NDArray | None = None) -> None:
+        """Set the spread and each finger's joints at once, lock them there, start the motors.
+
+        ``joint3`` defaults to the coupled ``joint2 / 3``.
+        """
         c = self.world.client
+        q2 = np.asarray(joint2, float)
+        q3 = COUPLING * q2 if joint3 is None else np.asarray(joint3, float)
         self.spread = float(spread)
         for joint in SPREAD_JOINTS:
             c.resetJointState(self.uid, joint, self.spread)
-        for finger, q2 in zip(self.fingers, np.asarray(joint2, float), strict=True):
-            c.resetJointState(self.uid, finger.joints[0], q2)
-            c.resetJointState(self.uid, finger.joints[1], COUPLING * q2)
+        for finger, a, b in zip(self.fingers, q2, q3, strict=True):
+            c.resetJointState(self.uid, finger.joints[0], float(a))
+            c.resetJointState(self.uid, finger.joints[1], float(b))
             finger.broken_away = False
-        self._peak, _ = self.joint_states()
-        self._hold_spread()
+        self._origin = np.stack([q2, q3], axis=1)
+        self._peak = self._origin.copy()
         c.setJointMotorControlArray(
-            self.uid, [j for f in self.fingers for j in f.joints], pybullet.VELOCITY_CONTROL,
-            targetVelocities=[0.0] * 6, forces=[5.0] * 6,
-        )
-
-    def _hold_spread(self) -> None:
-        self.world.client.setJointMotorControlArray(
             self.uid, list(SPREAD_JOINTS), pybullet.POSITION_CONTROL,
             targetPositions=[self.spread] * 2, forces=[10.0] * 2,
         )
+        self._command_motors()
 
-    def set_finger_torques(self, planned_joint2: NDArray) -> None:
-        """Motor torques giving ``finger_force_n`` at the fingertips in their planned postures.
+    def set_finger_torques(self, contact_q2: NDArray, contact_q3: NDArray | None = None) -> None:
+        """Motor torques giving ``finger_force_n`` at the fingertips in their contact postures.
 
         A horizontal fingertip force F needs tau_k = F * (height of the tip above joint k).
         """
         force = self.config.finger_force_n
-        q2 = np.asarray(planned_joint2, float)
-        _, tip_h = fingertip_in_plane(q2, COUPLING * q2)
+        q2 = np.asarray(contact_q2, float)
+        q3 = COUPLING * q2 if contact_q3 is None else np.asarray(contact_q3, float)
+        _, tip_h = fingertip_in_plane(q2, q3)
         joint3_h = KNUCKLE_HEIGHT_MM + PROXIMAL_MM * np.sin(q2)
         for finger, h, h3 in zip(self.fingers, tip_h, joint3_h, strict=True):
             finger.tau2 = force * max(h - KNUCKLE_HEIGHT_MM, 20.0) * MM
@@ -215,58 +220,78 @@ class Hand:
 
     def joint_states(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Flexion joint positions and velocities, shape (3, 2) each, planar finger order."""
-        joints = [j for f in self.fingers for j in f.joints]
-        states = self.world.client.getJointStates(self.uid, joints)
+        states = self._get_states(self.uid, self._flex)
         q = np.array([s[0] for s in states]).reshape(3, 2)
         dq = np.array([s[1] for s in states]).reshape(3, 2)
         return q, dq
 
+    def motor_torques(self) -> NDArray[np.float64]:
+        """Torque each flexion motor applied in the last step (3, 2), N·m."""
+        states = self._get_states(self.uid, self._flex)
+        return np.array([s[3] for s in states]).reshape(3, 2)
+
     def drive_fingers(self, touching: NDArray[np.bool_] | None = None) -> NDArray[np.float64]:
         """One control update of the finger motors; returns the flexion velocities (3, 2).
 
-        Each joint pushes towards closing with its motor torque; a joint pushed back more than
-        ``BACKLASH_RAD`` behind the furthest it has closed is held there with ``HOLD_FACTOR``
-        times that torque (the non-backdrivable worm gear). Before breakaway joint 3 follows
-        q2 / 3 through the gear train (held with the same stiffness): a finger stopped at its
-        distal link stalls as a whole. ``touching`` ((3, 2) proximal/distal contacts) triggers
-        the breakaway of a finger whose proximal link is stopped by contact.
+        A joint pushed back more than ``BACKLASH_RAD`` behind the furthest it has closed is held
+        there with ``HOLD_FACTOR`` times its motor torque (the non-backdrivable worm gear).
+        ``touching`` ((3, 2) proximal/distal contacts) triggers the breakaway of a finger whose
+        proximal link is stopped by contact; joint 3 then closes on its own motor.
         """
         q, dq = self.joint_states()
         self._peak = np.maximum(self._peak, q)
-        backdriven = q < self._peak - BACKLASH_RAD
-        speed = self.close_speed_rad_s
-        joints, modes, targets, forces = [], [], [], []
-        for i, finger in enumerate(self.fingers):
-            if touching is not None and touching[i, 0] and dq[i, 0] < 0.1 * speed:
-                finger.broken_away = True
-            for k, tau in enumerate((finger.tau2, finger.tau3)):
-                joints.append(finger.joints[k])
-                if k == 1 and not finger.broken_away:
-                    target = min(COUPLING * self._peak[i, 0], JOINT3_MAX)
-                    modes.append(("pos", target, HOLD_FACTOR * tau))
-                elif backdriven[i, k]:
-                    modes.append(("pos", self._peak[i, k], HOLD_FACTOR * tau))
-                else:
-                    modes.append(("vel", speed, tau))
-        c = self.world.client
-        for kind, mode in (("pos", pybullet.POSITION_CONTROL), ("vel", pybullet.VELOCITY_CONTROL)):
-            chosen = [(j, m) for j, m in zip(joints, modes, strict=True) if m[0] == kind]
-            if not chosen:
-                continue
-            targets = [m[1] for _, m in chosen]
-            forces = [m[2] for _, m in chosen]
-            ids = [j for j, _ in chosen]
-            if kind == "pos":
-                c.setJointMotorControlArray(self.uid, ids, mode, targetPositions=targets,
-                                            forces=forces, positionGains=[HOLD_GAIN] * len(ids))
-            else:
-                c.setJointMotorControlArray(self.uid, ids, mode, targetVelocities=targets,
-                                            forces=forces)
+        held = q < self._peak - BACKLASH_RAD
+        if touching is not None:
+            for i, finger in enumerate(self.fingers):
+                if touching[i, 0] and dq[i, 0] < 0.1 * self.close_speed_rad_s:
+                    finger.broken_away = True
+        self._command_motors(held)
         return dq
+
+    def _command_motors(self, held: NDArray[np.bool_] | None = None) -> None:
+        """Joints close on their motors; joint 3 follows the gear train until breakaway."""
+        held = np.zeros((3, 2), bool) if held is None else held
+        velocity, velocity_forces, position, targets, position_forces = [], [], [], [], []
+        for i, finger in enumerate(self.fingers):
+            for k, tau in enumerate((finger.tau2, finger.tau3)):
+                joint = finger.joints[k]
+                if k == 1 and not finger.broken_away:
+                    closed = self._peak[i, 0] - self._origin[i, 0]
+                    coupled = self._origin[i, 1] + COUPLING * closed
+                    position.append(joint)
+                    targets.append(min(coupled, JOINT3_MAX))
+                    position_forces.append(GEAR_FACTOR * tau)
+                elif held[i, k]:
+                    position.append(joint)
+                    targets.append(float(self._peak[i, k]))
+                    position_forces.append(HOLD_FACTOR * tau)
+                else:
+                    velocity.append(joint)
+                    velocity_forces.append(tau)
+        if velocity:
+            self._motors(self.uid, velocity, pybullet.VELOCITY_CONTROL,
+                         targetVelocities=[self.close_speed_rad_s] * len(velocity),
+                         forces=velocity_forces)
+        if position:
+            self._motors(self.uid, position, pybullet.POSITION_CONTROL, targetPositions=targets,
+                         forces=position_forces, positionGains=[GEAR_GAIN] * len(position))
+
+    def state(self) -> HandState:
+        """The controller's own state, to restore together with a PyBullet state."""
+        return HandState(self._peak.copy(), self._origin.copy(),
+                         tuple(f.broken_away for f in self.fingers), self._target)
+
+    def restore(self, state: HandState) -> None:
+        """Bring the controller back to ``state`` (after ``restoreState`` of the same moment)."""
+        self._peak, self._origin = state.peak.copy(), state.origin.copy()
+        for finger, broken in zip(self.fingers, state.broken_away, strict=True):
+            finger.broken_away = broken
+        self._command_motors()
+        self._target = state.palm_target
+        self.move(np.asarray(state.palm_target[0]), state.palm_target[1])
 
     def touching(self, body: int) -> NDArray[np.bool_]:
         """(3, 2): whether each finger's proximal and distal links (planar order) touch ``body``."""
         contacts = self.world.client.getContactPoints(bodyA=self.uid, bodyB=body)
         links = {point[3] for point in contacts}
         return np.array([[f.links[-2] in links, f.links[-1] in links] for f in self.fingers])
-

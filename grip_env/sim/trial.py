@@ -1,7 +1,14 @@
-"""One grip execution in PyBullet: place, pre-shape, lower, close, lift, shake, judge.
+"""One grip execution in PyBullet: place, pre-shape, lower, close, lift, hold, judge, disturb.
 
 A ``TrialScene`` owns one ``World`` with the table, the object and the hand, saved once; every
 trial restores that state (cheaper than rebuilding, see the benchmark) and applies its noise.
+All three fingertip pads are planned to touch in one horizontal plane, as close above the
+object's mid-thickness as the hand reaches (``sim.contact_plane_rise_mm``), so the planar model's
+contacts are the simulated ones (no pitching couple between fingers). A trial is
+held when, after the lift and a hold of ``sim.hold_time_s``, the object has moved at most
+``sim.hold_tolerance_mm`` and turned at most ``sim.hold_rotation_deg`` in the palm frame; its
+robustness is then the disturbance level it resists (``grip_env.sim.disturbance``), and it
+succeeds when that level reaches ``sim.reference_level_g``.
 """
 
 from __future__ import annotations
@@ -15,11 +22,17 @@ import pandas as pd
 from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
-from grip_env import barrett
 from grip_env.config import Config
+from grip_env.finger import finger_reaches, planar_contacts
 from grip_env.objects import PlanarObject
-from grip_env.sim.hand import Hand, closing_depth, closing_posture
-from grip_env.sim.uncertainty import TrialNoise
+from grip_env.sim.disturbance import RampProbe, robustness
+from grip_env.sim.hand import (
+    ContactPosture,
+    Hand,
+    opening_posture,
+    palm_to_world,
+)
+from grip_env.sim.uncertainty import TrialNoise, object_mass_kg
 from grip_env.sim.world import World
 
 PLAN_COLUMNS = ("hand_x", "hand_y", "hand_yaw", "spread", "p1_x", "p1_y", "p2_x", "p2_y",
@@ -27,9 +40,7 @@ PLAN_COLUMNS = ("hand_x", "hand_y", "hand_yaw", "spread", "p1_x", "p1_y", "p2_x"
 APPROACH_MM = 10.0  # the pre-shaped hand is lowered this far onto its grip height
 APPROACH_STEPS = 8
 SETTLE_STEPS = 8
-HOLD_STEPS = 12
 STALL_SPEED = 0.05  # rad/s: a finger whose joints move slower than this has stopped
-SHAKE_DIRECTIONS = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))
 
 
 @dataclass(frozen=True)
@@ -48,23 +59,21 @@ class GripPlan:
 
 @dataclass(frozen=True)
 class TrialResult:
-    """Outcome of one trial: held or not, object drift in the palm frame (mm), physics steps."""
+    """Outcome of one trial.
+
+    ``held``: the object was lifted and stayed within the hold tolerance; ``robustness_g``: the
+    disturbance level it then resisted (0 when not held); ``success``: robustness reached the
+    reference level. Drift (mm) and rotation (deg) are in the palm frame after the hold.
+    """
 
     success: bool
+    robustness_g: float
+    held: bool
     drift_mm: float
+    rotation_deg: float
     lifted_mm: float
     steps: int
     close_steps: int
-
-
-def finger_reaches(grips: pd.DataFrame) -> NDArray[np.float64]:
-    """(n, 3) reach of each finger from its line origin to its contact, from the grip columns."""
-    yaw, spread = grips["hand_yaw"].to_numpy(float), grips["spread"].to_numpy(float)
-    palm = grips[["hand_x", "hand_y"]].to_numpy(float)
-    forces = barrett.finger_forces(yaw, spread)
-    origins = np.concatenate([barrett.spread_axes(palm, yaw), palm[:, None, :]], axis=1)
-    contacts = grips[list(PLAN_COLUMNS[4:])].to_numpy(float).reshape(-1, 3, 2)
-    return np.einsum("nij,nij->ni", origins - contacts, forces)
 
 
 def grip_plans(grips: pd.DataFrame) -> list[GripPlan]:
@@ -88,15 +97,16 @@ class TrialScene:
         self.config = config if config is not None else Config()
         sim = self.config.sim
         self.thickness_mm = self.config.objects.thickness_mm
+        self.mass_kg = object_mass_kg(obj, self.config)
         self.world = World(timestep=sim.timestep, solver_iterations=sim.solver_iterations)
         self.world.add_table()
-        mass = sim.mass_per_weight_kg * self.config.grasp.weight
-        self.object = self.world.add_object(obj, self.thickness_mm, mass, self.config.grasp.mu)
-        info = self.world.client.getDynamicsInfo(self.object.uid, -1)
-        self._inertia_per_kg = np.asarray(info[2]) / info[0]
+        self.object = self.world.add_object(obj, self.thickness_mm, self.mass_kg,
+                                            self.config.grasp.mu)
+        self.gyration_m = float(np.sqrt(self.object.inertia_per_kg[2]))
         self.hand = Hand(self.world, sim)
         self.hand.teleport(np.array([0.0, 0.0, 400.0]), 0.0)
         self.state = self.world.client.saveState()
+        self._postures: dict[GripPlan, ContactPosture] = {}
 
     def close(self) -> None:
         """Release the PyBullet client."""
@@ -113,51 +123,65 @@ class TrialScene:
         self, plan: GripPlan, noise: TrialNoise,
         on_phase: Callable[[str, TrialScene], None] | None = None,
     ) -> TrialResult:
-        """Execute ``plan`` under ``noise``; ``on_phase(name, scene)`` is called at each phase."""
-        self._reset(noise)
-        counter = _StepCounter(self.world)
-        notify = on_phase or (lambda name, scene: None)
+        """Execute ``plan`` under ``noise``; ``on_phase(name, scene)`` is called at each phase.
+
+        Raises:
+            ValueError: the plan is out of the hand's reach (no posture puts its pads there).
+        """
+        sim = self.config.sim
         palm, yaw, grip_z = self._place(plan, noise)
+        counter = _StepCounter(self.world, self.hand)
+        notify = on_phase or (lambda name, scene: None)
         for z in np.linspace(grip_z + APPROACH_MM, grip_z, APPROACH_STEPS + 1)[1:]:
             self.hand.move(np.array([*palm, z]), yaw)
-            counter.step(1, self.hand)
+            counter.step()
         notify("approach", self)
         close_steps = self._close(counter)
-        counter.step(SETTLE_STEPS, self.hand)
+        counter.step(SETTLE_STEPS)
         notify("closed", self)
         reference = self._object_in_palm()
         start_z = self._object_height()
         self._lift(palm, yaw, grip_z, counter)
-        notify("lifted", self)
-        self._shake(palm, yaw, grip_z + self.config.sim.lift_height_mm, counter)
-        counter.step(HOLD_STEPS, self.hand)
-        notify("shaken", self)
-        drift = float(np.linalg.norm(self._object_in_palm() - reference))
+        counter.step(max(0, round(sim.hold_time_s / sim.timestep)))
+        notify("held", self)
+        drift, turn = self._moved_from(reference)
         lifted = self._object_height() - start_z
-        sim = self.config.sim
-        held = drift < sim.hold_tolerance_mm and lifted > 0.5 * sim.lift_height_mm
-        return TrialResult(bool(held), drift, float(lifted), counter.steps, close_steps)
+        held = (drift <= sim.hold_tolerance_mm and turn <= sim.hold_rotation_deg
+                and lifted > 0.5 * sim.lift_height_mm)
+        level = self._robustness(yaw, noise, counter) if held else 0.0
+        success = held and level >= sim.reference_level_g
+        return TrialResult(bool(success), level, bool(held), drift, turn, float(lifted),
+                           counter.steps, close_steps)
 
-    def _reset(self, noise: TrialNoise) -> None:
-        c = self.world.client
-        c.restoreState(self.state)
-        c.changeDynamics(
-            self.object.uid, -1, mass=noise.mass_kg, lateralFriction=noise.friction,
-            localInertiaDiagonal=(self._inertia_per_kg * noise.mass_kg).tolist(),
-        )
+    def posture(self, plan: GripPlan) -> ContactPosture:
+        """The plan's contact posture (cached: it does not depend on a trial's noise)."""
+        if plan not in self._postures:
+            sim = self.config.sim
+            posture, found = planar_contacts(
+                np.asarray(plan.reach_mm), self.thickness_mm, sim.contact_plane_rise_mm,
+                sim.fingertip_clearance_mm, sim.palm_clearance_mm, sim.preshape_gap_mm,
+            )
+            if not found[0]:
+                raise ValueError(f"no posture puts every pad of reaches "
+                                 f"{np.round(plan.reach_mm, 2).tolist()} mm in one plane of the "
+                                 f"object: the plan is out of the hand's reach")
+            self._postures[plan] = ContactPosture(posture.q2[0], posture.q3[0],
+                                                  posture.height_mm[0], posture.plane_z_mm[0])
+        return self._postures[plan]
 
     def _place(self, plan: GripPlan, noise: TrialNoise) -> tuple[NDArray, float, float]:
-        """Pre-shape the hand for the plan and put it (with error) just above its grip height."""
+        """Reset, pre-shape the hand for the plan and put it (with error) just above its height."""
         sim = self.config.sim
-        reach = np.asarray(plan.reach_mm)
-        q2_grip, _ = closing_posture(reach)
-        q2_open, _ = closing_posture(reach + sim.preshape_gap_mm)
-        grip_z = float(closing_depth(q2_open, q2_grip).max() + sim.fingertip_clearance_mm)
+        self.world.client.restoreState(self.state)
+        self.world.set_dynamics(self.object, self.mass_kg * noise.mass_scale, noise.friction)
+        posture = self.posture(plan)
+        q2_open, q3_open = opening_posture(posture.q2, posture.q3, sim.preshape_gap_mm)
+        grip_z = float(posture.plane_z_mm + posture.height_mm)
         palm = np.asarray(plan.palm_mm) + np.asarray(noise.offset_mm)
         yaw = plan.yaw + noise.yaw_error
-        self.hand.preshape(plan.spread, q2_open)
-        self.hand.set_finger_torques(q2_grip)
         self.hand.teleport(np.array([*palm, grip_z + APPROACH_MM]), yaw)
+        self.hand.preshape(plan.spread, q2_open, q3_open)
+        self.hand.set_finger_torques(posture.q2, posture.q3)
         return palm, yaw, grip_z
 
     def _close(self, counter: _StepCounter) -> int:
@@ -165,7 +189,8 @@ class TrialScene:
         still = 0
         for step in range(1, self.config.sim.max_close_steps + 1):
             velocities = self.hand.drive_fingers(self.hand.touching(self.object.uid))
-            counter.step()
+            self.world.step()
+            counter.steps += 1
             moving = np.abs(velocities[:, 0]).max()
             broken = [i for i, f in enumerate(self.hand.fingers) if f.broken_away]
             if broken:
@@ -181,45 +206,68 @@ class TrialScene:
         for t in np.arange(1, steps + 1) / steps:
             z = grip_z + sim.lift_height_mm * (1 - np.cos(np.pi * t)) / 2
             self.hand.move(np.array([*palm, z]), yaw)
-            counter.step(1, self.hand)
+            counter.step()
 
-    def _shake(self, palm: NDArray, yaw: float, z: float, counter: _StepCounter) -> None:
-        """One sine period of ``shake_amplitude_mm`` along world x, then y, then z."""
-        sim = self.config.sim
-        if sim.shake_amplitude_mm == 0 or sim.shake_frequency_hz == 0:
-            return
-        steps = max(2, round(1.0 / (sim.shake_frequency_hz * sim.timestep)))
-        phase = np.sin(2 * np.pi * np.arange(1, steps + 1) / steps)
-        centre = np.array([*palm, z])
-        for direction in SHAKE_DIRECTIONS:
-            for s in phase:
-                self.hand.move(centre + sim.shake_amplitude_mm * s * np.asarray(direction), yaw)
-                counter.step(1, self.hand)
-        self.hand.move(centre, yaw)
+    def _robustness(self, yaw: float, noise: TrialNoise, counter: _StepCounter) -> float:
+        """The disturbance ramp from this moment (``grip_env.sim.disturbance``)."""
+        c, sim = self.world.client, self.config.sim
+        saved, hand_state = c.saveState(), self.hand.state()
+        reference = self._object_in_palm()
+        uid = self.object.uid
 
-    def _object_in_palm(self) -> NDArray[np.float64]:
+        def restore() -> None:
+            c.restoreState(saved)
+            self.hand.restore(hand_state)
+
+        def push(kind: str, vector: NDArray) -> None:
+            if kind == "torque":
+                c.applyExternalTorque(uid, -1, vector.tolist(), c.WORLD_FRAME)
+            else:
+                com = c.getBasePositionAndOrientation(uid)[0]
+                c.applyExternalForce(uid, -1, vector.tolist(), com, c.WORLD_FRAME)
+
+        def moved() -> bool:
+            drift, turn = self._moved_from(reference)
+            return drift > sim.hold_tolerance_mm or turn > sim.hold_rotation_deg
+
+        axes = np.stack([palm_to_world(yaw, np.eye(3)[k]) for k in range(3)])
+        probe = RampProbe(restore, push, counter.step, moved, axes)
+        try:
+            return robustness(probe, self.mass_kg * noise.mass_scale, self.gyration_m, sim)
+        finally:
+            c.removeState(saved)
+
+    def _object_in_palm(self) -> tuple[NDArray[np.float64], Rotation]:
         palm_pos, palm_orn = self.hand.palm_pose_mm()
-        obj_pos, _ = self.world.pose_mm(self.object.uid)
-        return Rotation.from_quat(palm_orn).inv().apply(obj_pos - palm_pos)
+        obj_pos, obj_orn = self.world.pose_mm(self.object.uid)
+        to_palm = Rotation.from_quat(palm_orn).inv()
+        return to_palm.apply(obj_pos - palm_pos), to_palm * Rotation.from_quat(obj_orn)
+
+    def _moved_from(self, reference: tuple[NDArray[np.float64], Rotation]) -> tuple[float, float]:
+        """Drift (mm) and rotation (deg) of the object in the palm frame since ``reference``."""
+        position, orientation = self._object_in_palm()
+        drift = float(np.linalg.norm(position - reference[0]))
+        turn = float(np.degrees((reference[1].inv() * orientation).magnitude()))
+        return drift, turn
 
     def _object_height(self) -> float:
         return float(self.world.pose_mm(self.object.uid)[0][2])
 
 
 class _StepCounter:
-    def __init__(self, world: World) -> None:
-        self.world, self.steps = world, 0
+    """Steps the world with the hand's controller updated before each step, and counts."""
 
-    def step(self, n: int = 1, hand: Hand | None = None) -> None:
-        """Step ``n`` times, updating the hand's motors before each step when given."""
+    def __init__(self, world: World, hand: Hand) -> None:
+        self.world, self.hand, self.steps = world, hand, 0
+
+    def step(self, n: int = 1) -> None:
         for _ in range(n):
-            if hand is not None:
-                hand.drive_fingers()
+            self.hand.drive_fingers()
             self.world.step()
         self.steps += n
 
 
-STRIP_PHASES = ("approach", "closed", "lifted", "shaken")
+STRIP_PHASES = ("approach", "closed", "held")
 
 
 def render_trial_strip(
@@ -228,8 +276,8 @@ def render_trial_strip(
 ) -> TrialResult:
     """Run one trial of ``grip`` (a candidate row) and write a PNG strip of its phases.
 
-    Frames: approach, closed, lifted, shaken, seen obliquely from the side; the trial's noise is
-    drawn from ``seed`` (trial 0 of a grip keyed 0). Returns the trial's result.
+    Frames: approach, closed, held after the lift, seen obliquely from the side; the trial's
+    noise is drawn from ``seed`` (trial 0 of a grip keyed 0). Returns the trial's result.
     """
     from PIL import Image
 

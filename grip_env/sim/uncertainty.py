@@ -7,16 +7,28 @@ from dataclasses import dataclass
 import numpy as np
 
 from grip_env.config import Config
+from grip_env.objects import PlanarObject
 
 
 @dataclass(frozen=True)
 class TrialNoise:
-    """One trial's draws: palm offset (mm, plane frame), yaw error (rad), friction, mass (kg)."""
+    """One trial's draws: palm offset (mm, plane frame), yaw error (rad), friction, mass factor.
+
+    ``friction`` is the pad-object coefficient (the object's side; the pads' is 1, and PyBullet
+    multiplies the two); ``mass_scale`` multiplies the object's nominal mass.
+    """
 
     offset_mm: tuple[float, float]
     yaw_error: float
     friction: float
-    mass_kg: float
+    mass_scale: float
+
+
+def object_mass_kg(obj: PlanarObject, config: Config | None = None) -> float:
+    """Nominal mass: area x thickness x density x the weight class W (``grasp.weight``)."""
+    config = config if config is not None else Config()
+    volume_m3 = obj.area * config.objects.thickness_mm * 1e-9
+    return float(volume_m3 * config.objects.density_kg_m3 * config.grasp.weight)
 
 
 def sample_noise(rng: np.random.Generator, config: Config | None = None) -> TrialNoise:
@@ -24,8 +36,8 @@ def sample_noise(rng: np.random.Generator, config: Config | None = None) -> Tria
 
     Palm position: isotropic Gaussian with std ``uncertainty.position_std_mm`` per axis;
     yaw: Gaussian with std ``yaw_std_rad``; friction: uniform in ``friction_range``, never below
-    the planner's assumed minimum ``grasp.mu``; mass: log-normal around
-    ``sim.mass_per_weight_kg * grasp.weight`` with relative std ``mass_rel_std``.
+    the planner's assumed minimum ``grasp.mu``; mass: a log-normal factor of mean 1 and
+    relative std ``mass_rel_std`` on the object's nominal mass (``object_mass_kg``).
     """
     config = config if config is not None else Config()
     u = config.uncertainty
@@ -35,9 +47,8 @@ def sample_noise(rng: np.random.Generator, config: Config | None = None) -> Tria
     offset = rng.normal(0.0, u.position_std_mm, size=2)
     yaw = rng.normal(0.0, u.yaw_std_rad)
     friction = rng.uniform(low, high)
-    nominal = config.sim.mass_per_weight_kg * config.grasp.weight
     sigma = np.sqrt(np.log1p(u.mass_rel_std**2))
-    mass = nominal * np.exp(rng.normal(-sigma**2 / 2, sigma))
+    mass = np.exp(rng.normal(-sigma**2 / 2, sigma))
     offset_mm = (float(offset[0]), float(offset[1]))
     return TrialNoise(offset_mm, float(yaw), float(friction), float(mass))
 
@@ -50,5 +61,4 @@ def trial_rng(seed: int, grip_key: int, trial: int) -> np.random.Generator:
 def zero_noise(config: Config | None = None) -> TrialNoise:
     """No execution error; friction at the planner's minimum and the nominal mass."""
     config = config if config is not None else Config()
-    mass = config.sim.mass_per_weight_kg * config.grasp.weight
-    return TrialNoise((0.0, 0.0), 0.0, float(config.grasp.mu), float(mass))
+    return TrialNoise((0.0, 0.0), 0.0, float(config.grasp.mu), 1.0)

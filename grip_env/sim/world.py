@@ -16,6 +16,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from grip_env.objects import PlanarObject
+from grip_env.objects.decomposition import MAX_PIECES, inset_convex
+from grip_env.objects.simulated import DEFAULT_TOLERANCE_MM
 
 
 @contextlib.contextmanager
@@ -41,14 +43,23 @@ with _quiet_native_stdout():
     from pybullet_utils.bullet_client import BulletClient
 
 MM = 1e-3  # metres per millimetre
+COLLISION_MARGIN_MM = 1.0
+"""Bullet's margin around a convex mesh (PyBullet's default, measured: a body built from exact
+prisms touched a probe 1 mm away); object prisms are inset by it (at most a quarter thickness)."""
 
 
 @dataclass(frozen=True)
 class Body:
-    """A body in a ``World``: its PyBullet id and the height of its top face (mm)."""
+    """A body in a ``World``: its PyBullet id, the height of its top face (mm), its link count.
+
+    ``inertia_per_kg`` is the principal inertia of the whole body per kilogram (m²), so a new
+    mass rescales it exactly; ``links`` lists every link id of the body (-1 is the base).
+    """
 
     uid: int
     top_mm: float
+    links: tuple[int, ...] = (-1,)
+    inertia_per_kg: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
 class World:
@@ -67,8 +78,11 @@ class World:
         c = self.client
         c.resetSimulation()
         c.setGravity(0, 0, -9.81)
+        # Deterministic overlapping pairs: contacts are solved in an order that does not depend
+        # on the history of the broadphase, so a restored state replays exactly (trial order).
         c.setPhysicsEngineParameter(
-            fixedTimeStep=self.timestep, numSolverIterations=self.solver_iterations
+            fixedTimeStep=self.timestep, numSolverIterations=self.solver_iterations,
+            deterministicOverlappingPairs=1,
         )
 
     def close(self) -> None:
@@ -110,8 +124,13 @@ class World:
         mass_kg: float = 0.3,
         friction: float = 0.5,
         rgba: tuple[float, float, float, float] = (0.15, 0.15, 0.15, 1.0),
+        tolerance_mm: float = DEFAULT_TOLERANCE_MM,
     ) -> Body:
-        """The object extruded to ``thickness_mm`` on z = 0, one exact prism per convex piece.
+        """The object extruded to ``thickness_mm`` on z = 0, one prism per convex piece of its
+        simulated shape (within ``tolerance_mm`` of the contour; ``objects.sim_tolerance_mm``).
+
+        Raises:
+            ValueError: bad thickness or mass, or a shape that cannot be simulated whole.
 
         The body frame is the object's plane frame (x, y in mm scaled to m, origin at the plane
         origin), so planar coordinates map to world coordinates without a transform.
@@ -119,27 +138,49 @@ class World:
         if thickness_mm <= 0 or mass_kg <= 0:
             raise ValueError(f"thickness and mass must be positive, got {thickness_mm}, {mass_kg}")
         c = self.client
+        margin_mm = min(COLLISION_MARGIN_MM, thickness_mm / 4)
         shapes, visuals = [], []
-        for piece in obj.convex_pieces():
-            vertices = _prism(piece, thickness_mm)
+        for piece in obj.simulated_shape(tolerance_mm).pieces:
+            vertices = _collision_prism(piece, thickness_mm, margin_mm)
             shapes.append(c.createCollisionShape(pybullet.GEOM_MESH, vertices=vertices))
             visuals.append(_visual_prism(c, piece, thickness_mm, rgba))
         centroid = [obj.centroid[0] * MM, obj.centroid[1] * MM, thickness_mm * MM / 2]
-        uid = self._compound(shapes, visuals, mass_kg, centroid)
-        c.changeDynamics(
-            uid, -1, lateralFriction=friction, spinningFriction=0.001, rollingFriction=0.0
-        )
-        return Body(uid, thickness_mm)
+        inertia, axes = prism_inertia(obj, thickness_mm)
+        uid = self._compound(shapes, visuals, mass_kg, centroid, axes)
+        body = Body(uid, thickness_mm, tuple(range(-1, len(shapes) - 1)), inertia)
+        for link in body.links:
+            c.changeDynamics(uid, link, collisionMargin=margin_mm * MM)
+        self.set_dynamics(body, mass_kg, friction)
+        return body
+
+    def set_dynamics(self, body: Body, mass_kg: float, friction: float,
+                     spinning_friction: float = 1.0) -> None:
+        """Mass (with the whole body's inertia) and friction on every link of ``body``.
+
+        PyBullet multiplies the friction coefficients of two touching bodies, so ``friction``
+        here is the object's side of the product; every convex piece gets the same value.
+        """
+        c = self.client
+        inertia = [i * mass_kg for i in body.inertia_per_kg]
+        c.changeDynamics(body.uid, -1, mass=mass_kg, localInertiaDiagonal=inertia)
+        for link in body.links:
+            c.changeDynamics(body.uid, link, lateralFriction=friction,
+                             spinningFriction=spinning_friction, rollingFriction=0.0)
 
     def _compound(
-        self, shapes: list[int], visuals: list[int], mass_kg: float, com: list[float]
+        self, shapes: list[int], visuals: list[int], mass_kg: float, com: list[float],
+        axes: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0),
     ) -> int:
         c = self.client
         n = len(shapes)
+        if n > MAX_PIECES:
+            raise ValueError(
+                f"a body of {n} convex pieces exceeds PyBullet's {MAX_PIECES} (base + 127 links)"
+            )
         if n == 1:
             return c.createMultiBody(
                 mass_kg, shapes[0], visuals[0], basePosition=[0, 0, 0],
-                baseInertialFramePosition=com,
+                baseInertialFramePosition=com, baseInertialFrameOrientation=axes,
             )
         # A massless-looking base is avoided: the whole mass sits in the base, links are fixed.
         return c.createMultiBody(
@@ -148,6 +189,7 @@ class World:
             baseVisualShapeIndex=visuals[0],
             basePosition=[0, 0, 0],
             baseInertialFramePosition=com,
+            baseInertialFrameOrientation=axes,
             linkMasses=[0.0] * (n - 1),
             linkCollisionShapeIndices=shapes[1:],
             linkVisualShapeIndices=visuals[1:],
@@ -215,6 +257,32 @@ class World:
             width, height, view, projection, renderer=pybullet.ER_TINY_RENDERER
         )
         return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[..., :3]
+
+
+def prism_inertia(
+    obj: PlanarObject, thickness_mm: float
+) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
+    """Principal inertia per kg (m²) of the uniform prism and its principal axes (quaternion).
+
+    From the whole polygon's second central moments: about the in-plane principal axes
+    ``l_other + t²/12``, about z ``l1 + l2``; the axes turn about z by the major axis angle.
+    """
+    l_minor, l_major = np.linalg.eigvalsh(obj.second_moments) * MM**2
+    t2 = (thickness_mm * MM) ** 2 / 12.0
+    inertia = (float(l_minor + t2), float(l_major + t2), float(l_major + l_minor))
+    half = obj.major_axis_angle / 2.0
+    return inertia, (0.0, 0.0, float(np.sin(half)), float(np.cos(half)))
+
+
+def _collision_prism(
+    piece: NDArray[np.float64], thickness_mm: float, margin_mm: float
+) -> list[list[float]]:
+    """Prism vertices (m) inset by the collision margin on every face: Bullet rounds a convex
+    mesh outward by its margin, so the surface it collides with is then the piece's own."""
+    inset = inset_convex(piece, margin_mm)
+    bottom = [[x * MM, y * MM, margin_mm * MM] for x, y in inset]
+    top = [[x * MM, y * MM, (thickness_mm - margin_mm) * MM] for x, y in inset]
+    return bottom + top
 
 
 def _prism(piece: NDArray[np.float64], thickness_mm: float) -> list[list[float]]:

