@@ -73,12 +73,12 @@ def test_grey_level_mask_gives_sub_pixel_edge() -> None:
     assert contour[:, 0].max() == pytest.approx(7 + 1 / 3)
 
 
-def test_largest_component_is_kept() -> None:
+def test_a_mask_of_several_parts_is_refused() -> None:
     mask = np.zeros((40, 40), dtype=bool)
     mask[2:6, 2:6] = True
     mask[10:30, 10:35] = True
-    obj = PlanarObject.from_mask(mask, 1.0)
-    assert obj.area == pytest.approx(20 * 25 - 0.5)
+    with pytest.raises(ValueError, match="2 separate parts"):
+        PlanarObject.from_mask(mask, 1.0)
 
 
 @pytest.mark.parametrize(

@@ -11,6 +11,9 @@ import shapely
 from numpy.typing import ArrayLike, NDArray
 from shapely.geometry import Polygon
 
+from grip_env.objects.decomposition import ccw, exact_pieces
+from grip_env.objects.simulated import DEFAULT_TOLERANCE_MM, SimulatedShape, simulated_shape
+
 _MIN_AREA_MM2 = 1e-6
 
 
@@ -43,11 +46,13 @@ class PlanarObject:
         """An object from a binary (or grey-level in [0, 1]) image, row 0 at the top.
 
         The contour is the 0.5 iso-line of the image (sub-pixel), in mm with y pointing up.
-        The largest outer contour is kept.
-        """
-        from grip_env.perception.segmentation import contour_from_mask
 
-        return cls(contour_from_mask(mask, mm_per_px), name=name, source="mask")
+        Raises:
+            ValueError: a bad or empty mask, or one with several parts or holes.
+        """
+        from grip_env.perception.segmentation import contour_from_mask, one_region
+
+        return cls(contour_from_mask(one_region(mask), mm_per_px), name=name, source="mask")
 
     @classmethod
     def from_image(
@@ -124,17 +129,29 @@ class PlanarObject:
         return inside.reshape(pts.shape[:-1])
 
     def convex_pieces(self) -> list[NDArray[np.float64]]:
-        """Exact convex pieces covering the object (the contour itself when convex)."""
+        """Exact convex pieces tiling the contour (the contour itself when convex), unbounded in
+        number; the simulated body uses :meth:`simulated_shape` instead."""
         return [piece.copy() for piece in self._convex_pieces]
 
     @cached_property
     def _convex_pieces(self) -> list[NDArray[np.float64]]:
-        if self.is_convex:
-            return [self.contour.copy()]
-        triangles = shapely.constrained_delaunay_triangles(self._polygon)
-        pieces = [_ccw(np.asarray(t.exterior.coords)[:-1]) for t in triangles.geoms]
-        pieces = [p for p in pieces if Polygon(p).area > _MIN_AREA_MM2]
-        return merge_convex(pieces)
+        return exact_pieces(self.contour)
+
+    def simulated_shape(self, tolerance_mm: float = DEFAULT_TOLERANCE_MM) -> SimulatedShape:
+        """The shape its simulated body has: at most ``MAX_PIECES`` convex pieces within
+        ``tolerance_mm`` (Hausdorff) of the contour (cached per tolerance).
+
+        Raises:
+            ValueError: the shape cannot be simulated whole within the tolerance.
+        """
+        key = float(tolerance_mm)
+        if key not in self._simulated:
+            self._simulated[key] = simulated_shape(self.contour, key, self.name)
+        return self._simulated[key]
+
+    @cached_property
+    def _simulated(self) -> dict[float, SimulatedShape]:
+        return {}
 
     # ----------------------------------------------------------------- transforms
     def transformed(
@@ -183,55 +200,6 @@ def polygon_moments(
     return float(area), np.array([cx, cy]), np.array([[mxx, mxy], [mxy, myy]])
 
 
-def merge_convex(pieces: list[NDArray[np.float64]]) -> list[NDArray[np.float64]]:
-    """Merge CCW convex pieces across shared edges while the union stays convex (Hertel-Mehlhorn).
-
-    Fewer, larger pieces make cheaper and better-behaved collision shapes than raw triangles.
-    """
-    polys = [[tuple(v) for v in piece] for piece in pieces]
-    merged = True
-    while merged:
-        merged = False
-        edges = {}
-        for index, poly in enumerate(polys):
-            for k in range(len(poly)):
-                edges[(poly[k], poly[(k + 1) % len(poly)])] = index
-        for (a, b), i in edges.items():
-            j = edges.get((b, a))
-            if j is None or j == i:
-                continue
-            union = _splice(polys[i], polys[j], a, b)
-            if _is_convex(union):
-                polys[i] = union
-                del polys[j]
-                merged = True
-                break
-    return [np.array(poly, dtype=float) for poly in polys]
-
-
-def _splice(first: list, second: list, a: tuple, b: tuple) -> list:
-    """Union of two CCW polygons sharing the edge a->b in ``first`` (b->a in ``second``)."""
-    i = first.index(b)
-    rotated_first = first[i:] + first[:i]  # starts at b, ends at a
-    j = second.index(a)
-    rotated_second = second[j:] + second[:j]  # starts at a, ends at b
-    return rotated_first + rotated_second[1:-1]
-
-
-def _is_convex(poly: list) -> bool:
-    pts = np.asarray(poly, dtype=float)
-    d1 = np.roll(pts, -1, axis=0) - pts
-    d2 = np.roll(d1, -1, axis=0)
-    cross = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
-    return bool(np.all(cross >= -1e-9 * np.abs(d1).max() ** 2))
-
-
-def _ccw(vertices: NDArray[np.float64]) -> NDArray[np.float64]:
-    x, y = vertices[:, 0], vertices[:, 1]
-    signed = (x * np.roll(y, -1) - np.roll(x, -1) * y).sum()
-    return vertices if signed > 0 else vertices[::-1].copy()
-
-
 def _validated_contour(contour: ArrayLike, name: str) -> NDArray[np.float64]:
     try:
         pts = np.array(contour, dtype=float)
@@ -258,4 +226,4 @@ def _validated_contour(contour: ArrayLike, name: str) -> NDArray[np.float64]:
         raise ValueError(f"object {name!r}: polygon is not simple ({reason})")
     if polygon.area <= _MIN_AREA_MM2:
         raise ValueError(f"object {name!r}: polygon has zero area")
-    return _ccw(pts)
+    return ccw(pts)

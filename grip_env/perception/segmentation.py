@@ -18,6 +18,8 @@ from skimage.filters import threshold_otsu
 from skimage.measure import find_contours
 
 _MIN_CONTRAST = 1e-6  # grey-level range below which an image is uniform (no object)
+SPECK_FRACTION = 1e-3
+"""Parts and holes of a user's mask smaller than this fraction of the object are noise."""
 
 
 def contour_from_mask(mask: ArrayLike, mm_per_px: float) -> NDArray[np.float64]:
@@ -57,15 +59,47 @@ def segment(grey: ArrayLike) -> NDArray[np.bool_]:
         raise ValueError("grey image contains NaN or infinite values")
     if np.ptp(image) <= _MIN_CONTRAST * max(1.0, float(np.abs(image).max())):
         raise ValueError("image has no object: it is uniform")
-    bright = image > threshold_otsu(image)
-    border = np.concatenate([bright[0], bright[-1], bright[1:-1, 0], bright[1:-1, -1]])
-    foreground = ~bright if border.mean() > 0.5 else bright
+    foreground = _foreground(image)
     labels, count = ndimage.label(foreground, structure=np.ones((3, 3)))
     if count == 0:
         raise ValueError("image has no object: no pixel differs from the background")
     sizes = np.bincount(labels.ravel())[1:]
     largest = labels == 1 + int(np.argmax(sizes))
     return ndimage.binary_fill_holes(largest)
+
+
+def one_region(mask: ArrayLike) -> NDArray[np.float64]:
+    """A user's object mask, checked to be one region without holes.
+
+    Parts and holes smaller than ``SPECK_FRACTION`` of the object are noise: dropped and filled.
+
+    Raises:
+        ValueError: a bad or empty mask, several parts (8-connected) or holes (4-connected).
+    """
+    image = _validated_mask(mask).copy()
+    inside = image > 0.5
+    labels, _ = ndimage.label(inside, structure=np.ones((3, 3)))
+    sizes = np.bincount(labels.ravel())[1:]
+    speck = SPECK_FRACTION * sizes.max()
+    if np.count_nonzero(sizes > speck) > 1:
+        parts = sorted((int(n) for n in sizes[sizes > speck]), reverse=True)
+        raise ValueError(
+            f"mask has {len(parts)} separate parts ({', '.join(map(str, parts[:5]))} px): "
+            "give one object per mask"
+        )
+    region = labels == 1 + int(np.argmax(sizes))
+    filled = ndimage.binary_fill_holes(region)
+    holes, _ = ndimage.label(filled & ~region)
+    hole_sizes = np.bincount(holes.ravel())[1:]
+    if np.any(hole_sizes > speck):
+        found = sorted((int(n) for n in hole_sizes[hole_sizes > speck]), reverse=True)
+        raise ValueError(
+            f"mask has {len(found)} hole(s) ({', '.join(map(str, found[:5]))} px): "
+            "a planar object here is one region without holes"
+        )
+    image[inside & ~region] = 0.0
+    image[filled & ~inside] = 1.0
+    return image
 
 
 def grey_from_rgb(image: NDArray) -> NDArray[np.float64]:
@@ -98,9 +132,24 @@ def mask_from_image_file(path: str | Path) -> NDArray[np.bool_]:
     except Exception as exc:  # imageio raises many types for unreadable data
         raise ValueError(f"cannot read image file {path}: {exc}") from None
     try:
-        return segment(grey_from_rgb(image))
+        return one_region(_foreground(_validated_grey(grey_from_rgb(image)))) > 0.5
     except ValueError as exc:
         raise ValueError(f"image file {path}: {exc}") from None
+
+
+def _validated_grey(image: NDArray[np.float64]) -> NDArray[np.float64]:
+    if not np.all(np.isfinite(image)):
+        raise ValueError("grey image contains NaN or infinite values")
+    if np.ptp(image) <= _MIN_CONTRAST * max(1.0, float(np.abs(image).max())):
+        raise ValueError("image has no object: it is uniform")
+    return image
+
+
+def _foreground(image: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Otsu threshold; the object is the class that does not dominate the image border."""
+    bright = image > threshold_otsu(image)
+    border = np.concatenate([bright[0], bright[-1], bright[1:-1, 0], bright[1:-1, -1]])
+    return ~bright if border.mean() > 0.5 else bright
 
 
 def _validated_mask(mask: ArrayLike) -> NDArray[np.float64]:
