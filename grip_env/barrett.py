@@ -21,22 +21,42 @@ their shared region for every psi. The palm centre's position along the thumb li
 it is placed where e3 equals the finger extension at the fingers' mean depth d ahead of the thumb,
 e3 = (25^2 + d^2) / (2 d), moved as little as needed to keep every extension >= min_extension_mm.
 
+Reach is physical: finger i's contact lies on its force line at the reach r_i = (S_i - P_i) . F_i
+from its line origin S_i (its spread axis; O for the thumb, so r3 = e3), and r_i must lie within
+the fingertip reaches of the URDF finger's coupled closing (``FINGER_REACH_MM``,
+``THUMB_REACH_MM``: joint 3 = joint 2 / 3 over ``CLOSING_JOINT2_RAD``, where the pad corner makes
+the contact). The check runs inside the thumb search, so a grasp whose C1-best direction is out
+of reach can still give a configuration at another direction; so does an optional further test
+of the reaches (``executable``, e.g. the executor's). Two-finger grasps move the palm along the
+thumb line, as little as needed, into the interval where all three reaches are within range.
+e_i = |P_i - O| stays what the features (C3, C6) use.
+
 Rejected: theta outside [0, max_spread_rad]; any e_i outside [min_extension_mm, max_extension_mm];
-e3 <= 0; C_C behind the thumb; a force not pointing into the object (delta_i >= pi/2); a finger or
-the thumb whose approach (its force line from 1 mm to 60 mm behind the contact) enters the object.
+any reach r_i outside its finger's range; e3 <= 0; C_C behind the thumb; a force not pointing into
+the object (delta_i >= pi/2); a finger or the thumb whose approach enters the object. The approach
+is the finger's footprint swept back along its force line, from 1 mm to 60 mm behind the contact:
+its centre line, and its two edges ``finger_width_mm / 2`` to either side from
+``edge_start_mm(params, config)`` behind the contact. Closer than that, a flat fingertip on the
+contacted face itself, met at up to the search's largest deviation, would reach it with its edge:
+that is the contact's business (the point-contact model), not an obstacle on the way in.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
 
 from grip_env.config import SynthesisConfig
-from grip_env.grasps import Grasps
-from grip_env.objects import PlanarObject
-from grip_env.params import GraspParams
+from grip_env.features import force_line_from_deviations
+from grip_env.params import DEFAULT_PARAMS, GraspParams
+
+if TYPE_CHECKING:
+    from grip_env.grasps import Grasps
+    from grip_env.objects import PlanarObject
 
 # Hand geometry (barrett-bh8-280.md; link lengths are the manufacturer's figures).
 SPREAD_AXIS_OFFSET_MM = 25.0  #: spread axes of fingers 1 and 2 at (+-25, 0) in the palm
@@ -44,20 +64,87 @@ KNUCKLE_RADIAL_MM = 50.0  #: joint 2 from its spread axis, radially
 THUMB_KNUCKLE_MM = 50.0  #: thumb joint 2 from the palm centre
 PROXIMAL_LINK_MM = 70.0  #: joint 2 to joint 3
 DISTAL_LINK_MM = 50.0  #: joint 3 to fingertip
+DISTAL_PAD_MM = 8.0  #: half thickness of the distal link: its pad face is this far off its axis
+DISTAL_BEND_RAD = float(np.deg2rad(42.0))  #: distal link bent towards the palm at joint 3 = 0
 PALM_HEIGHT_MM = 84.0  #: palm base to finger plane
-FINGER_WIDTH_MM = 25.0
 MAX_SPREAD_RAD = np.pi  #: mechanical spread range is [0, pi]
 JOINT2_RANGE_RAD = (0.0, 2.44)
 JOINT3_RANGE_RAD = (0.0, 0.84)
+JOINT_COUPLING = 1.0 / 3.0  #: joint 3 follows joint 2 / 3 until breakaway (the Barrett clutch)
+
+
+def fingertip_reach(joint2: NDArray, knuckle_mm: float = KNUCKLE_RADIAL_MM) -> NDArray:
+    """Reach (mm) of the fingertip pad corner from the finger's line origin, coupled closing.
+
+    In the finger's closing plane the distal link points at a = q2 + bend + q3 (q3 = q2 / 3) and the
+    pad corner sits ``DISTAL_PAD_MM`` off its tip on the closing side:
+    r = knuckle + proximal cos q2 + distal cos a - pad sin a.
+    """
+    q2 = np.asarray(joint2, dtype=float)
+    a = q2 + DISTAL_BEND_RAD + JOINT_COUPLING * q2
+    return (knuckle_mm + PROXIMAL_LINK_MM * np.cos(q2) + DISTAL_LINK_MM * np.cos(a)
+            - DISTAL_PAD_MM * np.sin(a))
+
+
+#: Direction of the distal link in its closing plane (a, from the palm plane outwards) at which
+#: its pad corner is what touches an object's side: past vertical (the link leans inwards below
+#: the corner, so nothing above the contact height is further in; 5 degrees past, as
+#: ``grip_env.finger.MIN_PAD_ANGLE``), up to pointing straight back at the finger's axis (beyond
+#: that its back corner is further in than its pad).
+PAD_ANGLE_RANGE_RAD = (float(np.deg2rad(95.0)), float(np.pi))
+#: Joint 2 over which the coupled closing touches with its pad: PAD_ANGLE_RANGE_RAD at
+#: a = q2 + bend + q2 / 3, within joint 2's and joint 3's ranges. The reach falls monotonically.
+_PAD_JOINT2 = [(a - DISTAL_BEND_RAD) / (1 + JOINT_COUPLING) for a in PAD_ANGLE_RANGE_RAD]
+CLOSING_JOINT2_RAD = (
+    float(max(JOINT2_RANGE_RAD[0], _PAD_JOINT2[0])),
+    float(min(JOINT2_RANGE_RAD[1], JOINT3_RANGE_RAD[1] / JOINT_COUPLING, _PAD_JOINT2[1])),
+)
+#: Shortest and longest fingertip reach of fingers 1 and 2 from their spread axes (mm).
+FINGER_REACH_MM = (float(fingertip_reach(CLOSING_JOINT2_RAD[1])),
+                   float(fingertip_reach(CLOSING_JOINT2_RAD[0])))
+#: Shortest and longest fingertip reach of the thumb from the palm centre (mm).
+THUMB_REACH_MM = (float(fingertip_reach(CLOSING_JOINT2_RAD[1], THUMB_KNUCKLE_MM)),
+                  float(fingertip_reach(CLOSING_JOINT2_RAD[0], THUMB_KNUCKLE_MM)))
+REACH_RANGES_MM = (FINGER_REACH_MM, FINGER_REACH_MM, THUMB_REACH_MM)  #: in finger order 1, 2, 3
+#: Slack on the reach range for rounding (mm): a palm placed exactly at a bound stays inside.
+REACH_TOLERANCE_MM = 1e-9
+_CLOSING_GRID = np.linspace(*CLOSING_JOINT2_RAD, 2001)
+
+
+def closing_joint2(reach_mm: NDArray, knuckle_mm: float = KNUCKLE_RADIAL_MM) -> NDArray:
+    """Joint 2 (rad) of the coupled closing whose pad corner reaches ``reach_mm`` (inverse of
+    :func:`fingertip_reach`, to well below a micrometre).
+
+    Raises:
+        ValueError: a reach outside [shortest, longest] of the finger (it is never clipped).
+    """
+    reach = np.asarray(reach_mm, dtype=float)
+    shortest = float(fingertip_reach(CLOSING_JOINT2_RAD[1], knuckle_mm))
+    longest = float(fingertip_reach(CLOSING_JOINT2_RAD[0], knuckle_mm))
+    bad = ~((reach >= shortest - REACH_TOLERANCE_MM) & (reach <= longest + REACH_TOLERANCE_MM))
+    if bad.any():
+        raise ValueError(f"reach {float(reach[bad].flat[0])!r} mm outside the finger's range "
+                         f"[{shortest:.3f}, {longest:.3f}] mm")
+    grid = fingertip_reach(_CLOSING_GRID, knuckle_mm)
+    q2 = np.interp(-reach, -grid, _CLOSING_GRID)
+    for _ in range(2):  # Newton steps on the smooth, monotonic reach curve
+        a = q2 + DISTAL_BEND_RAD + JOINT_COUPLING * q2
+        slope = -PROXIMAL_LINK_MM * np.sin(q2) - (1.0 + JOINT_COUPLING) * (
+            DISTAL_LINK_MM * np.sin(a) + DISTAL_PAD_MM * np.cos(a))
+        q2 = np.clip(q2 - (fingertip_reach(q2, knuckle_mm) - reach) / slope, *CLOSING_JOINT2_RAD)
+    return q2
 
 #: The approach of a finger: its force line from APPROACH_START_MM to APPROACH_LENGTH_MM behind
 #: its contact, sampled at APPROACH_SAMPLES points, must stay outside the object.
 APPROACH_START_MM = 1.0
 APPROACH_LENGTH_MM = 60.0
 APPROACH_SAMPLES = 12
-
+#: The edges are checked this far inside the finger's width (mm): an edge running exactly along a
+#: side of the object grazes it, and rounding must not decide whether it enters.
+APPROACH_GRAZE_MM = 1e-6
 Array = NDArray[np.float64]
-DEFAULT_PARAMS = GraspParams()
+#: An extra test of the hand's reach: (n, 3) finger reaches -> (n,) whether the hand executes them.
+ReachTest = Callable[[Array], NDArray[np.bool_]]
 DEFAULT_SYNTHESIS = SynthesisConfig()
 
 
@@ -139,6 +226,17 @@ def search_half_width(params: GraspParams) -> float:
     return min(2.0 * params.friction_angle, np.pi / 2 - 0.05)
 
 
+def edge_start_mm(params: GraspParams, config: SynthesisConfig) -> float:
+    """How far behind its contact a finger's approach edges are checked (mm).
+
+    A flat fingertip ``finger_width_mm`` wide meeting a straight face at deviation delta has its
+    edges width / 2 * tan(delta) behind the contact; this is that at the search's largest delta
+    (about 12 mm for 25 mm and mu = 0.4), and never less than ``APPROACH_START_MM``.
+    """
+    half = 0.5 * config.finger_width_mm
+    return max(APPROACH_START_MM, half * float(np.tan(search_half_width(params))))
+
+
 def force_line_value(forces: Array, normals: Array, friction_angle: float) -> Array:
     """C1 = (4k/3) sum(delta_i^2) / arctan(mu)^2 for (..., 3, 2) forces and normals."""
     return _force_line_from_cos(np.moveaxis(np.sum(forces * normals, axis=-1), -1, 0),
@@ -150,27 +248,48 @@ def configurations(
     obj: PlanarObject,
     params: GraspParams = DEFAULT_PARAMS,
     config: SynthesisConfig = DEFAULT_SYNTHESIS,
+    executable: ReachTest | None = None,
 ) -> Configurations:
     """The best reachable Barrett configuration for each grasp and thumb choice.
 
     Three-finger grasps give up to three configurations (one per thumb contact), two-finger
-    grasps at most one.
+    grasps at most one. ``executable``, when given, is a further test of the finger reaches
+    (for example the executor's, with the contact heights it plans): it runs inside the search,
+    with the approach check, so a grasp keeps its best direction that passes it.
     """
     if config.min_extension_mm >= config.max_extension_mm:
         raise ValueError(
             f"min_extension_mm ({config.min_extension_mm}) must be below max_extension_mm "
             f"({config.max_extension_mm})")
     offsets = np.linspace(-1.0, 1.0, config.thumb_search_steps) * search_half_width(params)
+    edge = edge_start_mm(params, config)
+
+    def check(contacts: Array, forces: Array, palm: Array) -> NDArray[np.bool_]:
+        ok = approach_clear(obj, contacts, forces, config.finger_width_mm, edge)
+        if executable is not None and ok.any():
+            ok[ok] = executable(reaches_of(contacts[ok], forces[ok], palm[ok]))
+        return ok
+
     three = np.nonzero(~grasps.two_finger)[0]
     two = np.nonzero(grasps.two_finger)[0]
     return Configurations.concatenate([
-        _three_finger(grasps, three, obj, params, config, offsets),
-        _two_finger(grasps, two, obj, params, config, offsets),
+        _three_finger(grasps, three, params, config, offsets, check),
+        _two_finger(grasps, two, params, config, offsets, check),
     ])
 
 
+def reaches_of(contacts: Array, forces: Array, palm: Array) -> Array:
+    """(..., 3) reach r_i = (S_i - P_i) . F_i of each finger from its line origin (S_1, S_2 the
+    spread axes, O for the thumb), for (..., 3, 2) contacts and forces and (..., 2) palm centres."""
+    thumb = forces[..., 2, :]
+    x = np.stack([thumb[..., 1], -thumb[..., 0]], axis=-1)  # hand x: F3 turned 90 deg clockwise
+    offset = SPREAD_AXIS_OFFSET_MM * x
+    origins = np.stack([palm + offset, palm - offset, palm], axis=-2)
+    return np.einsum("...ij,...ij->...i", origins - contacts, forces)
+
+
 # ----------------------------------------------------------------------------- three fingers
-def _three_finger(grasps, index, obj, params, config, offsets) -> Configurations:
+def _three_finger(grasps, index, params, config, offsets, check) -> Configurations:
     # one row per (grasp, thumb choice), one column per thumb direction; hand-frame components.
     # Contacts a, b are the two non-thumb contacts; finger 1 is the one on the hand's +x side.
     grasp, thumb = np.repeat(index, 3), np.tile(np.arange(3), len(index))
@@ -197,10 +316,14 @@ def _three_finger(grasps, index, obj, params, config, offsets) -> Configurations
         sin_t, cos_t = x1 / reach, (y1 - c) / reach
         palm_y = c + SPREAD_AXIS_OFFSET_MM * cos_t / sin_t
     e1, e2 = np.hypot(x1, y1 - palm_y), np.hypot(x2, y2 - palm_y)
+    # reach r_i = (S_i - P_i) . F_i with S_1,2 = (+-25, palm_y), F_1,2 = (-+sin, -cos); r3 = e3
+    offset = SPREAD_AXIS_OFFSET_MM
+    reaches = ((x1 - offset) * sin_t + (y1 - palm_y) * cos_t,
+               -(x2 + offset) * sin_t + (y2 - palm_y) * cos_t, palm_y)
     cos_delta = (-sin_t * n1x - cos_t * n1y, sin_t * n2x - cos_t * n2y, np.cos(offsets))
     feasible = (x1 > 0) & (x2 < 0) & (c > 0) & (sin_t > 0)
     feasible &= cos_t >= np.cos(config.max_spread_rad)
-    feasible &= _reachable((e1, e2, palm_y), cos_delta, config)
+    feasible &= _reachable((e1, e2, palm_y), reaches, cos_delta, config)
     cost = _force_line_from_cos(cos_delta, params.friction_angle)
 
     def finger_of(rows, cols):
@@ -214,7 +337,7 @@ def _three_finger(grasps, index, obj, params, config, offsets) -> Configurations
         spread = np.arctan2(sin_t[rows, cols], cos_t[rows, cols])
         return contacts, finger_forces(yaw[rows, cols], spread), palm
 
-    rows, cols, contacts, forces, palm = _best_clear(cost, feasible, obj, assemble)
+    rows, cols, contacts, forces, palm = _best_clear(cost, feasible, assemble, check)
     pick = (rows, cols)
     return _configurations(
         grasps, grasp[rows], finger_of(rows, cols), contacts=contacts, forces=forces,
@@ -225,7 +348,7 @@ def _three_finger(grasps, index, obj, params, config, offsets) -> Configurations
 
 
 # ------------------------------------------------------------------------------- two fingers
-def _two_finger(grasps, index, obj, params, config, offsets) -> Configurations:
+def _two_finger(grasps, index, params, config, offsets, check) -> Configurations:
     p3, n3 = grasps.contacts[index, 2], grasps.normals[index, 2]
     yaw = np.arctan2(n3[:, 1], n3[:, 0])[:, None] + offsets[None, :]
     frame = _HandFrame(yaw)
@@ -242,12 +365,14 @@ def _two_finger(grasps, index, obj, params, config, offsets) -> Configurations:
         fractions.append(u)
         depths.append(ay + u * (by - ay))
     feasible &= (depths[0] > 0) & (depths[1] > 0)
-    palm_y = _two_finger_palm(0.5 * (depths[0] + depths[1]), config.min_extension_mm)
+    palm_y = _within_reach(_two_finger_palm(0.5 * (depths[0] + depths[1]),
+                                            config.min_extension_mm), depths)
     extensions = np.stack([np.hypot(SPREAD_AXIS_OFFSET_MM, depths[0] - palm_y),
                            np.hypot(SPREAD_AXIS_OFFSET_MM, depths[1] - palm_y), palm_y], -1)
+    reaches = (depths[0] - palm_y, depths[1] - palm_y, palm_y)  # F_1,2 = -y, S_1,2 at palm_y
     _, nfy = frame.coordinates(grasps.normals[index, 0])
     cos_delta = (-nfy, -nfy, np.cos(offsets))
-    feasible &= _reachable(tuple(np.moveaxis(extensions, -1, 0)), cos_delta, config)
+    feasible &= _reachable(tuple(np.moveaxis(extensions, -1, 0)), reaches, cos_delta, config)
     cost = _force_line_from_cos(cos_delta, params.friction_angle)
 
     def assemble(rows, cols):
@@ -257,7 +382,7 @@ def _two_finger(grasps, index, obj, params, config, offsets) -> Configurations:
         palm = p3[rows] + palm_y[rows, cols, None] * frame.y[rows, cols]
         return contacts, finger_forces(yaw[rows, cols], np.zeros(len(rows))), palm
 
-    rows, cols, contacts, forces, palm = _best_clear(cost, feasible, obj, assemble)
+    rows, cols, contacts, forces, palm = _best_clear(cost, feasible, assemble, check)
     pick = (rows, cols)
     return _configurations(
         grasps, index[rows], np.tile(np.arange(3), (len(rows), 1)), contacts=contacts,
@@ -296,6 +421,14 @@ def _two_finger_palm(depth: Array, min_extension: float) -> Array:
     return np.where(ok, balanced, np.where(use_behind, behind, beyond))
 
 
+def _within_reach(palm_y: Array, depths: list[Array]) -> Array:
+    """``palm_y`` moved as little as needed so that the thumb's reach palm_y and the fingers'
+    reaches depth_i - palm_y are all within range (unchanged when no such palm_y exists)."""
+    low = np.maximum(THUMB_REACH_MM[0], np.maximum(*depths) - FINGER_REACH_MM[1])
+    high = np.minimum(THUMB_REACH_MM[1], np.minimum(*depths) - FINGER_REACH_MM[0])
+    return np.where(low <= high, np.clip(palm_y, low, np.maximum(low, high)), palm_y)
+
+
 # ---------------------------------------------------------------------------------- helpers
 class _HandFrame:
     """Hand axes for a (K, S) grid of yaws, and hand coordinates of (K, 2) world vectors."""
@@ -311,11 +444,14 @@ class _HandFrame:
         return vx * self.sin - vy * self.cos, vx * self.cos + vy * self.sin
 
 
-def _reachable(extensions, cos_delta, config: SynthesisConfig) -> NDArray[np.bool_]:
-    """Extensions (e1, e2, e3) within range, e3 > 0, every force into the object (delta < pi/2)."""
+def _reachable(extensions, reaches, cos_delta, config: SynthesisConfig) -> NDArray[np.bool_]:
+    """Extensions (e1, e2, e3) within the configured range, e3 > 0, reaches (r1, r2, r3) within
+    the fingers' physical range, and every force into the object (delta < pi/2)."""
     ok = extensions[2] > 0
     for e in extensions:
         ok &= (e >= config.min_extension_mm) & (e <= config.max_extension_mm)
+    for reach, (shortest, longest) in zip(reaches, REACH_RANGES_MM, strict=True):
+        ok &= (reach >= shortest - REACH_TOLERANCE_MM) & (reach <= longest + REACH_TOLERANCE_MM)
     for cosine in cos_delta:
         ok &= cosine > 0
     return ok
@@ -324,28 +460,23 @@ def _reachable(extensions, cos_delta, config: SynthesisConfig) -> NDArray[np.boo
 def _force_line_from_cos(cos_delta, friction_angle: float) -> Array:
     """C1 from the cosines (cos delta_1, cos delta_2, cos delta_3) of the force deviations."""
     deltas = [np.arccos(np.clip(cosine, -1.0, 1.0)) for cosine in cos_delta]
-    outside = np.zeros(np.broadcast_shapes(*(d.shape for d in deltas)), dtype=bool)
-    total = np.zeros(outside.shape)
-    for delta in deltas:
-        outside |= delta > friction_angle
-        total += delta**2
-    return np.where(outside, 4.0, 4.0 / 3.0) * total / friction_angle**2
+    return force_line_from_deviations(deltas, friction_angle)
 
 
-def _best_clear(cost, feasible, obj, assemble):
-    """Per row, the cheapest feasible column whose finger approaches are clear of the object.
+def _best_clear(cost, feasible, assemble, check):
+    """Per row, the cheapest feasible column that passes ``check(contacts, forces, palm)`` (its
+    finger approaches are clear of the object, and any further reach test).
 
-    Approaches are checked lazily: the cheapest column of every open row at once, then the next
-    cheapest for the rows whose candidate collided, and so on. Returns the rows that found one,
-    their columns, and ``assemble(rows, cols)`` (contacts, forces, palm) for them.
+    Checks run lazily: the cheapest column of every open row at once, then the next cheapest for
+    the rows whose candidate failed, and so on. Returns the rows that found one, their columns,
+    and ``assemble(rows, cols)`` (contacts, forces, palm) for them.
     """
     cost = np.where(feasible, cost, np.inf)
     best = np.full(len(cost), -1)
     open_rows = np.nonzero(np.isfinite(cost).any(axis=1))[0]
     while len(open_rows):
         column = np.argmin(cost[open_rows], axis=1)
-        contacts, forces, _ = assemble(open_rows, column)
-        clear = approach_clear(obj, contacts, forces)
+        clear = check(*assemble(open_rows, column))
         best[open_rows[clear]] = column[clear]
         cost[open_rows[~clear], column[~clear]] = np.inf
         open_rows = open_rows[~clear]
@@ -354,13 +485,26 @@ def _best_clear(cost, feasible, obj, assemble):
     return rows, best[rows], *assemble(rows, best[rows])
 
 
-def approach_clear(obj: PlanarObject, contacts: Array, forces: Array) -> NDArray[np.bool_]:
-    """Whether every finger's approach path behind its contact stays outside the object.
+def approach_clear(
+    obj: PlanarObject, contacts: Array, forces: Array, width_mm: float = 0.0,
+    edge_start: float = APPROACH_START_MM,
+) -> NDArray[np.bool_]:
+    """Whether every finger's approach behind its contact stays outside the object.
 
-    ``contacts`` and ``forces`` are (..., 3, 2); returns (...,) booleans.
+    The centre line is sampled from ``APPROACH_START_MM`` to ``APPROACH_LENGTH_MM`` behind the
+    contact; with ``width_mm`` > 0 the finger's two edges, ``width_mm / 2`` to either side, are
+    sampled from ``edge_start`` to ``APPROACH_LENGTH_MM``. ``contacts`` and ``forces`` are
+    (..., 3, 2); returns (...,) booleans.
     """
     behind = np.linspace(APPROACH_START_MM, APPROACH_LENGTH_MM, APPROACH_SAMPLES)
     samples = contacts[..., None, :] - behind[:, None] * forces[..., None, :]
+    if width_mm > 0:
+        half = max(0.5 * width_mm - APPROACH_GRAZE_MM, 0.0)
+        side = half * np.stack([-forces[..., 1], forces[..., 0]], axis=-1)
+        edge = np.linspace(edge_start, APPROACH_LENGTH_MM, APPROACH_SAMPLES)
+        line = contacts[..., None, :] - edge[:, None] * forces[..., None, :]
+        samples = np.concatenate([samples, line + side[..., None, :], line - side[..., None, :]],
+                                 axis=-2)
     return ~obj.contains(samples).any(axis=(-1, -2))
 
 

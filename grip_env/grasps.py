@@ -35,17 +35,17 @@ from itertools import combinations
 import numpy as np
 from numpy.typing import NDArray
 
+from grip_env.barrett import DEFAULT_SYNTHESIS, SPREAD_AXIS_OFFSET_MM
 from grip_env.config import SynthesisConfig
 from grip_env.objects import PlanarObject
-from grip_env.params import GraspParams
+from grip_env.params import DEFAULT_PARAMS, GraspParams
 from grip_env.perception.regions import Regions
 
 #: Contacts sit at fractions of their region in [END_FRACTION, 1 - END_FRACTION].
 END_FRACTION = 0.15
 #: Lateral offset of fingers 1 and 2 from the thumb line in a two-finger grasp (mm): at spread 0
-#: each finger's force line runs through its spread axis, 25 mm beside the palm centre
-#: (``grip_env.barrett.SPREAD_AXIS_OFFSET_MM``, which imports this module and so cannot be used).
-HALF_FINGER_BASE_MM = 25.0
+#: each finger's force line runs through its spread axis, 25 mm beside the palm centre.
+HALF_FINGER_BASE_MM = SPREAD_AXIS_OFFSET_MM
 #: Grasps on the same regions whose contacts all lie closer than this fraction of their regions'
 #: lengths count as the same grasp.
 DEDUP_FRACTION = 0.01
@@ -54,8 +54,6 @@ _TOLERANCE_MM = 1e-7  # slack on length limits for rounding noise
 _SHORTLIST = 4  # best-ranked candidates examined per grasp kept (repeats come in up to threes)
 
 Array = NDArray[np.float64]
-DEFAULT_PARAMS = GraspParams()
-DEFAULT_SYNTHESIS = SynthesisConfig()
 
 
 @dataclass(frozen=True)

@@ -10,7 +10,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from grip_env.barrett import (
+    FINGER_REACH_MM,
     SPREAD_AXIS_OFFSET_MM,
+    THUMB_REACH_MM,
     approach_clear,
     configurations,
     finger_forces,
@@ -129,17 +131,84 @@ def test_two_finger_rectangle_configuration_by_hand():
     assert np.all(np.isnan(confs.focus[0]))
 
 
+def _bar_grasp(thickness: float) -> tuple[PlanarObject, Grasps]:
+    """A 120 mm bar ``thickness`` thick: thumb below, both fingers on the top side."""
+    half = thickness / 2
+    obj = PlanarObject.from_polygon(rectangle(120, thickness))
+    ends = (np.array([[[50, half], [50, half], [-50, -half]]]),
+            np.array([[[-50, half], [-50, half], [50, -half]]]))
+    grasp = _grasps([[25, half], [-25, half], [0, -half]], [[0, -1], [0, -1], [0, 1]],
+                    [np.nan, np.nan], two_finger=True, region_ends=ends)
+    return obj, grasp
+
+
+def _reaches(confs) -> np.ndarray:
+    """(C, 3) reach of each finger from its line origin along its force, from a configuration."""
+    origins = np.concatenate([spread_axes(confs.palm, confs.yaw), confs.palm[:, None]], axis=1)
+    return np.einsum("cij,cij->ci", origins - confs.contacts, confs.forces)
+
+
 def test_two_finger_palm_respects_minimum_extension():
     # a 40 mm bar: the balanced palm position (e = 27.8 mm) is too close; the palm moves beyond
-    obj = PlanarObject.from_polygon(rectangle(120, 40))
-    ends = (np.array([[[50, 20], [50, 20], [-50, -20]]]), np.array([[[-50, 20], [-50, 20],
-                                                                     [50, -20]]]))
-    grasp = _grasps([[25, 20], [-25, 20], [0, -20]], [[0, -1], [0, -1], [0, 1]],
-                    [np.nan, np.nan], two_finger=True, region_ends=ends)
-    confs = configurations(grasp, obj, PARAMS, SYNTHESIS)
+    obj, grasp = _bar_grasp(40.0)
+    config = SYNTHESIS.model_copy(update={"min_extension_mm": 28.0})
+    confs = configurations(grasp, obj, PARAMS, config)
     assert len(confs) == 1
-    lateral = math.sqrt(30**2 - 25**2)
-    np.testing.assert_allclose(confs.extensions[0], [30, 30, 40 + lateral], rtol=1e-12)
+    lateral = math.sqrt(28**2 - 25**2)
+    np.testing.assert_allclose(confs.extensions[0], [28, 28, 40 + lateral], rtol=1e-12)
+    # at 30 mm the fingers would have to reach 16.6 mm past their axes: beyond the finger
+    assert len(configurations(grasp, obj, PARAMS, SYNTHESIS)) == 0
+
+
+def test_two_finger_palm_moves_into_the_fingers_reach():
+    # a 10 mm bar: the balanced palm (e3 = 36.25 mm) needs the fingers 26 mm past their axes;
+    # the palm moves towards the thumb until the fingers' reach is their shortest
+    obj, grasp = _bar_grasp(10.0)
+    config = SYNTHESIS.model_copy(update={"min_extension_mm": 15.0})
+    confs = configurations(grasp, obj, PARAMS, config)
+    assert len(confs) == 1
+    shortest = FINGER_REACH_MM[0]
+    np.testing.assert_allclose(_reaches(confs)[0], [shortest, shortest, 10 - shortest],
+                               atol=1e-9)
+    np.testing.assert_allclose(confs.extensions[0, 2], 10 - shortest, atol=1e-9)
+
+
+def test_reach_bounds_every_configuration_and_rejects_beyond():
+    obj = PlanarObject.from_polygon(regular_polygon(3, 100, np.pi / 2))
+    confs = configurations(_edge_midpoint_grasp(obj), obj, PARAMS, SYNTHESIS)
+    reaches = _reaches(confs)
+    assert (reaches[:, :2] >= FINGER_REACH_MM[0]).all()
+    assert (reaches[:, :2] <= FINGER_REACH_MM[1]).all()
+    assert (reaches[:, 2] >= THUMB_REACH_MM[0]).all() and (reaches[:, 2] <= THUMB_REACH_MM[1]).all()
+    np.testing.assert_allclose(reaches[:, 2], confs.extensions[:, 2])  # the thumb's reach is e3
+
+
+def _exact_grasp(yaw, spread, palm, reach):
+    """Contacts on the hand's own force lines with normals = forces, and their triangle object."""
+    palm = np.asarray(palm, float)
+    forces = finger_forces(yaw, spread)
+    axes = spread_axes(palm, yaw)
+    contacts = np.stack([axes[0] - reach[0] * forces[0], axes[1] - reach[1] * forces[1],
+                         palm - reach[2] * forces[2]])
+    focus = palm - SPREAD_AXIS_OFFSET_MM / math.tan(spread) * forces[2]
+    corners = [_meet(contacts[i], forces[i], contacts[j], forces[j])
+               for i, j in ((0, 1), (1, 2), (2, 0))]
+    return _grasps(contacts, forces, focus), PlanarObject.from_polygon(corners)
+
+
+def test_reach_is_checked_inside_the_thumb_search():
+    """The C1-best direction puts finger 1 18 mm past its axis, beyond the finger: the search
+    keeps the best direction the hand can reach instead of dropping the grasp."""
+    config = SYNTHESIS.model_copy(update={"min_extension_mm": 5.0})
+    inside = configurations(*_exact_grasp(np.pi / 2, 1.2, (0, 0), (-10, 20, 70)), PARAMS, config)
+    assert inside.force_line[inside.thumb == 2] == pytest.approx([0.0], abs=1e-12)
+    grasp, obj = _exact_grasp(np.pi / 2, 1.2, (0, 0), (-18, 20, 70))
+    assert FINGER_REACH_MM[0] > -18
+    confs = configurations(grasp, obj, PARAMS, config)
+    i = np.nonzero(confs.thumb == 2)[0]
+    assert len(i) == 1
+    assert confs.force_line[i[0]] > 0.1  # not the exact (unreachable) configuration
+    assert _reaches(confs)[i[0], 0] >= FINGER_REACH_MM[0]
 
 
 def test_approach_through_the_object_is_detected():
@@ -156,7 +225,7 @@ def test_approach_through_the_object_is_detected():
     yaw=st.floats(-math.pi, math.pi),
     spread=st.floats(0.35, 1.3),
     palm=st.tuples(st.floats(-200, 200), st.floats(-200, 200)),
-    reach=st.tuples(st.floats(10, 60), st.floats(10, 60), st.floats(35, 100)),
+    reach=st.tuples(st.floats(10, 60), st.floats(10, 60), st.floats(35, 90)),
 )
 def test_configuration_of_an_exact_barrett_grasp_is_recovered(yaw, spread, palm, reach):
     """Contacts on the hand's own force lines, normals = forces: the search finds the hand."""

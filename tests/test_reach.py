@@ -1,0 +1,173 @@
+"""Reach is physical: each planned contact is where the URDF finger, closed to it, puts its pad.
+
+The planner (``grip_env.barrett``) bounds each finger's reach from its own line origin (spread axis;
+O for the thumb) by the coupled closing of the URDF finger. These tests close the URDF in PyBullet
+(``World`` + ``Hand``, joints set with ``resetJointState``, the distal link read back with
+``getLinkState``) and compare its pad corner with the planned contacts of the default objects.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from grip_env import barrett
+from grip_env.objects import load_object_set
+from grip_env.pipeline import candidates
+from grip_env.sim import hand as sim_hand
+from grip_env.sim.hand import Hand
+from grip_env.sim.world import World
+
+PAD_TOLERANCE_MM = 1.0
+SAMPLES_PER_OBJECT = 4
+
+
+@pytest.fixture(scope="module")
+def tables() -> dict[str, pd.DataFrame]:
+    return {obj.name: candidates(obj) for obj in load_object_set("default")}
+
+
+@pytest.fixture(scope="module")
+def hand():
+    with World() as world:
+        yield Hand(world)
+
+
+def _plan(table: pd.DataFrame) -> tuple[np.ndarray, ...]:
+    """Line origins (n, 3, 2), forces (n, 3, 2) and contacts (n, 3, 2) of the planned grips."""
+    yaw, spread = table["hand_yaw"].to_numpy(), table["spread"].to_numpy()
+    palm = table[["hand_x", "hand_y"]].to_numpy()
+    origins = np.concatenate([barrett.spread_axes(palm, yaw), palm[:, None]], axis=1)
+    contacts = np.stack([table[[f"p{i}_x", f"p{i}_y"]].to_numpy() for i in "123"], axis=1)
+    return origins, barrett.finger_forces(yaw, spread), contacts
+
+
+def _reaches(origins, forces, contacts) -> np.ndarray:
+    return np.einsum("nij,nij->ni", origins - contacts, forces)
+
+
+def _postures(reaches: np.ndarray) -> np.ndarray:
+    """Joint 2 of each finger (n, 3) in the coupled closing; raises if out of reach."""
+    knuckles = (barrett.KNUCKLE_RADIAL_MM, barrett.KNUCKLE_RADIAL_MM, barrett.THUMB_KNUCKLE_MM)
+    return np.stack([barrett.closing_joint2(reaches[:, i], k) for i, k in enumerate(knuckles)], 1)
+
+
+def _urdf_pads(hand: Hand, row: pd.Series, joint2: np.ndarray) -> np.ndarray:
+    """(3, 2) pad corners (world mm, planar finger order) of the URDF closed to ``joint2``."""
+    client, uid = hand.world.client, hand.uid
+    hand.teleport(np.array([row["hand_x"], row["hand_y"], 300.0]), float(row["hand_yaw"]))
+    for joint in sim_hand.SPREAD_JOINTS:
+        client.resetJointState(uid, joint, float(row["spread"]))
+    pads = []
+    for joints, links, q2 in zip(sim_hand.FLEX_JOINTS, sim_hand.FINGER_LINKS, joint2, strict=True):
+        client.resetJointState(uid, joints[0], float(q2))
+        client.resetJointState(uid, joints[1], float(barrett.JOINT_COUPLING * q2))
+        state = client.getLinkState(uid, links[-1], computeForwardKinematics=True)
+        rotation = np.array(client.getMatrixFromQuaternion(state[5])).reshape(3, 3)
+        corner = np.array([barrett.DISTAL_LINK_MM, 0.0, barrett.DISTAL_PAD_MM])
+        pads.append(np.asarray(state[4]) * 1000 + rotation @ corner)
+    return np.array(pads)[:, :2]
+
+
+def test_every_candidate_contact_is_on_its_finger_line_within_reach(tables):
+    """Vectorised planar check of all candidates of every default object."""
+    total = 0
+    for name, table in tables.items():
+        origins, forces, contacts = _plan(table)
+        offset = contacts - origins
+        off_line = np.abs(offset[..., 0] * forces[..., 1] - offset[..., 1] * forces[..., 0])
+        assert off_line.max(initial=0) < 1e-6, name
+        reaches = _reaches(origins, forces, contacts)
+        tol = barrett.REACH_TOLERANCE_MM
+        for i, (shortest, longest) in enumerate(barrett.REACH_RANGES_MM):
+            assert (reaches[:, i] >= shortest - tol).all(), name
+            assert (reaches[:, i] <= longest + tol).all(), name
+        joint2 = _postures(reaches)
+        knuckles = np.array([barrett.KNUCKLE_RADIAL_MM] * 2 + [barrett.THUMB_KNUCKLE_MM])
+        pads = origins - barrett.fingertip_reach(joint2, knuckles)[..., None] * forces
+        assert np.linalg.norm(pads - contacts, axis=-1).max(initial=0) < PAD_TOLERANCE_MM, name
+        np.testing.assert_allclose(table[["e1", "e2", "e3"]].to_numpy(),
+                                   np.linalg.norm(contacts - origins[:, 2:3], axis=-1), atol=1e-9)
+        total += len(table)
+    assert total > 1000
+
+
+def test_urdf_fingers_closed_to_the_posture_put_their_pads_on_the_contacts(tables, hand):
+    """Forward kinematics of the URDF for a sample of candidates of every default object: the
+    shortest and the longest reach of each, and random others."""
+    rng = np.random.default_rng(0)
+    checked = 0
+    for name, table in tables.items():
+        if table.empty:
+            continue
+        origins, forces, contacts = _plan(table)
+        reaches = _reaches(origins, forces, contacts)
+        extremes = [int(np.argmin(reaches.min(axis=1))), int(np.argmax(reaches.max(axis=1)))]
+        rows = set(extremes) | set(rng.choice(len(table), min(len(table), SAMPLES_PER_OBJECT - 2),
+                                              replace=False).tolist())
+        joint2 = _postures(reaches[sorted(rows)])
+        for k, row in enumerate(sorted(rows)):
+            pads = _urdf_pads(hand, table.iloc[row], joint2[k])
+            error = np.linalg.norm(pads - contacts[row], axis=-1)
+            assert error.max() < PAD_TOLERANCE_MM, (name, row, error)
+            checked += 1
+    assert checked >= 2 * len([t for t in tables.values() if len(t)])
+
+
+def test_reach_bounds_are_the_urdf_fingers_coupled_closing(hand):
+    """Shortest and longest reach: the URDF finger at the two ends of CLOSING_JOINT2_RAD."""
+    row = pd.Series({"hand_x": 0.0, "hand_y": 0.0, "hand_yaw": np.pi / 2, "spread": 0.5})
+    forces = barrett.finger_forces(np.pi / 2, 0.5)
+    origins = np.concatenate([barrett.spread_axes(np.zeros(2), np.pi / 2), np.zeros((1, 2))])
+    low, high = barrett.CLOSING_JOINT2_RAD
+    for q2, index in ((high, 0), (low, 1)):
+        pads = _urdf_pads(hand, row, np.full(3, q2))
+        reach = np.einsum("ij,ij->i", origins - pads, forces)
+        expected = [barrett.FINGER_REACH_MM[index]] * 2 + [barrett.THUMB_REACH_MM[index]]
+        np.testing.assert_allclose(reach, expected, atol=1e-3)
+    grid = np.linspace(low, high, 500)
+    reach = barrett.fingertip_reach(grid)
+    assert np.all(np.diff(reach) < 0)  # one posture per reach
+    assert reach[0] == barrett.FINGER_REACH_MM[1] and reach[-1] == barrett.FINGER_REACH_MM[0]
+    # the executor's fingertip model is the planner's
+    sim_reach, _ = sim_hand.fingertip_in_plane(grid, grid / 3)
+    np.testing.assert_allclose(sim_reach, reach, atol=1e-9)
+
+
+def _distal_angle(q2: float) -> float:
+    return q2 * (1 + barrett.JOINT_COUPLING) + barrett.DISTAL_BEND_RAD
+
+
+def test_outside_the_closing_range_the_pad_corner_is_not_what_touches():
+    """Within CLOSING_JOINT2_RAD the pad corner is the distal link's innermost point at and above
+    the contact; past its far end the back corner is further in, before its near end the link
+    leans outwards below joint 3, so the link above the contact is further in than the pad."""
+    low, high = barrett.CLOSING_JOINT2_RAD
+    assert np.cos(_distal_angle(low)) < 0  # past vertical
+    assert _distal_angle(high) == pytest.approx(np.pi) or high < barrett.JOINT2_RANGE_RAD[1]
+    pad = barrett.DISTAL_PAD_MM
+    for q2, inside in ((high - 0.05, True), (high + 0.05, False)):
+        back = barrett.fingertip_reach(q2) + 2 * pad * np.sin(_distal_angle(q2))
+        assert (barrett.fingertip_reach(q2) < back) == inside
+    for q2, inside in ((low + 0.05, True), (low - 0.2, False)):
+        tip = barrett.fingertip_reach(q2)
+        joint3_pad = tip - barrett.DISTAL_LINK_MM * np.cos(_distal_angle(q2))
+        assert (tip < joint3_pad) == inside
+
+
+def test_pad_angle_range_is_the_executors():
+    finger = pytest.importorskip("grip_env.finger")
+    assert abs(barrett.PAD_ANGLE_RANGE_RAD[0] - finger.MIN_PAD_ANGLE) < 1e-12
+    assert abs(barrett.DISTAL_BEND_RAD - finger.DISTAL_BEND_RAD) < 1e-12
+    assert barrett.DISTAL_PAD_MM == finger.DISTAL_PAD_MM
+    assert barrett.JOINT_COUPLING == finger.COUPLING
+
+
+def test_closing_joint2_inverts_the_reach_and_refuses_beyond():
+    reach = np.linspace(*barrett.FINGER_REACH_MM, 301)
+    np.testing.assert_allclose(barrett.fingertip_reach(barrett.closing_joint2(reach)), reach,
+                               atol=1e-6)
+    for bad in (barrett.FINGER_REACH_MM[0] - 0.01, barrett.FINGER_REACH_MM[1] + 0.01):
+        with pytest.raises(ValueError, match="outside the finger's range"):
+            barrett.closing_joint2(np.array([bad]))
