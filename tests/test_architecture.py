@@ -1,0 +1,173 @@
+"""The layers of docs/architecture.md, enforced: no import against their direction.
+
+Every ``import`` in grip_env/ and classifiers/ is read with ``ast`` (module level, inside
+functions, and under ``TYPE_CHECKING`` alike) and resolved to the unit it names (a subpackage or a
+top-level module of grip_env, or a subpackage of classifiers). Each unit may import only the units
+its layer allows; the table below is the one docs/architecture.md explains.
+"""
+
+from __future__ import annotations
+
+import ast
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+FOUNDATION = {"grip_env.params", "grip_env.columns", "grip_env.config", "grip_env.shutdown"}
+GEOMETRY = {"grip_env.objects", "grip_env.perception"}
+PLANNING = {"grip_env.barrett", "grip_env.finger", "grip_env.grasps", "grip_env.features",
+            "grip_env.epsilon", "grip_env.pipeline"}
+NOT_GRIP_ENV_UPPER = {"grip_env.sim", "grip_env.dataset", "grip_env.envs", "grip_env.cli",
+                      "grip_env.calibration", "grip_env.drawing"}
+
+# foundations: unit -> the only units of the project it may import
+ONLY: dict[str, set[str]] = {
+    "grip_env.params": set(),
+    "grip_env.columns": set(),
+    "grip_env.shutdown": set(),
+    "grip_env.config": {"grip_env.params"},
+}
+# every other unit -> the units it must never import (foundations are always allowed)
+FORBIDDEN: dict[str, set[str]] = {
+    **{unit: NOT_GRIP_ENV_UPPER | PLANNING | {"classifiers"} for unit in GEOMETRY},
+    **{unit: NOT_GRIP_ENV_UPPER | {"classifiers"} for unit in PLANNING},
+    "grip_env.sim": {"grip_env.dataset", "grip_env.envs", "grip_env.cli", "grip_env.calibration",
+                     "grip_env.drawing", "grip_env.pipeline", "grip_env.grasps",
+                     "grip_env.features", "classifiers"},
+    "grip_env.dataset": {"grip_env.envs", "grip_env.cli", "grip_env.calibration",
+                         "grip_env.drawing", "classifiers"},
+    "grip_env.calibration": {"grip_env.envs", "grip_env.cli", "classifiers"},
+    "grip_env.envs": {"grip_env.cli", "grip_env.calibration", "classifiers"},
+    "grip_env.drawing": {"grip_env.sim", "grip_env.dataset", "grip_env.envs", "grip_env.cli",
+                         "grip_env.calibration", "classifiers"},
+    "grip_env.cli": set(),  # anything, classifiers only inside a command (tested below)
+    "grip_env": {"classifiers", "grip_env.cli"},
+    "classifiers": {"grip_env.cli"},
+}
+# The one sanctioned exception: perception's top-down camera is the simulator's World.
+EXCEPTIONS = {("grip_env/perception/render.py", "grip_env.sim")}
+
+
+@dataclass(frozen=True)
+class Import:
+    path: str  # file, relative to the checkout
+    unit: str  # the unit the file belongs to
+    target: str  # the unit it imports
+    line: int
+    top_level: bool  # at module level (not inside a function)
+
+
+def unit_of(module: str) -> str | None:
+    """``grip_env.sim.trial`` -> ``grip_env.sim``; ``classifiers.report.x`` -> ``classifiers``."""
+    parts = module.split(".")
+    if parts[0] == "grip_env":
+        return "grip_env" if len(parts) == 1 else f"grip_env.{parts[1]}"
+    if parts[0] == "classifiers":
+        return "classifiers"
+    return None
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _targets(node: ast.AST, module: str, is_package: bool) -> list[str]:
+    if isinstance(node, ast.Import):
+        return [alias.name for alias in node.names]
+    if not isinstance(node, ast.ImportFrom):
+        return []
+    base = node.module or ""
+    if node.level:
+        package = module.split(".") if is_package else module.split(".")[:-1]
+        package = package[: len(package) - node.level + 1]
+        base = ".".join([*package, base] if base else package)
+    return [f"{base}.{alias.name}" for alias in node.names] or [base]
+
+
+def package_imports() -> list[Import]:
+    found = []
+    for root in ("grip_env", "classifiers"):
+        for path in sorted((ROOT / root).rglob("*.py")):
+            module = _module_name(path)
+            unit = unit_of(module)
+            tree = ast.parse(path.read_text(), filename=str(path))
+            top = {id(node) for node in tree.body}
+            top |= {id(n) for node in tree.body if isinstance(node, ast.If) for n in node.body}
+            for node in ast.walk(tree):
+                for name in _targets(node, module, path.name == "__init__.py"):
+                    target = _resolve(name)
+                    if target is not None and target != unit:
+                        found.append(Import(str(path.relative_to(ROOT)), unit, target,
+                                            node.lineno, id(node) in top))
+    return found
+
+
+def _resolve(name: str) -> str | None:
+    """The unit of an imported name; ``from grip_env import barrett`` names grip_env.barrett."""
+    unit = unit_of(name)
+    if unit == "grip_env" and "." in name:
+        candidate = name.split(".")[1]
+        if (ROOT / "grip_env" / candidate).is_dir() or (ROOT / f"grip_env/{candidate}.py").exists():
+            return f"grip_env.{candidate}"
+    return unit
+
+
+IMPORTS = package_imports()
+
+
+def _forbidden(item: Import) -> bool:
+    if (item.path, item.target) in EXCEPTIONS:
+        return False
+    if item.unit in ONLY:
+        return item.target not in ONLY[item.unit]
+    if item.target in FOUNDATION:
+        return False
+    default = FORBIDDEN["grip_env"] if item.unit.startswith("grip_env") else set()
+    return item.target in FORBIDDEN.get(item.unit, default)
+
+
+def test_the_scan_sees_the_package():
+    units = {item.unit for item in IMPORTS}
+    assert {"grip_env.sim", "grip_env.dataset", "grip_env.envs", "classifiers"} <= units
+    assert any(i.unit == "grip_env.dataset" and i.target == "grip_env.sim" for i in IMPORTS)
+
+
+def test_no_import_goes_against_the_layers():
+    wrong = [f"{i.path}:{i.line} ({i.unit}) imports {i.target}" for i in IMPORTS if _forbidden(i)]
+    assert not wrong, "imports against docs/architecture.md:\n" + "\n".join(wrong)
+
+
+@pytest.mark.parametrize(("unit", "target"), [
+    ("grip_env.features", "grip_env.sim"), ("grip_env.grasps", "grip_env.sim"),
+    ("grip_env.sim", "grip_env.dataset"), ("grip_env.dataset", "classifiers"),
+])
+def test_the_named_rules_hold(unit, target):
+    assert not [i for i in IMPORTS if i.unit == unit and i.target == target]
+
+
+def test_grip_env_loads_classifiers_only_inside_cli_commands():
+    outside = [i for i in IMPORTS if i.unit.startswith("grip_env") and i.target == "classifiers"
+               and (i.unit != "grip_env.cli" or i.top_level)]
+    assert not outside, [f"{i.path}:{i.line}" for i in outside]
+
+
+def test_the_rules_catch_a_wrong_import():
+    assert _forbidden(Import("grip_env/features.py", "grip_env.features", "grip_env.sim", 1, True))
+    assert _forbidden(Import("grip_env/sim/x.py", "grip_env.sim", "grip_env.dataset", 1, False))
+    assert not _forbidden(Import("grip_env/perception/render.py", "grip_env.perception",
+                                 "grip_env.sim", 1, False))
+
+
+@pytest.mark.xfail(strict=True, reason="classifiers/study.py and report/study_report.py import "
+                   "each other; reported to the lead for the owner of classifiers/")
+def test_the_study_and_its_report_do_not_import_each_other():
+    def imports(path: str, module: str) -> bool:
+        tree = ast.parse((ROOT / path).read_text())
+        return any(module in _targets(node, "", False) or getattr(node, "module", None) == module
+                   for node in ast.walk(tree))
+
+    assert not (imports("classifiers/study.py", "classifiers.report.study_report")
+                and imports("classifiers/report/study_report.py", "classifiers.study"))
