@@ -68,6 +68,25 @@ def run_outside(venv: Path, cwd: Path, *command: str) -> str:
     return done.stdout
 
 
+def test_citation_license_and_readme_agree_with_the_project():
+    import tomllib
+
+    import yaml
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    citation = yaml.safe_load((ROOT / "CITATION.cff").read_text())
+    assert citation["version"] == project["version"]
+    assert citation["license"] == project["license"] == "MIT"
+    assert (ROOT / "LICENSE").read_text().startswith("MIT License")
+    paper = citation["references"][0]
+    readme = (ROOT / "README.md").read_text()
+    opening = readme[: readme.index("## The two commands")]
+    assert f"title   = {{{paper['title']}}}" in opening  # the BibTeX entry
+    assert str(paper["year"]) in opening and paper["journal"] in opening
+    for author in paper["authors"]:
+        assert author["family-names"] in opening
+
+
 @pytest.mark.slow
 def test_wheel_installs_and_runs_outside_the_checkout(tmp_path):
     wheel = build_wheel(tmp_path)
