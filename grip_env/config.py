@@ -322,7 +322,7 @@ def check_contour_budget(
     if not extent_mm <= MAX_OBJECT_SIZE_MM:
         raise ValueError(
             f"object {name!r} is {extent_mm:.4g} mm across, more than {MAX_OBJECT_SIZE_MM:g} mm "
-            "(check its units or --mm-per-px)"
+            "(check its units, or the scale of its image)"
         )
     points = perimeter_mm / perception.contour_spacing_mm
     if not points <= MAX_CONTOUR_POINTS:

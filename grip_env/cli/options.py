@@ -8,7 +8,8 @@ from typing import Annotated
 import typer
 
 ConfigFile = Annotated[
-    Path | None, typer.Option(help="YAML config (default: the embedded configs/default.yaml)")
+    Path | None,
+    typer.Option(help="YAML config (default: the built-in defaults, as in configs/default.yaml)"),
 ]
 DatasetDir = Annotated[
     Path, typer.Option("--data", "-d", help="dataset directory (written by grip-env generate)")

@@ -39,7 +39,8 @@ class GripSelectEnv(GripEnvBase):
         data: a dataset path or DataFrame (replay backend); None runs grips live in PyBullet.
         objects: object set name, or names / ``PlanarObject`` list (live: the objects; replay: a
             filter on the dataset's object ids). None: ``config.objects.set`` live, all replayed.
-        config: grip-env :class:`~grip_env.config.Config` (default: ``configs/default.yaml``).
+        config: grip-env :class:`~grip_env.config.Config` (default: ``Config()``, the values of
+            ``configs/default.yaml``).
         max_candidates: K (default ``config.selector.max_candidates``).
         max_attempts: executions per episode (default ``config.selector.max_attempts``).
         success_reward, failure_reward, invalid_action_reward: reward values.
