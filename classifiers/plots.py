@@ -12,33 +12,43 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 from sklearn.calibration import calibration_curve
-from sklearn.metrics import roc_auc_score, roc_curve
+from sklearn.metrics import RocCurveDisplay
 
 
-def plot_roc(labels: np.ndarray, probabilities: Mapping[str, np.ndarray], path: Path) -> Path:
-    """ROC curve of each model on the same held-out grips."""
+def plot_roc(
+    labels: np.ndarray, probabilities: Mapping[str, np.ndarray], path: Path,
+    title: str = "ROC (held out)",
+) -> Path:
+    """ROC curve of each model on the same grips (sklearn's ``RocCurveDisplay``)."""
     figure, axes = plt.subplots(figsize=(5.5, 5))
     for name, probability in probabilities.items():
-        fpr, tpr, _ = roc_curve(labels, probability)
-        axes.plot(fpr, tpr, label=f"{name} (AUC {roc_auc_score(labels, probability):.3f})")
-    axes.plot([0, 1], [0, 1], color="grey", linestyle=":", linewidth=1)
-    axes.set(xlabel="false positive rate", ylabel="true positive rate", title="ROC (held out)")
+        RocCurveDisplay.from_predictions(labels, probability, name=name, ax=axes,
+                                         plot_chance_level=False)  # fmt: skip
+    axes.plot([0, 1], [0, 1], color="grey", linestyle=":", linewidth=1, label="chance")
+    axes.set(xlabel="false positive rate", ylabel="true positive rate")
+    axes.set_title(title, fontsize=9)
     axes.legend(fontsize=7, loc="lower right")
     return _save(figure, path)
 
 
 def plot_calibration(
-    labels: np.ndarray, probabilities: Mapping[str, np.ndarray], path: Path, bins: int = 10
+    labels: np.ndarray, probabilities: Mapping[str, np.ndarray], path: Path, bins: int = 10,
+    title: str = "Calibration, held-out objects",
 ) -> Path:
-    """Reliability diagram of each model on the same held-out grips."""
-    figure, axes = plt.subplots(figsize=(5.5, 5))
+    """Reliability diagram of each model (top) and the grips per probability bin (bottom)."""
+    figure, (top, bottom) = plt.subplots(2, 1, figsize=(5.5, 6.5), sharex=True,
+                                         gridspec_kw={"height_ratios": [3, 1.4]})  # fmt: skip
+    edges = np.linspace(0.0, 1.0, bins + 1)
     for name, probability in probabilities.items():
         observed, predicted = calibration_curve(labels, probability, n_bins=bins)
-        axes.plot(predicted, observed, marker="o", markersize=3, label=name)
-    axes.plot([0, 1], [0, 1], color="grey", linestyle=":", linewidth=1)
-    axes.set(xlabel="predicted success probability", ylabel="observed success rate",
-             title="Calibration, held-out objects")  # fmt: skip
-    axes.legend(fontsize=7, loc="upper left")
+        (line,) = top.plot(predicted, observed, marker="o", markersize=3, label=name)
+        counts, _ = np.histogram(probability, bins=edges)
+        bottom.stairs(counts, edges, color=line.get_color(), linewidth=1)
+    top.plot([0, 1], [0, 1], color="grey", linestyle=":", linewidth=1, label="perfect")
+    top.set(ylabel="observed success rate")
+    top.set_title(title, fontsize=9)
+    top.legend(fontsize=7, loc="upper left")
+    bottom.set(xlabel="predicted success probability", ylabel="grips per bin")
     return _save(figure, path)
 
 

@@ -4,8 +4,8 @@
 
 - ``metrics.json``: grouped, repeated CV of every model
   (:func:`classifiers.evaluation.evaluate_models`) plus the dataset checksum;
-- ``roc.png``, ``calibration.png``: curves on a held-out share of objects (``test_fraction``),
-  with the models fitted on the other objects;
+- ``roc.png``, ``calibration.png``: curves of the out-of-fold predictions of the CV's first
+  repeat, pooled (each grip scored by a model that never saw its object);
 - ``models/<name>.{json,skops|pt}``: each model refitted on the whole table, with its metadata
   (feature list, parameters, dataset checksum, seed);
 - when the table has the graded outcome: ``regression.json`` (grouped CV of
@@ -21,9 +21,13 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from sklearn.model_selection import GroupShuffleSplit
 
-from classifiers.evaluation import GROUP_COLUMN, LABEL_COLUMN, evaluate_models, positive_probability
+from classifiers.evaluation import (
+    LABEL_COLUMN,
+    evaluate_models,
+    grouped_folds,
+    positive_probability,
+)
 from classifiers.models import make_model, make_regressor
 from classifiers.persistence import dataset_checksum, save_model
 from classifiers.plots import plot_calibration, plot_roc
@@ -73,15 +77,21 @@ def train_regressors(
 
 
 def _held_out_plots(table: pd.DataFrame, config: Config, out_dir: Path) -> None:
+    """ROC and reliability from pooled out-of-fold predictions (the CV's first repeat)."""
     learning = config.learning
-    split = GroupShuffleSplit(1, test_size=learning.test_fraction, random_state=learning.seed)
+    table = table.reset_index(drop=True)
     labels = table[LABEL_COLUMN].to_numpy().astype(bool)
-    train, test = next(split.split(table, labels, table[GROUP_COLUMN].to_numpy()))
-    if np.unique(labels[test]).size < 2 or np.unique(labels[train]).size < 2:
-        return  # curves are undefined with one class on either side
-    probabilities = {}
-    for name in learning.models:
-        model = make_model(name, learning.seed, FEATURES).fit(table.iloc[train], labels[train])
-        probabilities[name] = positive_probability(model, table.iloc[test])
-    plot_roc(labels[test], probabilities, out_dir / "roc.png")
-    plot_calibration(labels[test], probabilities, out_dir / "calibration.png")
+    if np.unique(labels).size < 2:
+        return  # curves are undefined with one class
+    probabilities = {name: np.full(len(table), np.nan) for name in learning.models}
+    for train, test in grouped_folds(table, learning.folds, learning.seed):
+        if np.unique(labels[train]).size < 2:
+            continue
+        for name in learning.models:
+            model = make_model(name, learning.seed, FEATURES).fit(table.iloc[train], labels[train])
+            probabilities[name][test] = positive_probability(model, table.iloc[test])
+    scored = np.all([np.isfinite(p) for p in probabilities.values()], axis=0)
+    pooled = {name: p[scored] for name, p in probabilities.items()}
+    title = f"{learning.folds}-fold grouped CV, out-of-fold predictions pooled"
+    plot_roc(labels[scored], pooled, out_dir / "roc.png", title)
+    plot_calibration(labels[scored], pooled, out_dir / "calibration.png", title=title)

@@ -70,11 +70,95 @@ def test_feature_correlations_reads_the_columns():
 def test_report_writes_markdown_and_html(tmp_path):
     report = Report("title <x>")
     report.heading("Section")
-    report.text("a & b")
-    report.table(pd.DataFrame({"m": [0.12345]}, index=pd.Index(["svm"], name="model")))
+    report.text("a & b, best **rank_qc**")
+    report.table(pd.DataFrame({"m": [0.12345], "eta": [101.5], "s": ["x|y"]},
+                              index=pd.Index(["svm"], name="model")))  # fmt: skip
     report.figure("figures/a.png", "caption")
+    report.code("grasp:\n  mu: 0.4\n", "yaml")
     md, page = report.write(tmp_path)
     text = md.read_text()
-    assert "## Section" in text and "| model | m |" in text and "| svm | 0.123 |" in text
-    assert "![caption](figures/a.png)" in text
-    assert "title &lt;x&gt;" in page.read_text() and "a &amp; b" in page.read_text()
+    assert "## Section" in text and "| model | m | eta | s |" in text
+    assert "| svm | 0.1235 | 101.5 | x\\|y |" in text  # 4 significant digits, pipe escaped
+    assert "![caption](figures/a.png)" in text and "```yaml\ngrasp:\n  mu: 0.4\n```" in text
+    html = page.read_text()
+    assert "<h1>title &lt;x&gt;</h1>" in html and "a &amp; b" in html
+    assert "<strong>rank_qc</strong>" in html and "**" not in html
+    assert "<table>" in html and "<td>x|y</td>" in html
+    assert '<img src="figures/a.png" alt="caption"' in html
+    assert '<code class="language-yaml">grasp:' in html
+
+
+def _calibration_trials() -> pd.DataFrame:
+    rng = np.random.default_rng(0)
+    rows = []
+
+    def add(obj: str, part: str, end: str, grip: str, level: float, trials: int) -> None:
+        for k in range(trials):
+            value = max(level + rng.normal(0, 0.5), 0.0)
+            rows.append({"object_id": obj, "grip": grip, "part": part, "end": end, "Q_C": 1.0,
+                         "Q_G": 1.0, "trial": k, "robustness": value, "success": value >= 4,
+                         "friction": 0.4, "mass_kg": 0.2})  # fmt: skip
+
+    for box in ("box_90x55", "box_70x70", "box_120x40"):
+        add(box, "design", "best", f"{box}/0", 8.0, 1)
+    for obj in ("a", "b", "c"):
+        add(obj, "cone", "best", f"{obj}/best", 6.0, 4)
+        add(obj, "cone", "outside", f"{obj}/out", 2.0, 4)
+        for i in range(8):
+            add(obj, "retest", "best" if i < 4 else "worst", f"{obj}/{i}", float(i), 8)
+    return pd.DataFrame(rows)
+
+
+def test_calibration_report_states_every_check_with_its_figures(tmp_path):
+    from dataclasses import asdict
+
+    from classifiers.report.calibration import write_calibration
+    from classifiers.synthetic import synthetic_grips
+    from grip_env.calibration import (
+        CalibrationSettings,
+        cone_check,
+        dataset_checks,
+        design_check,
+        icc_check,
+        retest_check,
+    )
+
+    trials = _calibration_trials()
+    settings = CalibrationSettings(trials_per_set=4, bootstrap=100)
+    checks = [design_check(trials, 4.0), cone_check(trials), retest_check(trials, settings),
+              icc_check(trials), *dataset_checks(synthetic_grips(20, seed=1), settings)]
+    result = {"reference_level_g": 4.0, "mu": 0.4, "settings": asdict(settings),
+              "trials": len(trials), "checks": {c["name"]: c for c in checks}}  # fmt: skip
+    assert [c["passed"] for c in checks[:4]] == [True, True, True, True]
+    md = write_calibration(tmp_path, result, trials)
+    text = md.read_text()
+    table = text.split("*Checks against their targets.*")[1].split("###")[0]
+    assert table.count("| pass |") == 5 and "| - |" in table  # Q_G: for comparison only
+    for figure in ("design", "cone", "retest", "deciles"):
+        assert f"figures/calibration_{figure}.png" in text
+        assert (tmp_path / "figures" / f"calibration_{figure}.png").stat().st_size > 1000
+    assert "ICC(1)" in text and "Spearman" in text
+    failing = dict(result, checks={"retest": dict(result["checks"]["retest"], passed=False)})
+    assert "FAIL" in write_calibration(tmp_path / "f", failing, trials).read_text()
+
+
+def test_decile_intervals_resample_objects_and_bracket_the_means():
+    rng = np.random.default_rng(1)
+    table = pd.DataFrame({"object_id": np.repeat(np.arange(20), 10), "Q_C": rng.random(200)})
+    table["success_rate"] = np.clip(1 - table["Q_C"] + rng.normal(0, 0.1, 200), 0, 1)
+    bins = analysis.success_by_decile(table, resamples=300)
+    assert (bins["ci_low"] <= bins["success_rate"]).all()
+    assert (bins["success_rate"] <= bins["ci_high"]).all()
+    # an object-level effect widens the intervals: grips of one object move together
+    shifted = table.assign(success_rate=np.clip(
+        table["success_rate"] + rng.normal(0, 0.3, 20)[table["object_id"]], 0, 1))  # fmt: skip
+    wide = analysis.success_by_decile(shifted, resamples=300)
+    assert (wide["ci_high"] - wide["ci_low"]).mean() > (bins["ci_high"] - bins["ci_low"]).mean()
+
+
+def test_correlations_are_spearman_unless_asked():
+    rng = np.random.default_rng(2)
+    table = pd.DataFrame(rng.normal(size=(60, 11)), columns=analysis.CORRELATION_COLUMNS)
+    table["Q_C"] = np.exp(3 * table["C1"])  # monotone, far from linear
+    assert analysis.feature_correlations(table).loc["C1", "Q_C"] == pytest.approx(1.0)
+    assert analysis.feature_correlations(table, "pearson").loc["C1", "Q_C"] < 0.9

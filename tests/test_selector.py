@@ -256,3 +256,27 @@ def test_selector_trained_on_robustness_reports_first_pick_robustness(grips, sma
     best_possible = grips.groupby("object_id")["robustness_mean"].max()
     test_ids = report["split"]["test"]
     assert oracle <= best_possible[best_possible.index.astype(str).isin(test_ids)].mean() + 1e-9
+
+
+def test_training_baselines_are_the_expected_episode_rewards(grips, small_config):
+    from classifiers.selector.evaluation import training_baselines
+    from grip_env.envs.split import split_objects
+
+    one = small_config.override(selector={"max_attempts": 1})
+    lines = training_baselines(grips, one)
+    train_ids, _ = split_objects(grips["object_id"].astype(str), 0.25, 0)
+    train = grips[grips["object_id"].astype(str).isin(train_ids)]
+    shown = train.sort_values("Q_C", kind="stable").groupby("object_id").head(12)
+    per_object = shown.groupby("object_id")["success_rate"]
+    assert lines["random"] == pytest.approx(per_object.mean().mean())
+    assert lines["oracle"] == pytest.approx(per_object.max().mean())
+    best = shown.groupby("object_id").first()["success_rate"].mean()
+    assert lines["best Q_C"] == pytest.approx(best)
+    two = training_baselines(grips, small_config)  # two attempts: at least as likely to hold
+    assert all(two[name] >= lines[name] - 1e-12 for name in lines)
+    robust = training_baselines(grips, one.override(selector={"reward": "robustness"}))
+    reference = one.sim.reference_level_g
+    assert robust["oracle"] == pytest.approx(
+        shown.groupby("object_id")["robustness_mean"].max().mean() / reference
+    )
+    assert training_baselines(grips, small_config.override(selector={"reward": "robustness"})) == {}

@@ -1,4 +1,9 @@
-"""A small report document: headings, text, tables and figures, written as Markdown and HTML."""
+"""A small report document: headings, text, tables, code and figures, as Markdown and HTML.
+
+The Markdown is the source; the HTML page is that Markdown rendered by markdown-it-py
+(CommonMark plus tables, raw HTML disabled), so inline markup such as ``**bold**`` renders in
+both and nothing in a cell or caption can inject markup.
+"""
 
 from __future__ import annotations
 
@@ -7,11 +12,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import pandas as pd
+from markdown_it import MarkdownIt
 
 
 @dataclass(frozen=True)
 class _Block:
-    kind: str  # "heading", "text", "table", "figure"
+    kind: str  # "heading", "text", "table", "figure", "code"
     content: object
     level: int = 2
     caption: str = ""
@@ -32,7 +38,7 @@ class Report:
         """A paragraph; Markdown inline markup is kept as is in Markdown, escaped in HTML."""
         self.blocks.append(_Block("text", paragraph))
 
-    def table(self, frame: pd.DataFrame, caption: str = "", float_format: str = "{:.3g}") -> None:
+    def table(self, frame: pd.DataFrame, caption: str = "", float_format: str = "{:.4g}") -> None:
         """A table from a DataFrame (its index is shown when it is named or not a RangeIndex)."""
         shown = frame if isinstance(frame.index, pd.RangeIndex) else frame.reset_index()
         formatted = shown.map(lambda v: float_format.format(v) if isinstance(v, float) else str(v))
@@ -41,6 +47,10 @@ class Report:
     def figure(self, path: str, caption: str) -> None:
         """A PNG figure beside the report."""
         self.blocks.append(_Block("figure", path, caption=caption))
+
+    def code(self, text: str, language: str = "") -> None:
+        """A fenced code block (a config, a command), shown verbatim."""
+        self.blocks.append(_Block("code", text, caption=language))
 
     # ------------------------------------------------------------------ writers
     def to_markdown(self) -> str:
@@ -52,12 +62,12 @@ class Report:
         return "\n".join(lines)
 
     def to_html(self) -> str:
-        """The report as a standalone HTML page."""
-        body = "\n".join(_HTML[block.kind](block) for block in self.blocks)
+        """The report as a standalone HTML page (its Markdown rendered by markdown-it-py)."""
+        body = _RENDERER.render(self.to_markdown())
         return (
             "<!doctype html><html><head><meta charset='utf-8'>"
             f"<title>{html.escape(self.title)}</title><style>{_CSS}</style></head>"
-            f"<body><h1>{html.escape(self.title)}</h1>\n{body}\n</body></html>\n"
+            f"<body>\n{body}\n</body></html>\n"
         )
 
     def write(self, folder: str | Path, stem: str = "report") -> tuple[Path, Path]:
@@ -72,22 +82,21 @@ class Report:
 
 def _md_table(block: _Block) -> list[str]:
     frame: pd.DataFrame = block.content  # type: ignore[assignment]
-    header = "| " + " | ".join(str(c) for c in frame.columns) + " |"
+    header = "| " + " | ".join(_cell(c) for c in frame.columns) + " |"
     rule = "|" + "|".join(" --- " for _ in frame.columns) + "|"
-    rows = ["| " + " | ".join(row) + " |" for row in frame.astype(str).to_numpy().tolist()]
+    rows = ["| " + " | ".join(_cell(v) for v in row) + " |"
+            for row in frame.astype(str).to_numpy().tolist()]  # fmt: skip
     caption = [f"*{block.caption}*", ""] if block.caption else []
     return [*caption, header, rule, *rows]
 
 
-def _html_table(block: _Block) -> str:
-    frame: pd.DataFrame = block.content  # type: ignore[assignment]
-    head = "".join(f"<th>{html.escape(str(c))}</th>" for c in frame.columns)
-    rows = "".join(
-        "<tr>" + "".join(f"<td>{html.escape(v)}</td>" for v in row) + "</tr>"
-        for row in frame.astype(str).to_numpy().tolist()
-    )
-    caption = f"<caption>{html.escape(block.caption)}</caption>" if block.caption else ""
-    return f"<table>{caption}<thead><tr>{head}</tr></thead><tbody>{rows}</tbody></table>"
+def _cell(value: object) -> str:
+    return str(value).replace("|", "\\|").replace("\n", " ")
+
+
+def _md_code(block: _Block) -> list[str]:
+    fence = "````" if "```" in str(block.content) else "```"
+    return [f"{fence}{block.caption}", str(block.content).rstrip("\n"), fence]
 
 
 _MARKDOWN = {
@@ -95,17 +104,10 @@ _MARKDOWN = {
     "text": lambda b: [str(b.content)],
     "table": _md_table,
     "figure": lambda b: [f"![{b.caption}]({b.content})", "", f"*{b.caption}*"],
+    "code": _md_code,
 }
 
-_HTML = {
-    "heading": lambda b: f"<h{b.level}>{html.escape(str(b.content))}</h{b.level}>",
-    "text": lambda b: f"<p>{html.escape(str(b.content))}</p>",
-    "table": _html_table,
-    "figure": lambda b: (
-        f"<figure><img src='{html.escape(str(b.content))}' alt='{html.escape(b.caption)}'>"
-        f"<figcaption>{html.escape(b.caption)}</figcaption></figure>"
-    ),
-}
+_RENDERER = MarkdownIt("commonmark", {"html": False}).enable("table")
 
 _CSS = (
     "body{font-family:sans-serif;max-width:1000px;margin:2em auto;line-height:1.45}"

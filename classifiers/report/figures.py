@@ -8,13 +8,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
 
 from grip_env.columns import FEATURES
 from grip_env.drawing import draw_grip, draw_object, save_figure
 from grip_env.objects import PlanarObject
 
 
-def correlation_heatmap(correlations: pd.DataFrame, path: Path) -> Path:
+def correlation_heatmap(correlations: pd.DataFrame, path: Path, label: str = "Spearman ρ") -> Path:
     """Heat map of a correlation matrix with the values printed in the cells."""
     fig = Figure(figsize=(7, 6))
     ax = fig.subplots()
@@ -24,40 +25,74 @@ def correlation_heatmap(correlations: pd.DataFrame, path: Path) -> Path:
     ax.set_yticks(range(len(labels)), labels)
     for (i, j), value in np.ndenumerate(correlations.to_numpy()):
         ax.text(j, i, f"{value:.2f}", ha="center", va="center", fontsize=7)
-    fig.colorbar(image, ax=ax, shrink=0.8, label="Pearson r")
-    ax.set_title("Feature correlations (paper, section VI-B)")
+    fig.colorbar(image, ax=ax, shrink=0.8, label=label)
+    ax.set_title(f"Feature correlations, {label} (paper, section VI-B)")
     fig.tight_layout()
     return save_figure(fig, path)
 
 
 def feature_distributions(table: pd.DataFrame, path: Path) -> Path:
-    """One histogram per feature, grips that held against grips that slipped."""
+    """Share of grips per bin of each feature, held against slipped, on symlog axes.
+
+    No value is cut: bins are even in ``asinh(x / s)`` (``s`` the feature's smallest nonzero
+    magnitude, at least 1e-3), which is what a symlog axis with linear range ``s`` shows; each
+    outcome's bars sum to 1, so the two groups compare whatever their sizes.
+    """
     fig = Figure(figsize=(12, 8))
     axes = fig.subplots(3, 4).ravel()
-    held = table["success"].astype(bool)
+    held = table["success"].astype(bool).to_numpy()
     for ax, name in zip(axes, FEATURES, strict=True):
         values = table[name].to_numpy(dtype=float)
-        upper = np.nanpercentile(values, 98) if len(values) else 1.0
-        bins = np.linspace(np.nanmin(values), max(upper, np.nanmin(values) + 1e-9), 30)
-        ax.hist(values[held], bins=bins, alpha=0.6, label="held", color="tab:green")
-        ax.hist(values[~held], bins=bins, alpha=0.6, label="slipped", color="tab:red")
+        finite = np.isfinite(values)
+        scale = _linear_range(values[finite])
+        edges = _symlog_edges(values[finite], scale)
+        for mask, label, colour in ((held, "held", "tab:green"), (~held, "slipped", "tab:red")):
+            chosen = values[mask & finite]
+            if chosen.size:
+                ax.hist(chosen, bins=edges, weights=np.full(chosen.size, 1.0 / chosen.size),
+                        alpha=0.55, label=label, color=colour)  # fmt: skip
+        ax.set_xscale("symlog", linthresh=scale)
         ax.set_title(name)
+        ax.tick_params(labelsize=7)
     axes[0].legend()
-    fig.suptitle("Feature distributions by simulated outcome (values above the 98th pct. cut)")
+    fig.supylabel("share of the outcome's grips")
+    fig.suptitle("Feature distributions by simulated outcome (symlog x: every value shown)")
     fig.tight_layout()
     return save_figure(fig, path)
 
 
+def _linear_range(values: np.ndarray) -> float:
+    nonzero = np.abs(values[values != 0])
+    return float(max(nonzero.min(), 1e-3)) if nonzero.size else 1.0
+
+
+def _symlog_edges(values: np.ndarray, scale: float, bins: int = 30) -> np.ndarray:
+    if values.size == 0:
+        return np.linspace(0.0, 1.0, bins + 1)
+    low, high = np.arcsinh(values.min() / scale), np.arcsinh(values.max() / scale)
+    if high <= low:
+        high = low + 1e-6
+    return np.sinh(np.linspace(low, high, bins + 1)) * scale
+
+
 def success_by_bin(bins: pd.DataFrame, path: Path, column: str = "Q_C") -> Path:
-    """Bar chart of the success rate per quantile bin of a quality index."""
+    """Bar chart of the success rate per quantile bin, with 95% intervals and grip counts."""
     fig = Figure(figsize=(6.5, 3.8))
     ax = fig.subplots()
-    ax.bar(bins.index.astype(int), bins["success_rate"], color="tab:blue")
+    index = bins.index.astype(int)
+    errors = None
+    if {"ci_low", "ci_high"} <= set(bins.columns):
+        errors = np.vstack([bins["success_rate"] - bins["ci_low"],
+                            bins["ci_high"] - bins["success_rate"]]).clip(min=0)  # fmt: skip
+    ax.bar(index, bins["success_rate"], yerr=errors, capsize=3, color="tab:blue")
+    for position, count in zip(index, bins["grips"], strict=True):
+        ax.annotate(f"n={count}", (position, 0.01), ha="center", va="bottom", fontsize=6,
+                    color="white")  # fmt: skip
     ax.set_xlabel(f"{column} decile (1 = best, lowest {column})")
     ax.set_ylabel("simulated success rate")
     ax.set_ylim(0, 1)
-    ax.set_xticks(bins.index.astype(int))
-    ax.set_title(f"Success rate per {column} decile")
+    ax.set_xticks(index)
+    ax.set_title(f"Success rate per {column} decile (95% object-bootstrap intervals)")
     fig.tight_layout()
     return save_figure(fig, path)
 
@@ -65,7 +100,8 @@ def success_by_bin(bins: pd.DataFrame, path: Path, column: str = "Q_C") -> Path:
 def grip_gallery(
     objects: Sequence[PlanarObject], grips: pd.DataFrame, path: Path, columns: int = 4
 ) -> Path:
-    """Each object with its best (solid) and worst (faint) grip by Q_C, and their outcomes."""
+    """Each object with its best (solid) and worst (faint) grip by Q_C and their outcomes; axes
+    in mm, one legend for the figure."""
     rows = int(np.ceil(len(objects) / columns))
     fig = Figure(figsize=(3.2 * columns, 3.2 * rows))
     axes = np.atleast_1d(fig.subplots(rows, columns)).ravel()
@@ -79,17 +115,31 @@ def grip_gallery(
             draw_grip(ax, mine.iloc[0], highlight=True)
             best, worst = mine.iloc[0], mine.iloc[-1]
             ax.set_title(
-                f"{obj.name}\nbest Q_C {best['Q_C']:.2f} ({_rate(best)}), "
-                f"worst {worst['Q_C']:.2f} ({_rate(worst)})",
-                fontsize=8,
+                f"{obj.name}\nbest Q_C {best['Q_C']:.2f}: {_rate(best)}\n"
+                f"worst Q_C {worst['Q_C']:.2f}: {_rate(worst)}",
+                fontsize=7,
             )
         else:
             ax.set_title(f"{obj.name}\n(no feasible grip)", fontsize=8)
         ax.set_xlabel("")
         ax.set_ylabel("")
         ax.tick_params(labelsize=6)
-    fig.tight_layout()
+    fig.supxlabel("x (mm)", fontsize=9)
+    fig.supylabel("y (mm)", fontsize=9)
+    fig.legend(handles=_gallery_legend(), loc="upper center", ncol=4, fontsize=8,
+               frameon=False)  # fmt: skip
+    fig.tight_layout(rect=(0, 0, 1, 1 - 0.35 / max(rows * 3.2, 1)))
     return save_figure(fig, path, dpi=100)
+
+
+def _gallery_legend() -> list[Line2D]:
+    return [
+        Line2D([], [], color="tab:blue", linewidth=2, label="best grip by Q_C (opaque)"),
+        Line2D([], [], color="tab:blue", alpha=0.35, linewidth=2,
+               label="worst grip (faint); arrows: finger forces"),
+        Line2D([], [], marker="o", linestyle="", color="black", label="contact"),
+        Line2D([], [], marker="s", linestyle="", color="black", label="palm centre"),
+    ]
 
 
 def interval_bars(
@@ -115,4 +165,7 @@ def interval_bars(
 def _rate(grip: pd.Series) -> str:
     if "success_rate" not in grip or pd.isna(grip["success_rate"]):
         return "not simulated"
-    return f"held {grip['success_rate']:.0%}"
+    rate = f"held {grip['success_rate']:.0%}"
+    if "robustness_mean" in grip and pd.notna(grip["robustness_mean"]):
+        rate += f", {grip['robustness_mean']:.1f} g"
+    return rate

@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import json
 import platform
+import subprocess
+from datetime import UTC, datetime
 from importlib import metadata
 from pathlib import Path
 from typing import Any
 
 import pandas as pd
+import yaml
 
 from classifiers.report import analysis, figures
 from classifiers.report.document import Report
@@ -29,11 +32,14 @@ def write_report(out: Path, config: Config, table: pd.DataFrame) -> Path:
         "positioning, friction and mass uncertainty. Everything below was produced by "
         "`grip-env study` from the configuration listed at the end."
     )
+    report.text(f"Written {datetime.now(UTC):%Y-%m-%d %H:%M} UTC from commit {_commit()}.")
     objects = _study_objects(config)
     _dataset_section(report, table, objects, fig_dir)
     _feature_section(report, table, fig_dir)
     _rank_section(report, objects, config)
+    _calibration_section(report, out, fig_dir)
     _classifier_section(report, out)
+    _regression_section(report, out)
     _ablation_section(report, out)
     _selector_section(report, out)
     _provenance_section(report, out, config)
@@ -59,6 +65,12 @@ def _dataset_section(report: Report, table: pd.DataFrame, objects: list[PlanarOb
                "grips per object (range)", "simulated trials", "mean success rate",
                "fraction labelled success (rate ≥ 0.5)", "fraction two-finger grips"],
     ).rename_axis("quantity")
+    if "robustness_mean" in table.columns:
+        robustness = table["robustness_mean"]
+        summary.loc["mean robustness (g), median [IQR]"] = (
+            f"{robustness.mean():.2f}, {robustness.median():.2f} "
+            f"[{robustness.quantile(0.25):.2f}, {robustness.quantile(0.75):.2f}]"
+        )
     report.table(summary)
     named = [o for o in objects if o.name in set(table["object_id"])][:16]
     path = figures.grip_gallery(named, table, fig_dir / "gallery.png")
@@ -73,16 +85,22 @@ def _feature_section(report: Report, table: pd.DataFrame, fig_dir: Path) -> None
     report.heading("Features and outcomes")
     root = fig_dir.parent
     path = figures.feature_distributions(table, fig_dir / "feature_distributions.png")
-    report.figure(_rel(path, root), "Distribution of each feature for grips that held and slipped.")
-    correlations = analysis.feature_correlations(table)
+    report.figure(_rel(path, root), "Share of the grips that held (green) and slipped (red) "
+                  "per bin of each feature; symlog x axis, so no value is cut.")
+    correlations = analysis.feature_correlations(table, "spearman")
+    pearson = analysis.feature_correlations(table, "pearson")
     path = figures.correlation_heatmap(correlations, fig_dir / "correlations.png")
-    report.figure(_rel(path, root), "Correlation matrix of the features and Q_C over all grips.")
-    report.table(correlations.round(2), caption="Feature correlations (compare the paper's "
-                 "table in section VI-B, where Q_C correlated most with C4 (.86) and C1 (.68)).")
+    report.figure(_rel(path, root), "Spearman rank correlations of the features and Q_C over "
+                  "all grips.")
+    shown = correlations.round(2).assign(**{"Q_C (Pearson)": pearson["Q_C"].round(2)})
+    report.table(shown, caption="Spearman rank correlations, with Pearson's r against Q_C in the "
+                 "last column (the paper's table in section VI-B, Pearson, has Q_C correlating "
+                 "most with C4 (.86) and C1 (.68)).")
     for column in ("Q_C", "Q_G"):
         bins = analysis.success_by_decile(table, column)
         path = figures.success_by_bin(bins, fig_dir / f"success_by_{column}.png", column)
-        report.figure(_rel(path, root), f"Simulated success rate per {column} decile.")
+        report.figure(_rel(path, root), f"Simulated success rate per {column} decile, 95% "
+                      "intervals from a bootstrap over objects; n = grips per decile.")
     bins = analysis.success_by_decile(table, "Q_C")
     trend = bins["success_rate"].iloc[:3].mean() - bins["success_rate"].iloc[-3:].mean()
     report.text(
@@ -148,6 +166,58 @@ def _classifier_section(report: Report, out: Path) -> None:
     _stage_figures(report, out, "classifiers")
 
 
+def _calibration_section(report: Report, out: Path, fig_dir: Path) -> None:
+    from classifiers.report.calibration import RESULT_FILE, TRIALS_FILE, calibration_section
+
+    result = _json(out / "calibration" / RESULT_FILE)
+    if result is None:
+        report.heading("Label validity (calibration)")
+        report.text("Not run.")
+        return
+    trials_path = out / "calibration" / TRIALS_FILE
+    trials = pd.read_parquet(trials_path) if trials_path.exists() else None
+    calibration_section(report, result, trials, fig_dir, out)
+
+
+_REGRESSION_SHOWN = ["spearman", "spearman_object", "top1_robustness", "r2", "mae"]
+
+
+def _regression_section(report: Report, out: Path) -> None:
+    from classifiers.study import frame_of_intervals
+
+    report.heading("Regressors of robustness (grouped cross-validation by object)")
+    result = _json(out / "classifiers" / "regression.json")
+    if result is None:
+        report.text("Not run (the dataset has no graded outcome).")
+        return
+    models = result["models"]
+    report.table(frame_of_intervals(models, _REGRESSION_SHOWN),
+                 caption="Target robustness_mean (g). spearman: rank correlation over a test "
+                 "fold's grips; spearman_object: mean within-object rank correlation; "
+                 "top1_robustness: mean robustness of each test object's top-predicted grip. "
+                 "Mean and 95% corrected interval over folds × repeats (same folds as the "
+                 "classifiers).")
+    paired = {f"{name} − {versus.removeprefix('vs_')}": block
+              for name, blocks in result["paired_difference"].items()
+              for versus, block in blocks.items()}  # fmt: skip
+    if paired:
+        report.table(frame_of_intervals(paired, ["spearman", "spearman_object",
+                                                 "top1_robustness"]),
+                     caption="Paired differences to the rank baselines (same folds and seeds).")
+    learned = {k: v for k, v in models.items() if k not in ("rank_qc", "rank_qg", "random")}
+    best = _best(learned, "spearman_object")
+    versus = result["paired_difference"].get(best or "", {}).get("vs_rank_qc")
+    if best and versus:
+        report.text(
+            f"Best learned regressor within objects: **{best}** (Spearman "
+            f"{_fmt(models[best]['spearman_object'])}), against ranking by Q_C "
+            f"{_fmt(versus['spearman_object'])} paired; pooled Spearman "
+            f"{_fmt(models[best]['spearman'])} against Q_C's "
+            f"{_fmt(models['rank_qc']['spearman'])} and Q_G's "
+            f"{_fmt(models['rank_qg']['spearman'])}."
+        )
+
+
 def _ablation_section(report: Report, out: Path) -> None:
     from classifiers.study import frame_of_intervals
 
@@ -175,12 +245,36 @@ def _ablation_section(report: Report, out: Path) -> None:
             f"Removing the six hand features (C1–C6) changes ROC-AUC by {_fmt(hand)} "
             f"against all twelve; {verdict}."
         )
+    _regression_ablation(report, ablation.get("regression"))
     importance = ablation.get("permutation_importance", {})
     if importance:
         report.table(frame_of_intervals({k: {"drop in ROC-AUC": v} for k, v in importance.items()},
                                         ["drop in ROC-AUC"]),
                      caption="Permutation importance of each feature on held-out objects.")
     _stage_figures(report, out, "ablation")
+
+
+def _regression_ablation(report: Report, regression: dict[str, Any] | None) -> None:
+    from classifiers.study import frame_of_intervals
+
+    if not regression:
+        return
+    model, reference = regression["model"], regression["reference"]
+    sets = regression["feature_sets"]
+    shown = ["spearman", "spearman_object", "top1_robustness"]
+    report.table(frame_of_intervals({n: b["models"][model] for n, b in sets.items()}, shown),
+                 caption=f"Regression task: {model} of robustness_mean on each feature set.")
+    differences = {n: b["paired_difference"][model] for n, b in sets.items() if n != reference}
+    report.table(frame_of_intervals(differences, shown),
+                 caption=f"Regression task: paired difference against {reference}.")
+    hand = differences.get("without_hand", {}).get("spearman_object")
+    if hand is not None and hand["mean"] is not None:
+        verdict = ("the interval excludes zero" if hand["ci"][0] > 0 or hand["ci"][1] < 0
+                   else "the interval includes zero: no significant effect on this dataset")
+        report.text(
+            f"Regression task: removing the hand features changes the within-object Spearman "
+            f"by {_fmt(hand)}; {verdict}."
+        )
 
 
 def _selector_section(report: Report, out: Path) -> None:
@@ -200,8 +294,9 @@ def _selector_section(report: Report, out: Path) -> None:
 def _provenance_section(report: Report, out: Path, config: Config) -> None:
     report.heading("Parameters and versions")
     params = pd.DataFrame({"value": config.grasp.model_dump()}).rename_axis("parameter")
-    report.table(params, caption="Grasping parameters (GraspParams).")
-    versions = {"python": platform.python_version(), "machine": platform.platform()}
+    report.table(params, caption="Grasping parameters (GraspParams).", float_format="{:g}")
+    versions = {"python": platform.python_version(), "machine": platform.platform(),
+                "commit": _commit()}  # fmt: skip
     for name in ("grip-env", *_PACKAGES):
         try:
             versions[name] = metadata.version(name)
@@ -212,11 +307,24 @@ def _provenance_section(report: Report, out: Path, config: Config) -> None:
     if timings:
         report.table(pd.DataFrame({"seconds": timings}).rename_axis("stage"),
                      caption="Wall time of the stages computed in the latest run.")
-    report.text("Configuration (YAML sections):")
-    report.text(json.dumps(config.model_dump(mode="json"), indent=1))
+    report.text("Configuration (`--config` YAML; every section):")
+    report.code(yaml.safe_dump(config.model_dump(mode="json"), sort_keys=False), "yaml")
 
 
 # ---------------------------------------------------------------------------------- helpers
+def _commit() -> str:
+    """The source checkout's commit (``+dirty`` with local changes), or "unknown"."""
+    root = Path(__file__).resolve().parents[2]
+    try:
+        head = subprocess.run(["git", "-C", str(root), "rev-parse", "--short", "HEAD"],
+                              capture_output=True, text=True, timeout=10, check=True)
+        dirty = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "-uno"],
+                               capture_output=True, text=True, timeout=10, check=True)
+    except (OSError, subprocess.SubprocessError):
+        return "unknown (not a git checkout)"
+    return head.stdout.strip() + ("+dirty" if dirty.stdout.strip() else "")  # fmt: skip
+
+
 def _study_objects(config: Config) -> list[PlanarObject]:
     objects = load_object_set(config.objects.set)
     if config.objects.procedural_count:
@@ -234,9 +342,23 @@ def _stage_result(report: Report, path: Path) -> dict[str, Any] | None:
     return result
 
 
+_CAPTIONS = {
+    "roc": "ROC curves of the pooled out-of-fold predictions of grouped cross-validation (first "
+           "repeat): every grip is scored by a model that never saw its object.",
+    "calibration": "Reliability of the predicted success probabilities (same out-of-fold "
+                   "predictions), with the number of grips in each probability bin below.",
+    "ablation": "Classification: ROC-AUC of each feature set (left) and its paired difference "
+                "to all twelve features (right), mean and 95% corrected interval.",
+    "ablation_regression": "Regression: Spearman of predicted and simulated robustness for "
+                           "each feature set (left) and its paired difference (right).",
+    "learning_curve": "Selector episode reward while training, with the expected reward of "
+                      "random, best-Q_C and oracle picks on the training objects.",
+}
+
+
 def _stage_figures(report: Report, out: Path, folder: str) -> None:
     for png in sorted((out / folder).glob("*.png")):
-        report.figure(_rel(png, out), png.stem.replace("_", " "))
+        report.figure(_rel(png, out), _CAPTIONS.get(png.stem, png.stem.replace("_", " ")))
 
 
 def _json(path: Path) -> dict[str, Any] | None:

@@ -129,6 +129,36 @@ def bootstrap_interval(values: NDArray[np.float64], resamples: NDArray[np.intp])
     return {"mean": float(values.mean()), "ci": [float(low), float(high)]}
 
 
+def training_baselines(table: pd.DataFrame, config: Config) -> dict[str, float]:
+    """Expected episode reward of random, best-Q_C and oracle picks on the training objects.
+
+    Objects are drawn uniformly per episode, each showing its ``max_candidates`` best by Q_C.
+    Success reward: the chance of a hold within ``max_attempts``; robustness reward (one
+    attempt only): the first pick's ``robustness_mean / sim.reference_level_g``. Empty when the
+    episode reward has no closed form (robustness with several attempts).
+    """
+    learning, selector = config.learning, config.selector
+    robust = selector.reward == "robustness"
+    if robust and (selector.max_attempts > 1 or "robustness_mean" not in table.columns):
+        return {}
+    ids = table["object_id"].astype(str)
+    train_ids, _ = split_objects(ids, learning.test_fraction, learning.seed)
+    rows: dict[str, list[float]] = {"random": [], "best Q_C": [], "oracle": []}
+    for _, frame in table[ids.isin(train_ids).to_numpy()].groupby("object_id"):
+        shown = frame.sort_values("Q_C", kind="stable").head(selector.max_candidates)
+        if robust:
+            value = shown["robustness_mean"].to_numpy(float) / config.sim.reference_level_g
+            rows["random"].append(value.mean())
+            rows["best Q_C"].append(value[0])
+            rows["oracle"].append(value.max())
+            continue
+        p = shown["success_rate"].to_numpy(float)
+        rows["random"].append(random_metrics(p, selector.max_attempts)[1])
+        rows["best Q_C"].append(attempt_metrics(p, selector.max_attempts)[1])
+        rows["oracle"].append(attempt_metrics(np.sort(p)[::-1], selector.max_attempts)[1])
+    return {name: float(np.mean(v)) for name, v in rows.items() if v}
+
+
 def evaluate_selectors(
     model: Any,
     data: pd.DataFrame,

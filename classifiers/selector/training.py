@@ -225,7 +225,13 @@ def train_selector(
         model.learn(int(steps), callback=recorder, progress_bar=progress,
                     tb_log_name=f"selector_{policy}")  # fmt: skip
     model.save(out / MODEL_FILE)
-    plot_learning_curve(recorder.timesteps, recorder.rewards, out / CURVE_FILE)
+    baselines = None
+    if table is not None:
+        from classifiers.selector.evaluation import training_baselines
+
+        baselines = training_baselines(table, config)
+    plot_learning_curve(recorder.timesteps, recorder.rewards, out / CURVE_FILE,
+                        baselines=baselines)  # fmt: skip
     model.episode_curve = (np.asarray(recorder.timesteps), np.asarray(recorder.rewards))
     env.close()
     return model
