@@ -1,4 +1,4 @@
-"""The main job: dataset, classifiers, ablation, RL selector, report.
+"""The main job: dataset, classifiers, ablation, RL selector, label calibration, report.
 
 Every stage reuses what an earlier run already produced in ``out``, so an interrupted study resumes.
 """
@@ -64,6 +64,8 @@ def run_study(
           lambda: run_ablation(table, out / "ablation", config))
     stage("selector", out / "selector" / "selector.json",
           lambda: run_selector(table, out / "selector", config))
+    stage("calibration", out / "calibration" / "calibration.json",
+          lambda: run_calibration(config, out / "calibration", table, quick, log))
     _merge_timings(out / "timings.json", timings)
     log("[study] report ...")
     from classifiers.report.study_report import write_report
@@ -71,23 +73,23 @@ def run_study(
     return write_report(out, config, table)
 
 
+def run_calibration(
+    config: Config, out: Path, table: pd.DataFrame | None = None, quick: bool = False,
+    log: Callable[[str], None] = print,
+) -> Path:
+    """The label-validity checks (``grip-env calibrate``) on ``config``, with the decile checks
+    on ``table``; writes ``out/calibration.{json,md,html}``, trials and figures."""
+    from classifiers.report.calibration import write_calibration
+    from grip_env.calibration import CalibrationSettings, calibrate
+
+    workers = config.dataset.workers
+    settings = CalibrationSettings.quick(workers) if quick else CalibrationSettings(workers=workers)
+    has_robustness = table is not None and "robustness_mean" in table.columns
+    result, trials = calibrate(config, settings, table if has_robustness else None, log)
+    return write_calibration(out, result, trials)
+
+
 def _merge_timings(path: Path, timings: dict[str, float]) -> None:
     previous = json.loads(path.read_text()) if path.exists() else {}
     previous.update({k: round(v, 2) for k, v in timings.items()})
     path.write_text(json.dumps(previous, indent=2))
-
-
-def load_json(path: Path) -> dict[str, Any]:
-    """A stage's JSON result."""
-    return json.loads(Path(path).read_text())
-
-
-def frame_of_intervals(results: dict[str, dict[str, Any]], metrics: list[str]) -> pd.DataFrame:
-    """``{name: {metric: {"mean", "ci"}}}`` as a table of ``mean [lo, hi]`` strings."""
-    rows = {}
-    for name, values in results.items():
-        rows[name] = {
-            m: f"{values[m]['mean']:.3f} [{values[m]['ci'][0]:.3f}, {values[m]['ci'][1]:.3f}]"
-            for m in metrics if m in values
-        }
-    return pd.DataFrame(rows).T.rename_axis("name")

@@ -162,3 +162,17 @@ def test_correlations_are_spearman_unless_asked():
     table["Q_C"] = np.exp(3 * table["C1"])  # monotone, far from linear
     assert analysis.feature_correlations(table).loc["C1", "Q_C"] == pytest.approx(1.0)
     assert analysis.feature_correlations(table, "pearson").loc["C1", "Q_C"] < 0.9
+
+
+def test_report_package_never_imports_the_study_that_drives_it():
+    """classifiers.study calls the report; the report must not import classifiers.study back."""
+    import ast
+    from pathlib import Path
+
+    import classifiers.report
+
+    for path in Path(classifiers.report.__file__).parent.glob("*.py"):
+        tree = ast.parse(path.read_text())
+        imported = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
+        imported |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
+        assert "classifiers.study" not in imported, path.name

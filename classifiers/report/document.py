@@ -10,6 +10,7 @@ from __future__ import annotations
 import html
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 from markdown_it import MarkdownIt
@@ -78,6 +79,24 @@ class Report:
         md.write_text(self.to_markdown())
         page.write_text(self.to_html())
         return md, page
+
+
+def frame_of_intervals(results: dict[str, dict[str, Any]], metrics: list[str]) -> pd.DataFrame:
+    """``{name: {metric: {"mean", "ci"}}}`` as a table of ``mean [lo, hi]`` strings."""
+    rows = {
+        name: {m: _interval_text(values[m]) for m in metrics if m in values}
+        for name, values in results.items()
+    }
+    return pd.DataFrame(rows).T.rename_axis("name")
+
+
+def _interval_text(value: dict[str, Any]) -> str:
+    low, high = value["ci"]
+    if value["mean"] is None:
+        return "n/a"
+    if low is None or high is None:
+        return f"{value['mean']:.3f}"
+    return f"{value['mean']:.3f} [{low:.3f}, {high:.3f}]"
 
 
 def _md_table(block: _Block) -> list[str]:

@@ -14,7 +14,7 @@ import pandas as pd
 import yaml
 
 from classifiers.report import analysis, figures
-from classifiers.report.document import Report
+from classifiers.report.document import Report, frame_of_intervals
 from grip_env.config import Config
 from grip_env.objects import PlanarObject, load_object_set, procedural_objects
 
@@ -145,8 +145,6 @@ def _rank_section(report: Report, objects: list[PlanarObject], config: Config) -
 
 
 def _classifier_section(report: Report, out: Path) -> None:
-    from classifiers.study import frame_of_intervals
-
     report.heading("Classifiers (grouped cross-validation by object)")
     metrics = _stage_result(report, out / "classifiers" / "metrics.json")
     if metrics is None:
@@ -183,8 +181,6 @@ _REGRESSION_SHOWN = ["spearman", "spearman_object", "top1_robustness", "r2", "ma
 
 
 def _regression_section(report: Report, out: Path) -> None:
-    from classifiers.study import frame_of_intervals
-
     report.heading("Regressors of robustness (grouped cross-validation by object)")
     result = _json(out / "classifiers" / "regression.json")
     if result is None:
@@ -219,8 +215,6 @@ def _regression_section(report: Report, out: Path) -> None:
 
 
 def _ablation_section(report: Report, out: Path) -> None:
-    from classifiers.study import frame_of_intervals
-
     report.heading("Ablation: what the hand features add")
     ablation = _stage_result(report, out / "ablation" / "ablation.json")
     if ablation is None:
@@ -255,8 +249,6 @@ def _ablation_section(report: Report, out: Path) -> None:
 
 
 def _regression_ablation(report: Report, regression: dict[str, Any] | None) -> None:
-    from classifiers.study import frame_of_intervals
-
     if not regression:
         return
     model, reference = regression["model"], regression["reference"]
@@ -278,8 +270,6 @@ def _regression_ablation(report: Report, regression: dict[str, Any] | None) -> N
 
 
 def _selector_section(report: Report, out: Path) -> None:
-    from classifiers.study import frame_of_intervals
-
     report.heading("RL selector on held-out objects")
     selector = _stage_result(report, out / "selector" / "selector.json")
     if selector is None:
