@@ -15,11 +15,11 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from grip_env.barrett import Configurations, configurations
+from grip_env.barrett import Configurations, ReachTest, configurations
 from grip_env.columns import CANDIDATE_COLUMNS
 from grip_env.config import Config
 from grip_env.features import OUTPUT_NAMES, features_from_arrays
-from grip_env.finger import executable, finger_reaches
+from grip_env.finger import executable
 from grip_env.grasps import synthesize_grasps
 from grip_env.objects import PlanarObject
 from grip_env.params import GraspParams
@@ -59,8 +59,8 @@ def candidates(
 
         regions = find_regions(obj, config.perception, params)
     grasps = synthesize_grasps(regions, obj, params, config.synthesis)
-    confs = configurations(grasps, obj, params, config.synthesis)
-    columns = _executable_only(descriptor_columns(obj, confs), config)
+    confs = configurations(grasps, obj, params, config.synthesis, _executable_test(config))
+    columns = descriptor_columns(obj, confs)
     if len(columns["hand_x"]):
         features = features_from_arrays(columns, params)
     else:
@@ -70,19 +70,21 @@ def candidates(
     return pd.DataFrame({name: columns[name][order] for name in CANDIDATE_COLUMNS})
 
 
-def _executable_only(columns: dict[str, np.ndarray], config: Config) -> dict[str, np.ndarray]:
-    """The configurations whose three pads the hand can put in one plane of the object.
+def _executable_test(config: Config) -> ReachTest:
+    """Whether the hand can put the three pads of (n, 3) finger reaches in one plane of the object.
 
     The executor plans every contact in that one plane (``grip_env.finger.planar_contacts``);
     a configuration it cannot reach there is not a candidate, so what is planned is executed.
+    The thumb search runs this test (``barrett.configurations``), so a grasp whose best direction
+    the hand cannot execute keeps its best one that it can.
     """
-    if not len(columns["hand_x"]):
-        return columns
     sim = config.sim
-    keep = executable(finger_reaches(columns), config.objects.thickness_mm,
-                      sim.contact_plane_rise_mm, sim.fingertip_clearance_mm,
-                      sim.palm_clearance_mm, sim.preshape_gap_mm)
-    return {name: values[keep] for name, values in columns.items()}
+
+    def test(reaches: np.ndarray) -> np.ndarray:
+        return executable(reaches, config.objects.thickness_mm, sim.contact_plane_rise_mm,
+                          sim.fingertip_clearance_mm, sim.palm_clearance_mm, sim.preshape_gap_mm)
+
+    return test
 
 
 def _settings(params: GraspParams | None, config: Config | None) -> tuple[Config, GraspParams]:

@@ -267,3 +267,23 @@ def test_two_finger_grasp_base_matches_the_hands_spread_axes():
     from grip_env import barrett, grasps
 
     assert grasps.HALF_FINGER_BASE_MM == barrett.SPREAD_AXIS_OFFSET_MM
+
+
+def test_an_executable_test_runs_inside_the_search():
+    """A further reach test (the executor's, in the pipeline) that refuses the C1-best direction:
+    the search keeps the best direction that passes it, not nothing."""
+    config = SYNTHESIS.model_copy(update={"min_extension_mm": 5.0})
+    grasp, obj = _exact_grasp(np.pi / 2, 1.2, (0, 0), (-10, 20, 70))
+    asked = []
+
+    def finger_1_above_minus_8(reaches):
+        asked.append(reaches.copy())
+        return reaches[:, 0] >= -8.0
+
+    confs = configurations(grasp, obj, PARAMS, config, finger_1_above_minus_8)
+    i = np.nonzero(confs.thumb == 2)[0]
+    assert len(i) == 1
+    assert confs.force_line[i[0]] > 0.1
+    np.testing.assert_allclose(_reaches(confs)[i], asked[-1][-1:], atol=1e-9)
+    assert _reaches(confs)[i[0], 0] >= -8.0
+    assert any((r[:, 0] < -8.0).any() for r in asked)  # the exact direction was asked and refused

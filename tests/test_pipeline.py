@@ -10,7 +10,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from grip_env.barrett import SPREAD_AXIS_OFFSET_MM, approach_clear
+from grip_env.barrett import (
+    REACH_RANGES_MM,
+    SPREAD_AXIS_OFFSET_MM,
+    approach_clear,
+    edge_start_mm,
+    force_line_value,
+)
 from grip_env.columns import CANDIDATE_COLUMNS
 from grip_env.config import Config
 from grip_env.features import FEATURE_NAMES
@@ -74,7 +80,13 @@ def assert_row_geometry(table: pd.DataFrame, obj: PlanarObject, config: Config =
     assert np.all((theta >= 0) & (theta <= synthesis.max_spread_rad + TOL))
     assert np.all(theta[two] == 0)
     assert np.all(np.sum(f * n, axis=-1) > 0)  # every force pushes into the object
-    assert approach_clear(obj, p, f).all()
+    width = synthesis.finger_width_mm
+    assert approach_clear(obj, p, f, width, edge_start_mm(PARAMS, synthesis)).all()
+    # physical reach of each finger from its line origin (spread axis; O for the thumb)
+    origins = np.concatenate([axes, palm[:, None]], axis=1)
+    reach = np.einsum("nij,nij->ni", origins - p, f)
+    for i, (shortest, longest) in enumerate(REACH_RANGES_MM):
+        assert np.all((reach[:, i] >= shortest - TOL) & (reach[:, i] <= longest + TOL))
     # contacts on their region segments, with the regions' normals
     span = ends_b - ends_a
     t = np.sum((p - ends_a) * span, axis=-1) / np.sum(span**2, axis=-1)
@@ -167,6 +179,44 @@ def test_bad_input_is_refused():
         candidates(np.zeros((3, 2)))
     with pytest.raises(ValueError, match="GraspParams"):
         candidates(make_shape("square"), params={"mu": 0.4})
+
+
+def test_params_and_config_grasp_are_one_source():
+    """``params`` when given, else ``config.grasp``; both only when they agree."""
+    obj = make_shape("pentagon")
+    slippery = GraspParams(mu=0.3)
+    by_params = candidates(obj, slippery)
+    pd.testing.assert_frame_equal(by_params, candidates(obj, config=Config(grasp=slippery)))
+    pd.testing.assert_frame_equal(by_params, candidates(obj, slippery, Config(grasp=slippery)))
+    assert by_params["C1"].max() != pytest.approx(candidates(obj)["C1"].max())  # mu is used
+    with pytest.raises(ValueError, match=r"config\.grasp"):
+        candidates(obj, slippery, Config())
+    with pytest.raises(ValueError, match="Config"):
+        candidates(obj, config={"grasp": {"mu": 0.3}})
+
+
+def test_every_candidate_is_one_the_executor_reaches():
+    from grip_env.finger import finger_reaches
+    from grip_env.pipeline import _executable_test
+
+    for name in ("trapezoid", "rounded_rectangle"):
+        table = candidates(make_shape(name))
+        assert len(table) > 10
+        assert _executable_test(Config())(finger_reaches(table)).all()
+
+
+def test_search_and_features_agree_on_the_cone_edge():
+    """The thumb search lands forces exactly on the friction-cone edge; its C1 (from cosines)
+    and the features' C1 (from arctan2) decide that edge alike."""
+    at_edge = 0
+    for obj in load_object_set("default"):
+        table = candidates(obj)
+        f, n = _xy(table, "f"), _xy(table, "n")
+        deviation = np.arctan2(np.abs(_cross(f, n)), np.sum(f * n, axis=-1))
+        at_edge += int((np.abs(deviation - PARAMS.friction_angle) < 1e-12).any(axis=1).sum())
+        np.testing.assert_allclose(force_line_value(f, n, PARAMS.friction_angle), table["C1"],
+                                   rtol=1e-12, atol=1e-12)
+    assert at_edge > 0  # the case this guards is present
 
 
 def _features_match(a: pd.DataFrame, b: pd.DataFrame, names) -> None:
