@@ -160,7 +160,8 @@ def test_train_models_are_checked_before_the_data(tmp_path, models, fragment):
 
 
 # ----------------------------------------------------------------- generate
-@pytest.mark.xfail(strict=True, reason="generate.py must bound them with check_setting (lead)")
+@pytest.mark.xfail(run=False, reason="generate.py must bound them with check_setting (lead); "
+                   "unbounded, the run would start real work")
 @pytest.mark.parametrize(("flag", "value"), [
     ("--objects", "99999999999999999999"), ("--workers", "1000000000000"),
 ])
@@ -170,7 +171,8 @@ def test_generate_huge_counts_are_refused(tmp_path, flag, value):
                         *[item for pair in args.items() for item in pair]), flag, value)
 
 
-@pytest.mark.xfail(strict=True, reason="generate.py must refuse --address without ray (lead)")
+@pytest.mark.xfail(run=False, reason="generate.py must refuse --address without ray (lead); "
+                   "unchecked, the run would start real work")
 def test_generate_address_needs_the_ray_backend(tmp_path):
     assert_refused(*run("generate", "--out", tmp_path / "g", "--objects", "1",
                         "--backend", "process", "--address", "ray://host:10001"), "--address")
