@@ -13,8 +13,12 @@ import pandas as pd
 import pytest
 
 from grip_env import barrett
+from grip_env.barrett import configurations
+from grip_env.config import Config
+from grip_env.grasps import synthesize_grasps
 from grip_env.objects import load_object_set
-from grip_env.pipeline import candidates
+from grip_env.perception.regions import find_regions
+from grip_env.pipeline import candidates, descriptor_columns
 from grip_env.sim import hand as sim_hand
 from grip_env.sim.hand import Hand
 from grip_env.sim.world import World
@@ -25,7 +29,17 @@ SAMPLES_PER_OBJECT = 4
 
 @pytest.fixture(scope="module")
 def tables() -> dict[str, pd.DataFrame]:
-    return {obj.name: candidates(obj) for obj in load_object_set("default")}
+    """Every configuration the planner's search gives on each default object, before the
+    executor's own test (``pipeline.candidates`` keeps a subset of these): the descriptor columns
+    of the candidate table."""
+    config = Config()
+    out = {}
+    for obj in load_object_set("default"):
+        regions = find_regions(obj, config.perception, config.grasp)
+        grasps = synthesize_grasps(regions, obj, config.grasp, config.synthesis)
+        confs = configurations(grasps, obj, config.grasp, config.synthesis)
+        out[obj.name] = pd.DataFrame(descriptor_columns(obj, confs))
+    return out
 
 
 @pytest.fixture(scope="module")
@@ -70,27 +84,36 @@ def _urdf_pads(hand: Hand, row: pd.Series, joint2: np.ndarray) -> np.ndarray:
     return np.array(pads)[:, :2]
 
 
-def test_every_candidate_contact_is_on_its_finger_line_within_reach(tables):
-    """Vectorised planar check of all candidates of every default object."""
-    total = 0
+def _assert_pads_on_contacts(table: pd.DataFrame, name: str) -> None:
+    """Every row's contacts on their force lines, within reach, where the closed finger's pad is."""
+    origins, forces, contacts = _plan(table)
+    offset = contacts - origins
+    off_line = np.abs(offset[..., 0] * forces[..., 1] - offset[..., 1] * forces[..., 0])
+    assert off_line.max(initial=0) < 1e-6, name
+    reaches = _reaches(origins, forces, contacts)
+    tol = barrett.REACH_TOLERANCE_MM
+    for i, (shortest, longest) in enumerate(barrett.REACH_RANGES_MM):
+        assert (reaches[:, i] >= shortest - tol).all(), name
+        assert (reaches[:, i] <= longest + tol).all(), name
+    joint2 = _postures(reaches)
+    knuckles = np.array([barrett.KNUCKLE_RADIAL_MM] * 2 + [barrett.THUMB_KNUCKLE_MM])
+    pads = origins - barrett.fingertip_reach(joint2, knuckles)[..., None] * forces
+    assert np.linalg.norm(pads - contacts, axis=-1).max(initial=0) < PAD_TOLERANCE_MM, name
+    np.testing.assert_allclose(table[["e1", "e2", "e3"]].to_numpy(),
+                               np.linalg.norm(contacts - origins[:, 2:3], axis=-1), atol=1e-9)
+
+
+def test_every_configuration_contact_is_on_its_finger_line_within_reach(tables):
+    """Vectorised planar check of every configuration of every default object."""
     for name, table in tables.items():
-        origins, forces, contacts = _plan(table)
-        offset = contacts - origins
-        off_line = np.abs(offset[..., 0] * forces[..., 1] - offset[..., 1] * forces[..., 0])
-        assert off_line.max(initial=0) < 1e-6, name
-        reaches = _reaches(origins, forces, contacts)
-        tol = barrett.REACH_TOLERANCE_MM
-        for i, (shortest, longest) in enumerate(barrett.REACH_RANGES_MM):
-            assert (reaches[:, i] >= shortest - tol).all(), name
-            assert (reaches[:, i] <= longest + tol).all(), name
-        joint2 = _postures(reaches)
-        knuckles = np.array([barrett.KNUCKLE_RADIAL_MM] * 2 + [barrett.THUMB_KNUCKLE_MM])
-        pads = origins - barrett.fingertip_reach(joint2, knuckles)[..., None] * forces
-        assert np.linalg.norm(pads - contacts, axis=-1).max(initial=0) < PAD_TOLERANCE_MM, name
-        np.testing.assert_allclose(table[["e1", "e2", "e3"]].to_numpy(),
-                                   np.linalg.norm(contacts - origins[:, 2:3], axis=-1), atol=1e-9)
-        total += len(table)
-    assert total > 1000
+        _assert_pads_on_contacts(table, name)
+    assert sum(len(t) for t in tables.values()) > 1000
+
+
+def test_candidates_after_the_executors_test_too():
+    """``pipeline.candidates`` (the executor's test inside the search) on some default objects."""
+    for obj in load_object_set("default")[:6]:
+        _assert_pads_on_contacts(candidates(obj), obj.name)
 
 
 def test_urdf_fingers_closed_to_the_posture_put_their_pads_on_the_contacts(tables, hand):
@@ -171,3 +194,13 @@ def test_closing_joint2_inverts_the_reach_and_refuses_beyond():
     for bad in (barrett.FINGER_REACH_MM[0] - 0.01, barrett.FINGER_REACH_MM[1] + 0.01):
         with pytest.raises(ValueError, match="outside the finger's range"):
             barrett.closing_joint2(np.array([bad]))
+
+
+def test_the_planners_finger_width_is_the_urdf_distal_links(hand):
+    """synthesis.finger_width_mm (the approach check's footprint) is the URDF pads' width."""
+    client = hand.world.client
+    for links in sim_hand.FINGER_LINKS:
+        (shape,) = client.getCollisionShapeData(hand.uid, links[-1])
+        box_mm = np.asarray(shape[3]) * 1000  # (length, width, thickness)
+        assert box_mm[1] == pytest.approx(Config().synthesis.finger_width_mm)
+        assert box_mm[2] == pytest.approx(2 * barrett.DISTAL_PAD_MM)
