@@ -204,3 +204,21 @@ def test_the_planners_finger_width_is_the_urdf_distal_links(hand):
         box_mm = np.asarray(shape[3]) * 1000  # (length, width, thickness)
         assert box_mm[1] == pytest.approx(Config().synthesis.finger_width_mm)
         assert box_mm[2] == pytest.approx(2 * barrett.DISTAL_PAD_MM)
+
+
+def test_fingers_footprints_do_not_overlap(tables):
+    """Seen from above, each finger covers its line from the contact out past its knuckle
+    (60 mm reach), finger_width_mm wide; no two fingers of any configuration overlap, so the
+    URDF's self-collision has nothing to stop."""
+    import shapely
+
+    half = Config().synthesis.finger_width_mm / 2
+    for name, table in tables.items():
+        origins, forces, contacts = _plan(table)
+        side = half * np.stack([-forces[..., 1], forces[..., 0]], axis=-1)
+        outer = origins - 60.0 * forces
+        corners = np.stack([contacts + side, outer + side, outer - side, contacts - side], axis=-2)
+        fingers = shapely.polygons(corners)  # (n, 3)
+        for i, j in ((0, 1), (0, 2), (1, 2)):
+            overlap = shapely.area(shapely.intersection(fingers[:, i], fingers[:, j]))
+            assert overlap.max(initial=0) < 1.0, (name, i, j)
