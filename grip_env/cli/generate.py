@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, NoReturn
 
 import typer
 
 from grip_env.cli.errors import user_errors
 from grip_env.cli.options import ConfigFile
+from grip_env.shutdown import stop_on_signals
 
 
 def generate(
@@ -43,12 +44,15 @@ def generate(
     ] = False,
     progress: Annotated[bool, typer.Option(help="show a progress bar")] = True,
 ) -> None:
-    """Plan grips on every object, simulate the best ones and write a Parquet dataset to OUT.
+    """Plan grips on every object, simulate a stratified sample of them, write a Parquet dataset.
 
     Rerunning the same command after an interruption computes only the missing objects;
-    rerunning with other settings into the same OUT is refused unless --overwrite.
+    rerunning with other settings into the same OUT is refused unless --overwrite, and so is
+    a second run while one is writing OUT. Exit codes: 0 done; 1 the run failed (a worker
+    lost twice on one object, a full disk): finished objects are kept, rerun to finish;
+    2 bad input; 130, 143, 129 stopped by SIGINT, SIGTERM, SIGHUP: rerun to finish.
     """
-    with user_errors():
+    with stop_on_signals(f"rerun the same command to finish {out}"), user_errors():
         from grip_env.config import load_config
         from grip_env.dataset import WorkerLost, dataset_manifest
         from grip_env.dataset import generate as generate_dataset
@@ -59,16 +63,19 @@ def generate(
                 cfg, out, objects=objects, trials=trials, seed=seed, workers=workers,
                 backend=backend, address=address, progress=progress, overwrite=overwrite,
             )
-        except KeyboardInterrupt:
-            typer.echo(f"interrupted; rerun the same command to finish {out}", err=True)
-            raise typer.Exit(code=130) from None
         except WorkerLost as exc:
-            typer.echo(f"error: {exc}; rerun the same command to finish {out}", err=True)
-            raise typer.Exit(code=1) from None
+            _fail(f"{exc}; finished objects are kept: rerun the same command to finish {out}")
         except OSError as exc:
-            raise ValueError(f"cannot write the dataset in {out}: {exc}") from None
+            _fail(f"cannot write the dataset in {out}: {exc.strerror or exc}; finished objects "
+                  f"are kept: free space and rerun the same command to finish")
         manifest = dataset_manifest(path)
     typer.echo(f"wrote {path}: {manifest['rows']} grips of {len(manifest['objects'])} objects")
+
+
+def _fail(message: str) -> NoReturn:
+    """A run that failed for a reason outside the user's input: one line, exit code 1."""
+    typer.echo(f"error: {message}", err=True)
+    raise typer.Exit(code=1)
 
 
 def register(app: typer.Typer) -> None:

@@ -1,30 +1,35 @@
 """Running per-object jobs: in-process, on a local process pool, or as Ray tasks.
 
 Every backend yields ``(task, rows)`` pairs as jobs finish, keeping only a bounded number of
-jobs in flight, so the caller can store each result as soon as it arrives.
+jobs in flight, so the caller can store each result as soon as it arrives. Leaving a backend
+early (an interrupt, an error) stops its processes before the exception goes on.
 """
 
 from __future__ import annotations
 
 import multiprocessing
+import signal
 from collections.abc import Iterable, Iterator
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
-from concurrent.futures.process import BrokenProcessPool
-from contextlib import AbstractContextManager, nullcontext
+from contextlib import contextmanager
 
 import pandas as pd
 
 from grip_env.dataset.jobs import ObjectJob, ObjectTask
+from grip_env.dataset.pool import WorkerLost, WorkerPool, call_single_threaded
 
 BACKENDS = ("process", "ray")
 _IN_FLIGHT_PER_WORKER = 2
-_PRELOAD = ("grip_env.dataset.jobs", "grip_env.pipeline", "grip_env.sim", "pyarrow")
+_PRELOAD = (
+    "grip_env.dataset.jobs", "grip_env.dataset.pool", "grip_env.pipeline", "grip_env.sim",
+    "pyarrow",
+)
+#: Ray re-runs a task whose worker process died this many times before giving up.
+RAY_TASK_RETRIES = 2
+_RAY_POLL_SECONDS = 0.5
 
 Results = Iterator[tuple[ObjectTask, pd.DataFrame]]
 
-
-class WorkerLost(RuntimeError):
-    """A worker process died (killed, out of memory, crashed) before finishing its object."""
+__all__ = ["BACKENDS", "WorkerLost", "check_backend", "run_jobs"]
 
 
 def check_backend(backend: str, workers: int) -> None:
@@ -41,16 +46,20 @@ def run_jobs(
 ) -> Results:
     """Run ``job`` on every task; yields ``(task, rows)`` in completion order.
 
-    ``backend="process"`` with one worker runs in this process; with more it uses a pool of
-    'forkserver' (or 'spawn') processes, each with its own PyBullet client. ``backend="ray"``
-    submits Ray tasks to the cluster at ``address`` (a local Ray instance with ``workers`` CPUs
-    when None).
+    ``backend="process"`` with one worker runs in this process; with more it uses a
+    :class:`~grip_env.dataset.pool.WorkerPool` of 'forkserver' (or 'spawn') processes, each
+    with its own PyBullet client. ``backend="ray"`` submits Ray tasks to the cluster at
+    ``address`` (a local Ray instance with ``workers`` CPUs when None); Ray re-runs a task
+    whose worker died up to :data:`RAY_TASK_RETRIES` times.
+
+    Raises:
+        WorkerLost: an object lost its worker on every attempt.
     """
     check_backend(backend, workers)
     if backend == "ray":
         return _ray_results(job, tasks, workers, address)
     if workers == 1:
-        return ((task, _call(job, task)) for task in tasks)
+        return ((task, call_single_threaded(job, task)) for task in tasks)
     return _pool_results(job, tasks, workers)
 
 
@@ -65,27 +74,8 @@ def _pool_context() -> multiprocessing.context.BaseContext:
 
 
 def _pool_results(job: ObjectJob, tasks: Iterable[ObjectTask], workers: int) -> Results:
-    queue = iter(tasks)
-    running: dict[Future[pd.DataFrame], ObjectTask] = {}
-    with ProcessPoolExecutor(max_workers=workers, mp_context=_pool_context()) as pool:
-        try:
-            while True:
-                for task in _take(queue, workers * _IN_FLIGHT_PER_WORKER - len(running)):
-                    running[pool.submit(_call, job, task)] = task
-                if not running:
-                    return
-                done, _ = wait(running, return_when=FIRST_COMPLETED)
-                for future in sorted(done, key=lambda f: running[f].index):
-                    rows = future.result()
-                    yield running.pop(future), rows
-        except BrokenProcessPool:
-            in_flight = ", ".join(sorted(task.object_id for task in running.values()))
-            raise WorkerLost(
-                f"a worker process died while objects {in_flight} were in flight"
-            ) from None
-        finally:
-            for future in running:
-                future.cancel()
+    with WorkerPool(workers, _pool_context()) as pool:
+        yield from pool.results(job, tasks)
 
 
 def _ray_results(
@@ -93,11 +83,11 @@ def _ray_results(
 ) -> Results:
     ray = _import_ray()
     started_here = not ray.is_initialized()
-    if started_here:
-        _start_ray(ray, workers, address)
     try:
+        if started_here:
+            _start_ray(ray, workers, address)
         capacity = max(workers, int(ray.cluster_resources().get("CPU", workers)))
-        remote_job = ray.remote(num_cpus=1, max_retries=2)(_call)
+        remote_job = ray.remote(num_cpus=1, max_retries=RAY_TASK_RETRIES)(call_single_threaded)
         queue = iter(tasks)
         running: dict[object, ObjectTask] = {}
         while True:
@@ -105,27 +95,24 @@ def _ray_results(
                 running[remote_job.remote(job, task)] = task
             if not running:
                 return
-            done, _ = ray.wait(list(running), num_returns=1)
+            # with a timeout, so that a stop signal is acted on between waits
+            done, _ = ray.wait(list(running), num_returns=1, timeout=_RAY_POLL_SECONDS)
             for ref in done:
-                yield running.pop(ref), ray.get(ref)
+                task = running.pop(ref)
+                yield task, _ray_get(ray, ref, task)
     finally:
-        if started_here:
+        if started_here and ray.is_initialized():
             ray.shutdown()
 
 
-def _call(job: ObjectJob, task: ObjectTask) -> pd.DataFrame:
-    """Run one job single-threaded: each worker owns one core, so BLAS/OpenMP thread pools
-    inside a job would only oversubscribe the machine (measured 1.7x slower on 2 busy cores)."""
-    with _one_thread():
-        return job(task)
-
-
-def _one_thread() -> AbstractContextManager[object]:
+def _ray_get(ray, ref: object, task: ObjectTask) -> pd.DataFrame:  # type: ignore[no-untyped-def]
     try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:
-        return nullcontext()
-    return threadpool_limits(limits=1)
+        return ray.get(ref)
+    except (ray.exceptions.WorkerCrashedError, ray.exceptions.NodeDiedError) as exc:
+        raise WorkerLost(
+            f"the Ray worker running object {task.object_id} died "
+            f"{RAY_TASK_RETRIES + 1} times ({type(exc).__name__})"
+        ) from None
 
 
 def _take(queue: Iterator[ObjectTask], count: int) -> list[ObjectTask]:
@@ -151,10 +138,24 @@ def _import_ray():  # type: ignore[no-untyped-def]
 def _start_ray(ray, workers: int, address: str | None) -> None:  # type: ignore[no-untyped-def]
     options = {"include_dashboard": False, "log_to_driver": False, "configure_logging": False}
     try:
-        if address is None:
-            ray.init(num_cpus=workers, **options)
-        else:
-            ray.init(address=address, **options)
+        with _signal_handlers_kept():
+            if address is None:
+                ray.init(num_cpus=workers, **options)
+            else:
+                ray.init(address=address, **options)
     except (ConnectionError, RuntimeError, ValueError) as exc:
         where = address or "a local instance"
         raise ValueError(f"cannot start Ray on {where}: {exc}") from None
+
+
+@contextmanager
+def _signal_handlers_kept() -> Iterator[None]:
+    """Undo the SIGTERM handler ``ray.init`` installs (it exits without stopping the run)."""
+    signals = [getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n)]
+    kept = {signum: signal.getsignal(signum) for signum in signals}
+    try:
+        yield
+    finally:
+        for signum, handler in kept.items():
+            if handler is not None:
+                signal.signal(signum, handler)

@@ -2,7 +2,8 @@
 
 Each finished object is written as its own shard (temp file + atomic rename) and only then
 entered in the manifest, so an interrupted run loses at most the objects in flight; running the
-same call again computes only what is missing.
+same call again computes only what is missing. One run at a time may write a directory (an
+``flock``); a second is refused with :class:`~grip_env.dataset.lock.DatasetLockedError`.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from grip_env.dataset.backends import check_backend, run_jobs
 from grip_env.dataset.catalog import OBJECTS_FILE, DatasetObject, resolve_objects, write_objects
 from grip_env.dataset.files import check_writable, sha256_of
 from grip_env.dataset.jobs import ObjectJob, ObjectTask, object_seeds, simulate_object
+from grip_env.dataset.lock import dataset_lock
 from grip_env.dataset.manifest import (
     FORMAT_VERSION,
     MANIFEST_FILE,
@@ -31,6 +33,7 @@ from grip_env.dataset.manifest import (
     write_manifest,
 )
 from grip_env.dataset.shards import GRIPS_DIR, shard_path, write_shard
+from grip_env.shutdown import deferred_signals
 
 _MANIFEST_FLUSH_SECONDS = 1.0
 
@@ -73,22 +76,28 @@ def generate(
 
     Raises:
         DatasetMismatchError: ``out_dir`` holds another run's dataset and ``overwrite`` is False.
+        DatasetLockedError: another run is writing ``out_dir``.
+        WorkerLost: an object lost its worker process on every attempt.
+        OSError: a write failed (disk full); finished shards stay and a rerun continues.
         ValueError: bad argument, unknown object set, unwritable directory.
     """
     config = _effective_config(config, trials, seed)
     workers = config.dataset.workers if workers is None else workers
     backend = config.dataset.backend if backend is None else backend
     check_backend(backend, workers)
+    if address is not None and backend != "ray":
+        raise ValueError(f"address {address!r} is for backend 'ray' only, not {backend!r}")
     directory = Path(out_dir)
     entries = resolve_objects(config, objects, config.dataset.seed)
     check_writable(directory)
-    manifest = _open_run(directory, config, entries, overwrite)
-    seeds = [record["seed"] for record in manifest["objects"]]
-    pending = [
-        ObjectTask(e.index, e.object_id, e.obj, config, seeds[e.index])
-        for e in entries if not _is_done(directory, manifest, e)
-    ]
-    _run(directory, manifest, job, pending, len(entries), workers, backend, address, progress)
+    with dataset_lock(directory):
+        manifest = _open_run(directory, config, entries, overwrite)
+        seeds = [record["seed"] for record in manifest["objects"]]
+        pending = [
+            ObjectTask(e.index, e.object_id, e.obj, config, seeds[e.index])
+            for e in entries if not _is_done(directory, manifest, e)
+        ]
+        _run(directory, manifest, job, pending, len(entries), workers, backend, address, progress)
     return directory
 
 
@@ -170,13 +179,15 @@ def _run(
             for task, grips in run_jobs(job, pending, workers, backend, address):
                 path = shard_path(directory, task.index, task.object_id)
                 metadata = {"object_id": task.object_id, "object_index": task.index,
-                            "feature_cap": feature_cap, "params": manifest["params"]}
-                record = write_shard(path, grips, metadata)
-                manifest["shards"][task.object_id] = record.as_dict()
+                            "feature_cap": feature_cap, "params": manifest["params"],
+                            "sampling": manifest["sampling"]}
+                with deferred_signals():  # a shard is written and listed whole, or not at all
+                    record = write_shard(path, grips, metadata)
+                    manifest["shards"][task.object_id] = record.as_dict()
+                    if time.perf_counter() - last_flush >= _MANIFEST_FLUSH_SECONDS:
+                        write_manifest(directory, manifest)
+                        last_flush = time.perf_counter()
                 rows += record.rows
-                if time.perf_counter() - last_flush >= _MANIFEST_FLUSH_SECONDS:
-                    write_manifest(directory, manifest)
-                    last_flush = time.perf_counter()
                 bar.set_postfix(grips=rows, grips_per_s=f"{rows / _elapsed(started):.1f}",
                                 refresh=False)
                 bar.update(1)

@@ -1,0 +1,136 @@
+"""SIGINT, SIGTERM and SIGHUP to a real ``grip-env generate``, at planning, mid-physics and
+mid-write, on the process pool and in-process: the run stops within 5 s with exit code
+128 + signal and one line, leaves no process behind and no partial file, and the same command
+then finishes the dataset exactly as an uninterrupted run would have made it. (SIGTERM to a
+Ray run is in test_faults.py, with a lost Ray worker, to start Ray only once.)"""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from generate_runs import (
+    STOP_SECONDS,
+    assert_no_partial_files,
+    assert_resumes_to,
+    generate_command,
+    paused,
+    reference_dataset,
+    shards_on_disk,
+    small_config,
+    stop,
+    wait_until,
+)
+
+from grip_env.shutdown import Interrupted, exit_code
+
+
+@pytest.fixture
+def config() -> Path:
+    return small_config()
+
+
+@pytest.fixture
+def reference(config: Path) -> pd.DataFrame:
+    """The dataset of an uninterrupted run (shared by the tests of both modules)."""
+    return reference_dataset(config)
+
+
+CASES = [
+    # signal, where the run is stopped, extra generate options
+    (signal.SIGINT, "planning", ("--workers", "2")),
+    (signal.SIGTERM, "physics", ("--workers", "2")),
+    (signal.SIGHUP, "write", ("--workers", "2")),
+    (signal.SIGTERM, "planning", ("--workers", "1")),
+    (signal.SIGINT, "physics", ("--workers", "1")),
+]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("signum", "point", "options"), CASES,
+                         ids=[f"{s.name}-{p}-{o[1]}w" for s, p, o in CASES])
+def test_signal_stops_cleanly_and_the_rerun_finishes(
+    tmp_path: Path, config: Path, reference: pd.DataFrame, signum: signal.Signals, point: str,
+    options: tuple[str, ...],
+) -> None:
+    out, markers = tmp_path / "data", tmp_path / "markers"
+    # the write pause is short: a shard being written is finished before the run stops
+    run = paused(generate_command(config, out, *options), point, markers,
+                 seconds=1.0 if point == "write" else 60.0)
+    wait_until(lambda: (markers / point).exists(), run, 120, f"the run reached {point}")
+
+    code, took, stderr, left = stop(run, signum)
+
+    assert code == exit_code(signum) == 128 + signum, stderr
+    assert took < STOP_SECONDS, f"took {took:.1f} s to stop"
+    assert not left, f"processes left running: {left}"
+    message = stderr.strip().splitlines()
+    assert message[-1] == (f"interrupted by {signum.name}: stopped cleanly; "
+                           f"rerun the same command to finish {out}")
+    assert "Traceback" not in stderr
+    assert_no_partial_files(out)
+    if point == "write":  # the shard being written when the signal came is complete and kept
+        assert len(shards_on_disk(out)) >= 1
+    assert_resumes_to(config, out, reference, *options)
+
+
+# ----------------------------------------------------------------------------- the mechanism
+def _python(code: str) -> subprocess.CompletedProcess[str]:
+    """Run ``code`` in a fresh interpreter (the mechanism ends the children of its process)."""
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=False, timeout=60)
+
+
+def test_stop_on_signals_exits_with_the_signal_code_and_restores_handlers() -> None:
+    done = _python(
+        "import os, signal, time\n"
+        "from grip_env.shutdown import stop_on_signals\n"
+        "before = signal.getsignal(signal.SIGTERM)\n"
+        "try:\n"
+        "    with stop_on_signals('rerun it'):\n"
+        "        os.kill(os.getpid(), signal.SIGTERM)\n"
+        "        time.sleep(30)\n"
+        "finally:\n"
+        "    assert signal.getsignal(signal.SIGTERM) is before\n"
+    )
+    assert done.returncode == 143
+    assert done.stderr == "interrupted by SIGTERM: stopped cleanly; rerun it\n"
+
+
+def test_deferred_signal_takes_effect_when_the_block_ends() -> None:
+    done = _python(
+        "import signal\n"
+        "from grip_env.shutdown import deferred_signals, stop_on_signals\n"
+        "with stop_on_signals():\n"
+        "    with deferred_signals():\n"
+        "        signal.raise_signal(signal.SIGHUP)\n"
+        "        print('finished the block')\n"
+        "    print('not reached')\n"
+    )
+    assert done.returncode == 129 and done.stdout == "finished the block\n"
+
+
+def test_children_still_running_are_ended_and_work_without_signal_is_untouched() -> None:
+    done = _python(
+        "import os, signal, subprocess, sys, time\n"
+        "from grip_env.shutdown import stop_on_signals\n"
+        "with stop_on_signals():\n"
+        "    total = sum(range(10))\n"
+        "child = subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(60)'])\n"
+        "print(total, child.pid, flush=True)\n"
+        "with stop_on_signals():\n"
+        "    os.kill(os.getpid(), signal.SIGINT)\n"
+        "    time.sleep(30)\n"
+    )
+    total, child = done.stdout.split()
+    assert done.returncode == 130 and total == "45"
+    assert not Path(f"/proc/{child}").exists() or "Z" in Path(f"/proc/{child}/stat").read_text()
+
+
+def test_interrupted_is_a_keyboard_interrupt() -> None:
+    assert issubclass(Interrupted, KeyboardInterrupt)
+    assert Interrupted(signal.SIGTERM).exit_code == 143
