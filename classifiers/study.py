@@ -18,7 +18,8 @@ from grip_env.config import Config
 QUICK_OVERRIDES: dict[str, dict[str, Any]] = {
     "objects": {"set": "basic", "procedural_count": 2},
     "dataset": {"trials": 2, "max_grips_per_object": 8},
-    "learning": {"folds": 2, "repeats": 1, "models": ("logreg", "knn", "rank_qc", "random")},
+    "learning": {"folds": 2, "repeats": 1, "models": ("logreg", "knn", "rank_qc", "random"),
+                 "regressors": ("ridge", "rank_qc", "rank_qg", "random")},
     "selector": {"timesteps": 512, "max_candidates": 16},
 }
 

@@ -7,8 +7,9 @@
 - ``design_hold``: with no pose error, friction at the design value ``grasp.mu`` and the nominal
   mass, the best-Q_C grip of 90×55, 70×70 and 120×40 mm boxes holds the reference level;
 - ``cone``: at friction ``grasp.mu`` (pose and mass noise as configured), the best grip whose
-  finger force leaves the friction cone (C1's k = 3) against the object's best grip by Q_C,
-  paired by object: mean robustness difference with a t-interval over objects;
+  finger force leaves the friction cone (C1's k = 3) against the best grip inside the cone, on
+  default then procedural objects that have both, paired by object: mean robustness
+  difference with a t-interval over objects;
 - ``retest``: per-grip mean robustness from two disjoint sets of trial seeds (trials
   ``0..n-1`` and ``n..2n-1`` of one call, i.e. ``trial_offset = 0`` and ``n``) over the best and
   worst grips by Q_C of default objects: Spearman with a bootstrap interval over grips;
@@ -32,7 +33,7 @@ import pandas as pd
 from scipy import stats
 
 from grip_env.config import Config
-from grip_env.objects import PlanarObject, load_object_set
+from grip_env.objects import PlanarObject, load_object_set, procedural_objects
 from grip_env.objects.shapes import rectangle
 
 BOXES_MM: tuple[tuple[float, float], ...] = ((90.0, 55.0), (70.0, 70.0), (120.0, 40.0))
@@ -50,7 +51,7 @@ class CalibrationSettings:
     retest_objects: int = 6  # default objects, in set order, with >= 2 * grips_per_end grips
     grips_per_end: int = 8  # best and worst grips by Q_C per object
     trials_per_set: int = 8  # trials in each of the two disjoint seed sets
-    cone_objects: int = 6  # default objects with a grip outside the friction cone
+    cone_objects: int = 10  # default, then procedural, objects with grips in and out of the cone
     cone_trials: int = 8
     design_trials: int = 2
     bootstrap: int = 2000
@@ -59,7 +60,7 @@ class CalibrationSettings:
 
     def __post_init__(self) -> None:
         for name, value in asdict(self).items():
-            minimum = 0 if name == "seed" else 1
+            minimum = 0 if name in ("seed", "retest_objects", "cone_objects") else 1
             if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
                 raise ValueError(f"calibration setting {name} must be an integer >= {minimum}, "
                                  f"got {value!r}")  # fmt: skip
@@ -157,14 +158,26 @@ def object_job(task: Any, parts: dict[str, tuple[str, ...]],
     return pd.concat(frames, ignore_index=True).loc[:, list(TRIAL_COLUMNS)]
 
 
+def candidate_objects(config: Config) -> list[PlanarObject]:
+    """The boxes, the default objects, then the study's procedural objects."""
+    procedural = procedural_objects(config.objects.procedural_count, config.dataset.seed,
+                                    config.objects.procedural_size_mm)  # fmt: skip
+    return [*box_objects(), *load_object_set("default"), *procedural]
+
+
 def choose_objects(config: Config, settings: CalibrationSettings) -> dict[str, tuple[str, ...]]:
-    """Object name → calibration parts; the boxes, then default objects in set order."""
+    """Object name → calibration parts: the boxes (design); default objects in set order for
+    the retest; default, then procedural, objects with grips in and out of the cone."""
     plan: dict[str, tuple[str, ...]] = {obj.name: ("design",) for obj in box_objects()}
     retest = cone = 0
-    for obj in load_object_set("default"):
+    default = {obj.name for obj in load_object_set("default")}
+    for obj in candidate_objects(config)[len(BOXES_MM):]:
+        if retest >= settings.retest_objects and cone >= settings.cone_objects:
+            break
         table = _planned(obj, config)
         parts = []
-        if retest < settings.retest_objects and len(table) >= 2 * settings.grips_per_end:
+        if (obj.name in default and retest < settings.retest_objects
+                and len(table) >= 2 * settings.grips_per_end):  # fmt: skip
             parts.append("retest")
             retest += 1
         outside = outside_cone(table, config.grasp.mu)
@@ -185,7 +198,7 @@ def run_calibration_trials(
     from grip_env.dataset.jobs import ObjectTask
 
     plan = choose_objects(config, settings)
-    shapes = {obj.name: obj for obj in [*box_objects(), *load_object_set("default")]}
+    shapes = {obj.name: obj for obj in candidate_objects(config)}
     tasks = [ObjectTask(i, name, shapes[name], config, settings.seed)
              for i, name in enumerate(plan)]  # fmt: skip
     job = functools.partial(object_job, parts=plan, settings=settings)
@@ -403,7 +416,8 @@ def calibrate(
         checks += dataset_checks(dataset, settings)
     result = {"reference_level_g": reference, "mu": float(config.grasp.mu),
               "settings": asdict(settings), "trials": len(trials),
-              "checks": {c["name"]: c for c in checks}}  # fmt: skip
+              "checks": {c["name"]: c for c in checks},
+              "config": config.model_dump(mode="json")}  # fmt: skip
     return result, trials
 
 

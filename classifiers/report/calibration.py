@@ -41,8 +41,9 @@ def calibration_section(report: Report, result: dict[str, Any], trials: pd.DataF
     report.heading("Label validity (calibration)", level)
     report.text(
         f"Measured, never tuned: reference level {result['reference_level_g']:g} g, design "
-        f"friction mu = {result['mu']:g}, {result['trials']} simulated calibration trials. "
-        "Each check states its target and whether the measured figure meets it."
+        f"friction mu = {result['mu']:g}, {result['trials']} simulated calibration trials"
+        f"{_conditions(result.get('config'))}. Each check states its target and whether the "
+        "measured figure meets it."
     )
     report.table(summary_table(checks), caption="Checks against their targets.")
     sub = level + 1
@@ -194,6 +195,22 @@ def _deciles(report: Report, checks: list[dict[str, Any]], fig_dir: Path, root: 
 
 
 # ------------------------------------------------------------------------------------ helpers
+def _conditions(config: dict[str, Any] | None) -> str:
+    if not config:
+        return ""
+    u, objects = config.get("uncertainty", {}), config.get("objects", {})
+    parts = []
+    if "density_kg_m3" in objects:
+        parts.append(f"density {objects['density_kg_m3']:g} kg/m³")
+    if "thickness_mm" in objects:
+        parts.append(f"thickness {objects['thickness_mm']:g} mm")
+    if "friction_range" in u:
+        parts.append(f"friction drawn in [{u['friction_range'][0]:g}, {u['friction_range'][1]:g}]")
+    if "position_std_mm" in u:
+        parts.append(f"pose error {u['position_std_mm']:g} mm, {u.get('yaw_std_rad', 0):g} rad")
+    return f" ({'; '.join(parts)})" if parts else ""
+
+
 def _figure(report: Report, path: Path, root: Path, caption: str) -> None:
     report.figure(str(Path(path).relative_to(root)), caption)
 
