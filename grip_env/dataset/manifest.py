@@ -17,10 +17,10 @@ from typing import Any
 
 import grip_env
 from grip_env.config import Config
-from grip_env.dataset.catalog import DatasetObject
+from grip_env.dataset.catalog import OBJECTS_FILE, DatasetObject
 from grip_env.dataset.files import write_text_atomically
 from grip_env.dataset.sampling import sampling_record
-from grip_env.dataset.shards import ShardRecord
+from grip_env.dataset.shards import GRIPS_DIR, SHARD_FILE, ShardRecord
 
 FORMAT = "grip-env-dataset"
 #: 2: outcome columns robustness_mean and robustness_std; kept grips chosen by dataset.sampling.
@@ -114,7 +114,27 @@ def read_manifest(directory: Path) -> Manifest:
     version = manifest.get("format_version")
     if version != FORMAT_VERSION:
         raise FormatVersionError(directory, version)
+    _check_files(path, manifest)
     return manifest
+
+
+def _check_files(path: Path, manifest: Manifest) -> None:
+    """Every file the manifest names is a shard in ``grips/`` or ``objects.parquet``: a crafted
+    manifest cannot point a reader outside the dataset directory."""
+    shards = manifest.get("shards")
+    if not isinstance(shards, dict) or not isinstance(manifest.get("objects"), list):
+        raise ValueError(f"{path} is corrupt: no shards or objects list")
+    for object_id, record in shards.items():
+        file = record.get("file") if isinstance(record, dict) else None
+        if not isinstance(file, str) or not SHARD_FILE.fullmatch(file):
+            raise ValueError(
+                f"{path} is corrupt: object {object_id!r} names shard file {file!r}, "
+                f"not a {GRIPS_DIR}/part-*.parquet file of the dataset"
+            )
+    listed = manifest.get("objects_file")
+    objects_file = listed.get("file") if isinstance(listed, dict) else listed
+    if objects_file != OBJECTS_FILE:
+        raise ValueError(f"{path} is corrupt: objects file {objects_file!r} is not {OBJECTS_FILE}")
 
 
 def write_manifest(directory: Path, manifest: Manifest) -> None:

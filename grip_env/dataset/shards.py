@@ -31,6 +31,38 @@ _TYPES: dict[str, pa.DataType] = {
 #: Arrow schema of every grip shard: DATASET_COLUMNS in order; descriptors and features float64.
 GRIP_SCHEMA = pa.schema([(name, _TYPES.get(name, pa.float64())) for name in DATASET_COLUMNS])
 NON_FLOAT_COLUMNS = tuple(name for name in IDENTITY + OUTCOMES if name != "success_rate")
+#: A shard's file name inside the dataset: ``grips/part-<index>-<safe object id>.parquet``.
+SHARD_FILE = re.compile(rf"{GRIPS_DIR}/part-\d{{6}}-[A-Za-z0-9_.-]+\.parquet")
+
+
+def _equivalent_types() -> dict[pa.DataType, pa.DataType]:
+    """Arrow types that hold the same values as the schema's (pandas 3 writes large_string)."""
+    found = {pa.large_string(): pa.string()}
+    if hasattr(pa, "string_view"):
+        found[pa.string_view()] = pa.string()
+    return found
+
+
+_EQUIVALENT_TYPES = _equivalent_types()
+
+
+def same_type(found: pa.DataType, expected: pa.DataType) -> bool:
+    """Whether a column of type ``found`` holds what the schema's ``expected`` type holds."""
+    return _EQUIVALENT_TYPES.get(found, found) == expected
+
+
+def schema_problems(name: str, schema: pa.Schema) -> list[str]:
+    """One line per dataset column missing from ``schema`` or of another type."""
+    problems = []
+    for field in GRIP_SCHEMA:
+        if field.name not in schema.names:
+            problems.append(f"{name}: column {field.name} missing")
+        elif not same_type(schema.field(field.name).type, field.type):
+            problems.append(
+                f"{name}: column {field.name} has type {schema.field(field.name).type}, "
+                f"expected {field.type}"
+            )
+    return problems
 
 
 @dataclass(frozen=True)
@@ -46,7 +78,8 @@ class ShardRecord:
 
 
 def shard_path(directory: Path, index: int, object_id: str) -> Path:
-    """``DIR/grips/part-<index>-<object_id>.parquet`` (object id made file-name safe)."""
+    """``DIR/grips/part-<index>-<object_id>.parquet``; the object id is made a safe file name
+    (letters, digits, ``_.-`` only), so no object name can lead out of ``DIR/grips``."""
     safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", object_id)
     return directory / GRIPS_DIR / f"part-{index:06d}-{safe}.parquet"
 
@@ -78,10 +111,12 @@ def write_shard(path: Path, grips: pd.DataFrame, metadata: dict[str, Any]) -> Sh
 
 
 def read_shard(path: Path, expected: ShardRecord | None = None) -> pd.DataFrame:
-    """Read a shard, checking it against its manifest record when given.
+    """Read a shard's dataset columns (Parquet only: nothing in the file is run as code),
+    checking it against its manifest record when given and its schema always.
 
     Raises:
-        ValueError: the file is missing, unreadable, or differs from ``expected``.
+        ValueError: the file is missing, unreadable, of another schema, or differs from
+            ``expected``.
     """
     if not path.is_file():
         raise ValueError(f"shard {path} is missing")
@@ -93,7 +128,11 @@ def read_shard(path: Path, expected: ShardRecord | None = None) -> pd.DataFrame:
         raise ValueError(f"shard {path} is corrupt: {exc}") from None
     if expected is not None and table.num_rows != expected.rows:
         raise ValueError(f"shard {path} has {table.num_rows} rows, manifest says {expected.rows}")
-    return table.to_pandas()
+    problems = schema_problems(str(path), table.schema)
+    if problems:
+        raise ValueError(f"shard {problems[0]}" + (f" (and {len(problems) - 1} more)"
+                                                  if len(problems) > 1 else ""))
+    return table.select(list(DATASET_COLUMNS)).to_pandas()
 
 
 def shard_metadata(path: Path) -> dict[str, Any]:

@@ -13,7 +13,7 @@ from grip_env.columns import FEATURES, INDEXES, ROBUSTNESS
 from grip_env.dataset.files import sha256_of
 from grip_env.dataset.jobs import SUCCESS_THRESHOLD
 from grip_env.dataset.manifest import Manifest, read_manifest, shard_records
-from grip_env.dataset.shards import GRIP_SCHEMA, ShardRecord
+from grip_env.dataset.shards import ShardRecord, schema_problems
 from grip_env.params import GraspParams
 
 FEATURE_RTOL = 1e-7
@@ -80,38 +80,10 @@ def _shard_problems(directory: Path, record: ShardRecord) -> tuple[list[str], pd
         return [*problems, f"{record.file}: unreadable Parquet ({exc})"], None
     if table.num_rows != record.rows:
         problems.append(f"{record.file}: {table.num_rows} rows, manifest says {record.rows}")
-    schema_problems = _schema_problems(record.file, table.schema)
-    if schema_problems:
-        return problems + schema_problems, None
+    problems_of_schema = schema_problems(record.file, table.schema)
+    if problems_of_schema:
+        return problems + problems_of_schema, None
     return problems, table.to_pandas()
-
-
-def _equivalent_types() -> dict[pa.DataType, pa.DataType]:
-    """Arrow types that hold the same values as the schema's (pandas 3 writes large_string)."""
-    found = {pa.large_string(): pa.string()}
-    if hasattr(pa, "string_view"):
-        found[pa.string_view()] = pa.string()
-    return found
-
-
-_EQUIVALENT_TYPES = _equivalent_types()
-
-
-def _same_type(found: pa.DataType, expected: pa.DataType) -> bool:
-    return _EQUIVALENT_TYPES.get(found, found) == expected
-
-
-def _schema_problems(name: str, schema: pa.Schema) -> list[str]:
-    problems = []
-    for field in GRIP_SCHEMA:
-        if field.name not in schema.names:
-            problems.append(f"{name}: column {field.name} missing")
-        elif not _same_type(schema.field(field.name).type, field.type):
-            problems.append(
-                f"{name}: column {field.name} has type {schema.field(field.name).type}, "
-                f"expected {field.type}"
-            )
-    return problems
 
 
 def _row_problems(
