@@ -17,7 +17,6 @@ from grip_env.objects.decomposition import (
     MAX_PIECES,
     bounded_pieces,
     exact_pieces,
-    inset_convex,
     merge_convex,
 )
 from grip_env.objects.simplify import AREA_SHIFT, simplify_contour
@@ -199,12 +198,19 @@ def test_collision_surface_is_the_shape_not_the_shape_plus_margin():
         assert point[8] * 1e3 == pytest.approx(1.0, abs=0.01)  # top face at 30 mm
 
 
-def test_inset_convex_moves_every_edge_in():
-    square = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]])
-    inset = inset_convex(square, COLLISION_MARGIN_MM)
-    assert Polygon(inset).area == pytest.approx(64.0)
-    sliver = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 0.5]])
-    np.testing.assert_array_equal(inset_convex(sliver, 1.0), sliver)
+def test_collision_pieces_are_the_shape_eroded_by_the_margin():
+    """Grown back by the margin, they give the shape's opening: faces and concave corners exact."""
+    l_shape = PlanarObject.from_polygon([(0, 0), (60, 0), (60, 20), (20, 20), (20, 50), (0, 50)])
+    shape = l_shape.simulated_shape()
+    eroded = shape.collision_pieces(COLLISION_MARGIN_MM)
+    grown = shapely.unary_union([Polygon(p).buffer(COLLISION_MARGIN_MM, quad_segs=64)
+                                 for p in eroded])
+    corner_loss = 5 * (1 - np.pi / 4) * COLLISION_MARGIN_MM**2  # five convex right-angle corners
+    assert grown.area == pytest.approx(l_shape.area - corner_loss, abs=0.01)
+    assert Polygon(shape.contour).covers(grown.buffer(-1e-6))
+    with pytest.raises(ValueError, match="nowhere thicker"):
+        PlanarObject.from_polygon([(0, 0), (50, 0), (50, 1.5), (0, 1.5)]).simulated_shape(
+        ).collision_pieces(COLLISION_MARGIN_MM)
 
 
 def test_thousands_of_contour_points_load_in_bounded_time_and_memory():

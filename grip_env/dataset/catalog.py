@@ -14,6 +14,7 @@ import pyarrow.parquet as pq
 from grip_env.config import Config
 from grip_env.dataset.files import write_atomically
 from grip_env.objects import PlanarObject, load_object_set, procedural_objects
+from grip_env.objects.simulated import DEFAULT_TOLERANCE_MM
 
 OBJECTS_FILE = "objects.parquet"
 
@@ -72,8 +73,12 @@ def _unique_ids(names: list[str]) -> list[str]:
     return ids
 
 
-def objects_table(entries: list[DatasetObject]) -> pa.Table:
-    """One row per object: id, name, source, contour (list of [x, y] mm) and descriptors."""
+def objects_table(
+    entries: list[DatasetObject], tolerance_mm: float = DEFAULT_TOLERANCE_MM
+) -> pa.Table:
+    """One row per object: id, name, source, contour (list of [x, y] mm) and descriptors, then
+    its simulated shape within ``tolerance_mm``: ``sim_*`` columns (vertex and piece counts,
+    tolerance, deviation bound, area, whether approximate) and ``sim_contour``."""
     rows = [{
         "object_index": entry.index,
         "object_id": entry.object_id,
@@ -82,13 +87,17 @@ def objects_table(entries: list[DatasetObject]) -> pa.Table:
         "vertices": len(entry.obj.contour),
         "contour": entry.obj.contour.tolist(),
         **entry.obj.descriptors(),
+        **entry.obj.simulated_shape(tolerance_mm).record(),
+        "sim_contour": entry.obj.simulated_shape(tolerance_mm).contour.tolist(),
     } for entry in entries]
     return pa.Table.from_pylist(rows)
 
 
-def write_objects(directory: Path, entries: list[DatasetObject]) -> str:
+def write_objects(
+    directory: Path, entries: list[DatasetObject], tolerance_mm: float = DEFAULT_TOLERANCE_MM
+) -> str:
     """Write ``objects.parquet`` atomically; returns its SHA-256."""
-    table = objects_table(entries)
+    table = objects_table(entries, tolerance_mm)
     return write_atomically(directory / OBJECTS_FILE, lambda temp: pq.write_table(table, temp))
 
 

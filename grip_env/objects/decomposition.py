@@ -116,18 +116,6 @@ def bounded_pieces(
     return list(live.values())
 
 
-def inset_convex(piece: Piece, margin_mm: float) -> Piece:
-    """A convex CCW piece with every edge moved inward by ``margin_mm`` (mitred corners).
-
-    A collision engine that rounds each convex shape outward by a margin then sees the piece
-    itself, its corners rounded by that margin. A piece too thin to inset is returned as it is.
-    """
-    inset = Polygon(piece).buffer(-margin_mm, join_style="mitre", mitre_limit=1e6)
-    if inset.is_empty or inset.geom_type != "Polygon" or inset.area <= _MIN_AREA_MM2:
-        return np.asarray(piece, dtype=float).copy()
-    return ccw(np.asarray(inset.exterior.coords)[:-1])
-
-
 def ccw(vertices: NDArray[np.float64]) -> NDArray[np.float64]:
     """The vertices in counter-clockwise order."""
     x, y = vertices[:, 0], vertices[:, 1]

@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from shapely.geometry import Polygon
 
 from grip_env.config import ObjectsConfig
-from grip_env.objects.decomposition import MAX_PIECES, bounded_pieces, exact_pieces
+from grip_env.objects.decomposition import MAX_PIECES, bounded_pieces, ccw, exact_pieces
 from grip_env.objects.simplify import simplify_contour
 
 DEFAULT_TOLERANCE_MM: float = ObjectsConfig.model_fields["sim_tolerance_mm"].default
@@ -48,6 +48,27 @@ class SimulatedShape:
     def area(self) -> float:
         """Area of the pieces' union (mm²)."""
         return float(shapely.unary_union([Polygon(p) for p in self.pieces]).area)
+
+    def collision_pieces(self, margin_mm: float) -> tuple[NDArray[np.float64], ...]:
+        """Convex pieces of the shape eroded by ``margin_mm``, for an engine that grows every
+        convex piece by that margin (Bullet does): it then collides with the shape's opening by a
+        disc of that radius. Faces and concave corners are exact, a convex corner of angle a is
+        rounded off by ``margin (1 / sin(a/2) - 1)``, parts thinner than twice the margin go.
+
+        Raises:
+            ValueError: nothing is left, or more than ``MAX_PIECES`` pieces.
+        """
+        if margin_mm <= 0:
+            return self.pieces
+        union = shapely.unary_union([Polygon(p) for p in self.pieces])
+        eroded = union.buffer(-margin_mm, join_style="mitre", mitre_limit=1e6)
+        parts = [g for g in getattr(eroded, "geoms", [eroded]) if g.area > 1e-6]
+        if not parts:
+            raise ValueError(f"the object is nowhere thicker than twice {margin_mm:g} mm")
+        pieces = [p for g in parts for p in exact_pieces(ccw(np.asarray(g.exterior.coords)[:-1]))]
+        if len(pieces) > MAX_PIECES:
+            pieces = bounded_pieces(pieces, eroded.buffer(self.tolerance_mm), MAX_PIECES)
+        return tuple(pieces)
 
     def record(self) -> dict[str, float | int | bool]:
         """The simulated-shape columns of the objects table."""

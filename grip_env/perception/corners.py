@@ -35,7 +35,7 @@ def sharpen_corners(
     regions = find_regions(contour, config)
     if len(regions) < 2:
         return contour
-    max_stretch = 8.0 * config.curvature_sigma_mm
+    max_stretch = 10.0 * config.curvature_sigma_mm
     replacements = _corner_replacements(contour, regions, tolerance_mm, max_stretch)
     return _apply(contour, replacements)
 
@@ -64,9 +64,22 @@ def _corner_replacements(
             np.minimum(_segment_distance(stretch, regions.b[k], corner),
                        _segment_distance(stretch, corner, regions.a[j])) <= tolerance_mm / 2
         )
-        if near_corner and hugs_edges:
+        if near_corner and hugs_edges and _lines_reach(contour, regions, k, j, first, last,
+                                                       tolerance_mm / 4):
             found.append((first, last, corner))
     return found
+
+
+def _lines_reach(
+    contour: NDArray[np.float64], regions: Regions, k: int, j: int, first: int, last: int,
+    tolerance_mm: float,
+) -> bool:
+    """Whether both edge lines pass within ``tolerance_mm`` of the contour where they end: a
+    region fitted across a bend ends off the contour, and its line would misplace the corner."""
+    normal_k, normal_j = regions.normal[k], regions.normal[j]
+    off_k = abs((contour[first] - regions.a[k]) @ normal_k)
+    off_j = abs((contour[last] - regions.a[j]) @ normal_j)
+    return bool(max(off_k, off_j) <= tolerance_mm)
 
 
 def _apply(

@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from grip_env.objects import PlanarObject
-from grip_env.objects.decomposition import MAX_PIECES, inset_convex
+from grip_env.objects.decomposition import MAX_PIECES
 from grip_env.objects.simulated import DEFAULT_TOLERANCE_MM
 
 
@@ -44,8 +44,10 @@ with _quiet_native_stdout():
 
 MM = 1e-3  # metres per millimetre
 COLLISION_MARGIN_MM = 1.0
-"""Bullet's margin around a convex mesh (PyBullet's default, measured: a body built from exact
-prisms touched a probe 1 mm away); object prisms are inset by it (at most a quarter thickness)."""
+"""Bullet's margin around a convex mesh (PyBullet 3.2.7's default, measured: exact prisms touched a
+probe 1 mm away; ``changeDynamics(collisionMargin=)`` changes the base only, not links). Object
+prisms are built eroded by it (``SimulatedShape.collision_pieces``) so that they collide as the
+shape itself."""
 
 
 @dataclass(frozen=True)
@@ -137,19 +139,23 @@ class World:
         """
         if thickness_mm <= 0 or mass_kg <= 0:
             raise ValueError(f"thickness and mass must be positive, got {thickness_mm}, {mass_kg}")
+        if thickness_mm <= 2 * COLLISION_MARGIN_MM:
+            raise ValueError(f"thickness must exceed {2 * COLLISION_MARGIN_MM:g} mm, "
+                             f"twice the collision margin, got {thickness_mm}")
         c = self.client
-        margin_mm = min(COLLISION_MARGIN_MM, thickness_mm / 4)
-        shapes, visuals = [], []
-        for piece in obj.simulated_shape(tolerance_mm).pieces:
-            vertices = _collision_prism(piece, thickness_mm, margin_mm)
-            shapes.append(c.createCollisionShape(pybullet.GEOM_MESH, vertices=vertices))
-            visuals.append(_visual_prism(c, piece, thickness_mm, rgba))
+        shape = obj.simulated_shape(tolerance_mm)
+        shapes = [
+            c.createCollisionShape(pybullet.GEOM_MESH, vertices=_collision_prism(p, thickness_mm))
+            for p in shape.collision_pieces(COLLISION_MARGIN_MM)
+        ]
+        visuals = [_visual_prism(c, piece, thickness_mm, rgba) for piece in shape.pieces]
+        links = max(len(shapes), len(visuals))  # a link may carry only one of the two
+        shapes += [-1] * (links - len(shapes))
+        visuals += [-1] * (links - len(visuals))
         centroid = [obj.centroid[0] * MM, obj.centroid[1] * MM, thickness_mm * MM / 2]
         inertia, axes = prism_inertia(obj, thickness_mm)
         uid = self._compound(shapes, visuals, mass_kg, centroid, axes)
         body = Body(uid, thickness_mm, tuple(range(-1, len(shapes) - 1)), inertia)
-        for link in body.links:
-            c.changeDynamics(uid, link, collisionMargin=margin_mm * MM)
         self.set_dynamics(body, mass_kg, friction)
         return body
 
@@ -274,15 +280,11 @@ def prism_inertia(
     return inertia, (0.0, 0.0, float(np.sin(half)), float(np.cos(half)))
 
 
-def _collision_prism(
-    piece: NDArray[np.float64], thickness_mm: float, margin_mm: float
-) -> list[list[float]]:
-    """Prism vertices (m) inset by the collision margin on every face: Bullet rounds a convex
-    mesh outward by its margin, so the surface it collides with is then the piece's own."""
-    inset = inset_convex(piece, margin_mm)
-    bottom = [[x * MM, y * MM, margin_mm * MM] for x, y in inset]
-    top = [[x * MM, y * MM, (thickness_mm - margin_mm) * MM] for x, y in inset]
-    return bottom + top
+def _collision_prism(piece: NDArray[np.float64], thickness_mm: float) -> list[list[float]]:
+    """Prism vertices (m) of an eroded piece, its faces a collision margin in from z = 0 and the
+    top: Bullet grows it back by the margin to the object's own faces."""
+    low, high = COLLISION_MARGIN_MM * MM, (thickness_mm - COLLISION_MARGIN_MM) * MM
+    return [[x * MM, y * MM, low] for x, y in piece] + [[x * MM, y * MM, high] for x, y in piece]
 
 
 def _prism(piece: NDArray[np.float64], thickness_mm: float) -> list[list[float]]:
