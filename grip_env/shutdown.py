@@ -61,7 +61,6 @@ class _State:
         self.deferring = 0
         self.pending: int | None = None
         self.stopping = False
-        self.watchdog: threading.Event | None = None
 
 
 _STATE = _State()
@@ -96,8 +95,8 @@ def stop_on_signals(advice: str = "") -> Iterator[None]:
         raise SystemExit(exit_code(signum)) from None
     finally:
         _STATE.deferring += 1  # a signal from here on is only recorded: the work is over
-        if _STATE.watchdog is not None:
-            _STATE.watchdog.set()
+        # after a signal the watchdog stays armed until the process has exited, so that
+        # exit handlers (Ray's shutdown talking to processes the signal killed) cannot hang it
         for signum, handler in previous.items():
             signal.signal(signum, handler)
         _STATE.__init__()
@@ -120,24 +119,23 @@ def _on_signal(signum: int, frame: FrameType | None) -> None:
     if _STATE.pending is not None:
         return  # already stopping: the first signal decides the exit code
     _STATE.pending = signum
-    _STATE.watchdog = _start_watchdog(exit_code(signum))
+    _start_watchdog(exit_code(signum))
     if _STATE.deferring == 0:
         _STATE.stopping = True
         raise Interrupted(signum)
 
 
-def _start_watchdog(code: int) -> threading.Event:
-    """Kill the children and exit with ``code`` if the shutdown takes too long."""
-    done = threading.Event()
+def _start_watchdog(code: int) -> None:
+    """Kill the children and exit with ``code`` if this process still runs after
+    :data:`SHUTDOWN_SECONDS` (it is a daemon thread: a process that exits in time ends it)."""
 
     def watch() -> None:
-        if not done.wait(SHUTDOWN_SECONDS):
-            end_children(grace=0.0)
-            _say("interrupted: shutdown took too long, stopped by force")
-            os._exit(code)
+        time.sleep(SHUTDOWN_SECONDS)
+        end_children(grace=0.0)
+        _say("interrupted: shutdown took too long, stopped by force")
+        os._exit(code)
 
     threading.Thread(target=watch, name="shutdown-watchdog", daemon=True).start()
-    return done
 
 
 def end_children(grace: float = CHILD_GRACE_SECONDS) -> None:
