@@ -84,3 +84,30 @@ def test_registering_the_commands_loads_no_learning_code():
     done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
                           check=True, cwd=ROOT)
     assert done.stdout.strip() == "[]"
+
+
+def grip_env_command(*args: str) -> subprocess.CompletedProcess[str]:
+    """``grip-env ARGS`` through the console-script entry point, in a fresh process."""
+    return subprocess.run([sys.executable, "-c", "from grip_env.cli import main; main()", *args],
+                          capture_output=True, text=True, cwd=ROOT, timeout=120)
+
+
+@pytest.mark.parametrize(("args", "fragment"), [
+    (["select", "--data", ".", "--out", "x", "--policy", "deep"], "'deep' is not one of"),
+    (["show"], "Missing argument"),
+    (["show", "star", "--grips", "many"], "--grips"),
+    (["nosuch"], "No such command 'nosuch'"),
+])
+def test_usage_errors_are_one_line_with_exit_code_2(args, fragment):
+    done = grip_env_command(*args)
+    assert done.returncode == 2, done.stderr
+    lines = [line for line in (done.stdout + done.stderr).splitlines() if line.strip()]
+    assert len(lines) == 1 and lines[0].startswith("error: ") and fragment in lines[0], lines
+    assert "--help" in lines[0]
+
+
+def test_entry_point_keeps_version_help_and_exit_codes():
+    assert grip_env_command("--version").stdout.strip().startswith("grip-env ")
+    help_run = grip_env_command("show", "--help")
+    assert help_run.returncode == 0 and "Shape names" in help_run.stdout
+    assert grip_env_command("show", "nosuch").returncode == 2

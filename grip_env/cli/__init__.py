@@ -7,6 +7,7 @@ one-line message and exit code 2, never a traceback.
 from __future__ import annotations
 
 import importlib
+import sys
 from typing import Annotated
 
 import typer
@@ -61,6 +62,29 @@ def _register_commands() -> None:
 
 
 def main() -> None:
-    """Console-script entry point."""
+    """Console-script entry point; a usage error (bad option value, missing argument) is one line.
+
+    Exit codes: 0 done, 1 failed, 2 bad input; commands document their own (e.g. 130 on SIGINT).
+    """
     _register_commands()
-    app()
+    if len(sys.argv) < 2:
+        app()  # no arguments: the help, as Typer shows it
+        return
+    try:
+        code = app(standalone_mode=False)
+    except typer.Abort:
+        typer.echo("aborted", err=True)
+        sys.exit(1)
+    except Exception as exc:  # click's UsageError and kin (vendored by Typer): one line
+        usage = hasattr(exc, "format_message") and isinstance(getattr(exc, "exit_code", 0), int)
+        if not usage:
+            raise
+        typer.echo(f"error: {exc.format_message()}{_help_hint(exc)}", err=True)
+        sys.exit(exc.exit_code)
+    sys.exit(code if isinstance(code, int) else 0)
+
+
+def _help_hint(exc: Exception) -> str:
+    context = getattr(exc, "ctx", None)
+    path = getattr(context, "command_path", None)
+    return f" (see {path} --help)" if path else ""
