@@ -40,6 +40,9 @@ _BOUNDS = {
 }  # fmt: skip
 
 
+_DIFFERENCE_BOUNDS = {"spearman": (-2.0, 2.0), "spearman_object": (-2.0, 2.0)}
+
+
 def has_target(table: pd.DataFrame) -> bool:
     """Whether the table carries the graded outcome (datasets before it do not)."""
     return TARGET_COLUMN in table.columns and bool(np.isfinite(table[TARGET_COLUMN]).all())
@@ -116,9 +119,10 @@ def paired_regression_difference(
     merged = frame.merge(reference, on=["repeat", "fold"], suffixes=("", "_ref"),
                          validate="one_to_one")  # fmt: skip
     return {
-        m: interval((merged[m] - merged[f"{m}_ref"]).to_numpy(float), folds)
+        m: interval((merged[m] - merged[f"{m}_ref"]).to_numpy(float), folds,
+                    _DIFFERENCE_BOUNDS.get(m, (-np.inf, np.inf)))
         for m in REGRESSION_METRICS
-    }
+    }  # fmt: skip
 
 
 def evaluate_regressors(

@@ -174,7 +174,8 @@ def test_run_selector_writes_report_model_and_curve(grips, small_config, tmp_pat
         assert (tmp_path / name).stat().st_size > 0
     assert any((tmp_path / "tb").iterdir())
     policies = report["policies"]
-    assert set(policies) == {"rl", "random", "best_qc", "best_qg", "classifier_logreg", "oracle"}
+    assert set(policies) == {"rl", "random", "best_qc", "best_qg", "classifier_logreg", "oracle",
+                             "oracle_robustness"}  # fmt: skip
     for scores in policies.values():
         low, high = scores["success_rate"]["ci"]
         assert 0.0 <= low <= scores["success_rate"]["mean"] <= high <= 1.0
@@ -250,7 +251,7 @@ def test_selector_trained_on_robustness_reports_first_pick_robustness(grips, sma
     report = run_selector(grips, tmp_path, config, timesteps=64, progress=False)
     assert report["reward"] == "robustness"
     policies = report["policies"]
-    oracle = policies["oracle"]["first_pick_robustness"]["mean"]
+    oracle = policies["oracle_robustness"]["first_pick_robustness"]["mean"]
     for scores in policies.values():
         assert 0.0 <= scores["first_pick_robustness"]["mean"] <= oracle + 1e-12
     best_possible = grips.groupby("object_id")["robustness_mean"].max()

@@ -103,8 +103,9 @@ def _cone(report: Report, check: dict[str, Any], fig_dir: Path, root: Path, leve
         report.text("No object had both a grip inside and one outside the friction cone.")
         return
     report.text(
-        f"Per object, the best grip whose finger force leaves the cone against the best grip "
-        f"by Q_C, at friction mu: mean robustness difference {_number(check['measured'])} g, "
+        f"Per object, the best grip by Q_C whose finger force leaves the cone against the best "
+        f"grip inside it, at friction mu: mean robustness difference "
+        f"{_number(check['measured'])} g, "
         f"95% t-interval over {len(rows)} objects {_ci(check['ci'])} "
         f"({_verdict(check['passed'])})."
     )
@@ -115,7 +116,7 @@ def _cone(report: Report, check: dict[str, Any], fig_dir: Path, root: Path, leve
     for _, row in rows.iterrows():
         ax.plot([0, 1], [row["best_g"], row["outside_g"]], marker="o", color="tab:gray")
         ax.annotate(str(row["object_id"]), (1.02, row["outside_g"]), fontsize=7)
-    ax.set_xticks([0, 1], ["best by Q_C", "outside the cone"])
+    ax.set_xticks([0, 1], ["best inside the cone", "best outside the cone"])
     ax.set_xlim(-0.2, 1.5)
     ax.set_ylabel("mean robustness (g)")
     ax.set_title("Paired by object, friction = mu")

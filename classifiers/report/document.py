@@ -95,8 +95,13 @@ def _interval_text(value: dict[str, Any]) -> str:
     if value["mean"] is None:
         return "n/a"
     if low is None or high is None:
-        return f"{value['mean']:.3f}"
-    return f"{value['mean']:.3f} [{low:.3f}, {high:.3f}]"
+        return _short(value["mean"])
+    return f"{_short(value['mean'])} [{_short(low)}, {_short(high)}]"
+
+
+def _short(number: float) -> str:
+    """Three decimals, or three significant digits beyond ±10 000 (a diverging fit's R²)."""
+    return f"{number:.3f}" if abs(number) < 1e4 else f"{number:.3g}"
 
 
 def _md_table(block: _Block) -> list[str]:

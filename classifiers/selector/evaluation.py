@@ -19,8 +19,8 @@ reported, so nothing is chosen on the test objects) and ``oracle`` (highest ``su
 first: it holds whenever a holding grip exists).
 
 When the dataset has the graded outcome, each selector also gets ``first_pick_robustness``: the
-recorded ``robustness_mean`` (g) of its first pick (random: the mean over the candidates). With
-``selector.reward = "robustness"`` the oracle orders by ``robustness_mean`` instead.
+recorded ``robustness_mean`` (g) of its first pick (random: the mean over the candidates), and
+``oracle_robustness`` orders by ``robustness_mean`` (the best first pick that reward can give).
 
 Interval: 95% percentile bootstrap over test objects (the unit of generalisation), the same
 resampled objects for every selector; ``n_boot`` resamples from a generator seeded with
@@ -189,8 +189,9 @@ def evaluate_selectors(
     fitted = fit_classifiers(table[ids.isin(train_ids).to_numpy()], config, classifiers)
     rankers.update({f"classifier_{name}": _classifier_ranker(m) for name, m in fitted.items()})
     robust = "robustness_mean" in table.columns
-    by_robustness = robust and selector.reward == "robustness"
-    rankers["oracle"] = _robustness_oracle if by_robustness else _oracle
+    rankers["oracle"] = _oracle
+    if robust:
+        rankers["oracle_robustness"] = _robustness_oracle
     scores = {name: _score(sets, rank, selector.max_attempts, robust)
               for name, rank in rankers.items()}  # fmt: skip
     scores["random"] = np.array([
