@@ -47,8 +47,11 @@ def test_help_lists_every_option() -> None:
 
 
 @pytest.mark.parametrize(("args", "message"), [
-    (["--trials", "0"], "trials must be >= 1"),
-    (["--workers", "0"], "workers must be an integer >= 1"),
+    (["--trials", "0"], "--trials: Input should be greater than or equal to 1 (got 0)"),
+    (["--workers", "0"], "--workers: Input should be greater than or equal to 1 (got 0)"),
+    (["--workers", "1000000000000"], "--workers: Input should be less than or equal to 1024"),
+    (["--objects", "99999999999999999999"], "--objects: Input should be less than or equal to"),
+    (["--address", "ray://host:10001"], "--address ray://host:10001 needs --backend ray"),
     (["--backend", "dask"], "unknown backend 'dask'"),
     (["--objects", "no_such_set"], "unknown object set 'no_such_set'"),
 ])
@@ -128,3 +131,18 @@ def test_validate_cli_flags_tampered_feature(tmp_path: Path, small_config: Path)
     code, text = cli("validate", str(out))
     assert code == 1
     assert "S2 differs" in text and "SHA-256" in text
+
+
+def test_validate_of_a_too_old_dataset_says_regenerate_in_one_line(tmp_path: Path) -> None:
+    from test_dataset import toy_job
+
+    from grip_env.dataset import generate
+
+    out = generate(SMALL, tmp_path / "d", objects=2, workers=1, progress=False, job=toy_job)
+    manifest = json.loads((out / "manifest.json").read_text())
+    manifest["format_version"] = 1
+    (out / "manifest.json").write_text(json.dumps(manifest))
+    code, text = cli("validate", str(out))
+    assert code == 2 and len(text.strip().splitlines()) == 1
+    assert text.startswith(f"error: dataset {out} has format version 1, this grip-env reads "
+                           "version 2; it is too old: regenerate it")

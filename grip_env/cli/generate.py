@@ -58,6 +58,10 @@ def generate(
         from grip_env.dataset import generate as generate_dataset
 
         cfg = load_config(config)
+        _check_flags(objects, trials, seed, workers)
+        chosen = backend or cfg.dataset.backend
+        if address is not None and chosen != "ray":
+            raise ValueError(f"--address {address} needs --backend ray (the backend is {chosen})")
         try:
             path = generate_dataset(
                 cfg, out, objects=objects, trials=trials, seed=seed, workers=workers,
@@ -70,6 +74,20 @@ def generate(
                   f"are kept: free space and rerun the same command to finish")
         manifest = dataset_manifest(path)
     typer.echo(f"wrote {path}: {manifest['rows']} grips of {len(manifest['objects'])} objects")
+
+
+def _check_flags(
+    objects: str | None, trials: int | None, seed: int | None, workers: int | None
+) -> None:
+    """Bound the flags as the config keys they override are bounded, before any work."""
+    from grip_env.config import check_setting
+
+    for key, value, flag in (("trials", trials, "--trials"), ("seed", seed, "--seed"),
+                             ("workers", workers, "--workers")):
+        if value is not None:
+            check_setting("dataset", key, value, flag)
+    if objects is not None and objects.strip().isdigit():
+        check_setting("objects", "procedural_count", int(objects), "--objects")
 
 
 def _fail(message: str) -> NoReturn:
