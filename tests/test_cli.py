@@ -96,6 +96,7 @@ def grip_env_command(*args: str) -> subprocess.CompletedProcess[str]:
     (["select", "--data", ".", "--out", "x", "--policy", "deep"], "'deep' is not one of"),
     (["show"], "Missing argument"),
     (["show", "star", "--grips", "many"], "--grips"),
+    (["show", "square", "--sim", "--seed", "-1"], "--seed"),
     (["nosuch"], "No such command 'nosuch'"),
 ])
 def test_usage_errors_are_one_line_with_exit_code_2(args, fragment):

@@ -27,7 +27,7 @@ def show(
     config: ConfigFile = None,
     mm_per_px: Annotated[float, typer.Option(help="scale of an image object")] = 1.0,
     sim: Annotated[bool, typer.Option("--sim", help="simulate the best grip")] = False,
-    seed: Annotated[int, typer.Option(help="seed of the simulated trial")] = 0,
+    seed: Annotated[int, typer.Option(min=0, help="seed of the simulated trial")] = 0,
 ) -> None:
     """Draw OBJECT with its grasping regions (and grips) to a PNG."""
     with user_errors():
