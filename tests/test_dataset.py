@@ -415,15 +415,15 @@ REAL = Config().override(dataset={"max_grips_per_object": 2, "trials": 2, "seed"
 
 @pytest.mark.slow
 def test_real_job_same_dataset_from_one_and_two_workers(tmp_path: Path) -> None:
-    config = REAL.override(dataset={"max_grips_per_object": 5})
+    config = REAL.override(dataset={"max_grips_per_object": 3, "trials": 1})
     serial = generate(config, tmp_path / "one", objects="basic", workers=1, progress=False)
     pooled = generate(config, tmp_path / "two", objects="basic", workers=2, progress=False)
     grips = load(serial)
     pd.testing.assert_frame_equal(grips, load(pooled))
     assert validate(serial) == []
     assert set(grips["object_id"]) <= {"rectangle", "triangle", "hexagon", "l_shape"}
-    assert (grips.groupby("object_id").size() <= 5).all()
-    assert (grips["trials"] == 2).all()
+    assert (grips.groupby("object_id").size() <= 3).all()
+    assert (grips["trials"] == 1).all()
     assert grips["grip_id"].str.count("/").eq(2).all()  # object/grasp/thumb, one object prefix
     assert (grips["robustness_mean"] >= 0).all() and (grips["robustness_std"] >= 0).all()
     # within an object, rows are the stratified sample of its Q_C ranking, best first
@@ -432,7 +432,7 @@ def test_real_job_same_dataset_from_one_and_two_workers(tmp_path: Path) -> None:
         rows = grips[grips["object_id"] == entry["object_id"]]
         task = ObjectTask(entry["index"], entry["object_id"], obj, config, entry["seed"])
         ranked = candidates(obj, config.grasp, config).sort_values("Q_C", kind="stable")
-        ranks = kept_ranks(len(ranked), 5, "stratified", task.sampling_seed())
+        ranks = kept_ranks(len(ranked), 3, "stratified", task.sampling_seed())
         np.testing.assert_allclose(rows["Q_C"].to_numpy(), ranked["Q_C"].to_numpy()[ranks])
         assert rows["Q_C"].is_monotonic_increasing
 
