@@ -1,10 +1,13 @@
 """The main job: dataset, classifiers, ablation, RL selector, label calibration, report.
 
-Every stage reuses what an earlier run already produced in ``out``, so an interrupted study resumes.
+Every stage reuses what an earlier run already produced in ``out`` when the config sections it
+depends on and the dataset are unchanged (:func:`stage_key`, kept in ``<stage>/stage.json``), so an
+interrupted study resumes and a new learning seed recomputes only the learning stages.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import time
 from collections.abc import Callable
@@ -39,16 +42,22 @@ def run_study(
     timings: dict[str, float] = {}
 
     def stage(name: str, done: Path, run: Callable[[], object]) -> None:
-        if done.exists():
+        key = stage_key(name, config, checksum, quick)
+        marker = done.parent / STAGE_FILE
+        if done.exists() and _stored_key(marker) == key:
             log(f"[study] {name}: reusing {done}")
             return
+        if done.exists():
+            log(f"[study] {name}: its settings or the dataset changed, recomputing")
         log(f"[study] {name} ...")
         start = time.perf_counter()
         run()
+        marker.write_text(json.dumps({"stage": name, "key": key}, indent=2))
         timings[name] = time.perf_counter() - start
         log(f"[study] {name} done in {timings[name]:.1f} s")
 
     from classifiers.ablation import run_ablation
+    from classifiers.persistence import dataset_checksum
     from classifiers.selector import run_selector
     from classifiers.training import train_and_save
     from grip_env.dataset import generate, load
@@ -59,6 +68,7 @@ def run_study(
     generate(config, data_dir)
     timings["dataset"] = time.perf_counter() - start
     table = load(data_dir)
+    checksum = dataset_checksum(table)
     stage("classifiers", out / "classifiers" / "metrics.json",
           lambda: train_and_save(table, out / "classifiers", config))
     stage("ablation", out / "ablation" / "ablation.json",
@@ -72,6 +82,37 @@ def run_study(
     from classifiers.report.study_report import write_report
 
     return write_report(out, config, table)
+
+
+STAGE_FILE = "stage.json"
+_STAGE_SECTIONS = {
+    "classifiers": ("learning",),
+    "ablation": ("learning",),
+    "selector": ("learning", "selector", "sim"),
+    "calibration": ("grasp", "objects", "perception", "synthesis", "sim", "uncertainty"),
+}
+
+
+def stage_key(name: str, config: Config, dataset_sha256: str, quick: bool = False) -> str:
+    """What a stage's result depends on, hashed: its config sections and the dataset.
+
+    A rerun reuses a stage only when its key is unchanged, so a new learning seed recomputes
+    the learning stages (on the same dataset) and leaves the calibration alone.
+    """
+    data = config.model_dump(mode="json")
+    depends = {section: data[section] for section in _STAGE_SECTIONS[name]}
+    if name == "calibration":
+        depends["dataset_seed"] = config.dataset.seed  # seeds the procedural objects
+        depends["quick"] = quick
+    depends["dataset"] = dataset_sha256
+    return hashlib.sha256(json.dumps(depends, sort_keys=True).encode()).hexdigest()
+
+
+def _stored_key(marker: Path) -> str | None:
+    try:
+        return json.loads(marker.read_text()).get("key")
+    except (OSError, ValueError, AttributeError):
+        return None
 
 
 def run_calibration(

@@ -246,3 +246,21 @@ def test_regression_needs_the_graded_outcome(synthetic_grips_table):
                             config=LearningConfig(folds=3))  # fmt: skip
     with pytest.raises(ValueError, match="unknown regressor name 'forest'"):
         make_regressor("forest")
+
+
+def test_study_stage_keys_follow_only_what_each_stage_depends_on():
+    from classifiers.study import stage_key
+    from grip_env.config import Config
+
+    base = Config()
+    reseeded = base.override(learning={"seed": 7})
+    lighter = base.override(objects={"density_kg_m3": 250.0})
+    for name in ("classifiers", "ablation", "selector"):
+        assert stage_key(name, base, "d") != stage_key(name, reseeded, "d")
+        assert stage_key(name, base, "d") != stage_key(name, base, "other dataset")
+    assert stage_key("calibration", base, "d") == stage_key("calibration", reseeded, "d")
+    assert stage_key("calibration", base, "d") != stage_key("calibration", lighter, "d")
+    assert stage_key("classifiers", base, "d") == stage_key("classifiers", lighter, "d")
+    more_steps = base.override(selector={"timesteps": 5})
+    assert stage_key("selector", base, "d") != stage_key("selector", more_steps, "d")
+    assert stage_key("ablation", base, "d") == stage_key("ablation", more_steps, "d")
