@@ -34,7 +34,7 @@ def write_report(out: Path, config: Config, table: pd.DataFrame) -> Path:
     )
     report.text(f"Written {datetime.now(UTC):%Y-%m-%d %H:%M} UTC from commit {_commit()}.")
     objects = _study_objects(config)
-    _dataset_section(report, table, objects, fig_dir)
+    _dataset_section(report, table, objects, fig_dir, config)
     _feature_section(report, table, fig_dir)
     _rank_section(report, objects, config)
     _calibration_section(report, out, fig_dir)
@@ -49,7 +49,7 @@ def write_report(out: Path, config: Config, table: pd.DataFrame) -> Path:
 
 # ---------------------------------------------------------------------------------- sections
 def _dataset_section(report: Report, table: pd.DataFrame, objects: list[PlanarObject],
-                     fig_dir: Path) -> None:
+                     fig_dir: Path, config: Config) -> None:
     report.heading("Dataset")
     per_object = table.groupby("object_id").size()
     summary = pd.DataFrame(
@@ -63,7 +63,8 @@ def _dataset_section(report: Report, table: pd.DataFrame, objects: list[PlanarOb
         },
         index=["objects", "grips (configurations)", "grips per object (mean)",
                "grips per object (range)", "simulated trials", "mean success rate",
-               "fraction labelled success (rate ≥ 0.5)", "fraction two-finger grips"],
+               f"fraction labelled success (holds {config.sim.reference_level_g:g} g in at "
+               "least half its trials)", "fraction two-finger grips"],
     ).rename_axis("quantity")
     if "robustness_mean" in table.columns:
         robustness = table["robustness_mean"]
@@ -75,8 +76,9 @@ def _dataset_section(report: Report, table: pd.DataFrame, objects: list[PlanarOb
     named = [o for o in objects if o.name in set(table["object_id"])][:16]
     path = figures.grip_gallery(named, table, fig_dir / "gallery.png")
     report.figure(_rel(path, report_root=fig_dir.parent),
-                  "Objects with their best grip by Q_C (solid) and worst (faint); simulated "
-                  "outcome in brackets. Dots: contacts; arrows: real finger forces; dashed: "
+                  "Objects with their best grip by Q_C (opaque) and worst (faint); above each, "
+                  "the share of trials holding the reference level and the mean robustness. "
+                  "Axes in mm. Dots: contacts; arrows: real finger forces; dashed: "
                   "finger lines to their spread axes; square: palm centre; × C_G, * C_C "
                   "(paper's Fig. 15).")
 
