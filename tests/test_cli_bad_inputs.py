@@ -159,6 +159,12 @@ def test_train_models_are_checked_before_the_data(tmp_path, models, fragment):
     assert not (tmp_path / "m").exists()
 
 
+@pytest.mark.parametrize("steps", ["99999999999999999999999", "0", "-5"])
+def test_select_timesteps_are_bounded_before_any_training(tmp_path, steps):
+    assert_refused(*run("select", "--data", tmp_path / "none", "--out", tmp_path / "s",
+                        "--timesteps", steps), "timesteps")
+
+
 # ----------------------------------------------------------------- generate
 @pytest.mark.xfail(run=False, reason="generate.py must bound them with check_setting (lead); "
                    "unbounded, the run would start real work")

@@ -44,11 +44,14 @@ def select(
     TensorBoard logs OUT/tb and OUT/learning_curve.png.
     """
     with user_errors():
-        output_dir(out)
-        from classifiers.selector import REPORT_FILE, run_selector
-        from grip_env.config import load_config
+        from grip_env.config import check_setting, load_config
 
+        output_dir(out)
         cfg = load_config(config)
+        if timesteps is not None:
+            check_setting("selector", "timesteps", timesteps, "--timesteps")
+        from classifiers.selector import REPORT_FILE, run_selector
+
         report = run_selector(data, out, cfg, policy.value, timesteps, live, progress)
     for name, scores in report["policies"].items():
         rate = scores["success_rate"]
