@@ -10,7 +10,7 @@ that still needs more pieces is refused, never truncated.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
@@ -43,6 +43,9 @@ class SimulatedShape:
     tolerance_mm: float
     deviation_mm: float
     approximate: bool
+    _eroded: dict[float, tuple[NDArray[np.float64], ...]] = field(
+        default_factory=dict, init=False, repr=False
+    )
 
     @property
     def area(self) -> float:
@@ -60,6 +63,11 @@ class SimulatedShape:
         """
         if margin_mm <= 0:
             return self.pieces
+        if margin_mm not in self._eroded:
+            self._eroded[margin_mm] = self._erode(margin_mm)
+        return self._eroded[margin_mm]
+
+    def _erode(self, margin_mm: float) -> tuple[NDArray[np.float64], ...]:
         union = shapely.unary_union([Polygon(p) for p in self.pieces])
         eroded = union.buffer(-margin_mm, join_style="mitre", mitre_limit=1e6)
         parts = [g for g in getattr(eroded, "geoms", [eroded]) if g.area > 1e-6]
