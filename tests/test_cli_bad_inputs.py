@@ -159,6 +159,12 @@ def test_train_models_are_checked_before_the_data(tmp_path, models, fragment):
     assert not (tmp_path / "m").exists()
 
 
+def test_ablate_model_is_checked_before_the_data(tmp_path):
+    assert_refused(*run("ablate", "--data", tmp_path / "none", "--out", tmp_path / "a",
+                        "--model", "nosuch"), "unknown model 'nosuch'")
+    assert not (tmp_path / "a").exists()
+
+
 @pytest.mark.parametrize("steps", ["99999999999999999999999", "0", "-5"])
 def test_select_timesteps_are_bounded_before_any_training(tmp_path, steps):
     assert_refused(*run("select", "--data", tmp_path / "none", "--out", tmp_path / "s",

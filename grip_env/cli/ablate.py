@@ -15,16 +15,22 @@ def ablate(
     data: DatasetDir,
     out: OutputDir,
     config: ConfigFile = None,
-    model: Annotated[str, typer.Option(help="model cross-validated on every feature set")] = "svm",
+    model: Annotated[
+        str, typer.Option(help="model cross-validated on every feature set (a train --models name)")
+    ] = "svm",
 ) -> None:
     """Write OUT/ablation.json (metrics, paired differences, importances) and OUT/ablation.png."""
     with user_errors():
-        output_dir(out)
-        from classifiers.ablation import run_ablation
+        from grip_env.cli.train import check_model_names
         from grip_env.config import load_config
+
+        check_model_names((model,))
+        output_dir(out)
+        settings = load_config(config)
+        from classifiers.ablation import run_ablation
         from grip_env.dataset import load
 
-        result = run_ablation(load(data), out, load_config(config), model)
+        result = run_ablation(load(data), out, settings, model)
         for name, entry in result["feature_sets"].items():
             auc = entry["models"][model]["roc_auc"]["mean"]
             typer.echo(f"{name:18s} ROC-AUC {auc:.3f}" if auc is not None else name)
