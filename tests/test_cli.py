@@ -42,6 +42,16 @@ def test_help_lists_the_choices(command, choices):
         assert choice in result.output, (command, choice)
 
 
+def test_model_names_in_help_are_the_learning_packages():
+    from classifiers.models import MODEL_NAMES
+    from grip_env.cli.options import MODEL_NAMES_HELP
+
+    assert MODEL_NAMES_HELP.split(", ") == list(MODEL_NAMES)
+    for command in ("train", "ablate"):
+        result = RUNNER.invoke(app, [command, "--help"], terminal_width=200)
+        assert all(name in result.output for name in MODEL_NAMES), command
+
+
 def test_a_bad_choice_is_refused_with_exit_code_2(tmp_path):
     result = RUNNER.invoke(app, ["select", "--data", ".", "--out", str(tmp_path),
                                  "--policy", "deep"])

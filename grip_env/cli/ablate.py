@@ -7,7 +7,7 @@ from typing import Annotated
 import typer
 
 from grip_env.cli.errors import user_errors
-from grip_env.cli.options import ConfigFile, DatasetDir, OutputDir
+from grip_env.cli.options import MODEL_NAMES_HELP, ConfigFile, DatasetDir, OutputDir
 from grip_env.cli.paths import output_dir
 
 
@@ -16,7 +16,7 @@ def ablate(
     out: OutputDir,
     config: ConfigFile = None,
     model: Annotated[
-        str, typer.Option(help="model cross-validated on every feature set (a train --models name)")
+        str, typer.Option(help=f"model cross-validated on every feature set: {MODEL_NAMES_HELP}")
     ] = "svm",
 ) -> None:
     """Write OUT/ablation.json (metrics, paired differences, importances) and OUT/ablation.png."""

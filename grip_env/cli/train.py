@@ -7,7 +7,7 @@ from typing import Annotated
 import typer
 
 from grip_env.cli.errors import user_errors
-from grip_env.cli.options import ConfigFile, DatasetDir, OutputDir
+from grip_env.cli.options import MODEL_NAMES_HELP, ConfigFile, DatasetDir, OutputDir
 from grip_env.cli.paths import output_dir
 
 
@@ -17,8 +17,8 @@ def train(
     config: ConfigFile = None,
     models: Annotated[
         str | None,
-        typer.Option(help="comma-separated model names, from svm, mlp_torch, mlp_sklearn, knn, "
-                          "logreg, rank_qc, rank_qg, random [default: config learning.models]"),
+        typer.Option(help=f"comma-separated model names, from {MODEL_NAMES_HELP} "
+                          "[default: config learning.models]"),
     ] = None,
 ) -> None:
     """Write OUT/metrics.json (grouped CV), roc.png, calibration.png and OUT/models/."""
