@@ -145,6 +145,7 @@ def test_calibrate_quick_writes_a_report_from_real_trials(tmp_path: Path):
     assert retest.groupby("grip")["trial"].nunique().eq(4).all()  # two disjoint sets of 2
     text = (out / "calibration.md").read_text()
     assert "Label validity" in text and "figures/calibration_retest.png" in text
+    assert "Decile checks" in text and "not run" in text  # no --data given
     assert (out / "figures" / "calibration_design.png").is_file()
     for name in ("design_hold", "retest", "icc"):
         assert name in text

@@ -56,6 +56,10 @@ def calibration_section(report: Report, result: dict[str, Any], trials: pd.DataF
     deciles = [checks[k] for k in ("decile_Q_C", "decile_Q_G") if k in checks]
     if deciles:
         _deciles(report, deciles, fig_dir, root, sub)
+    else:
+        report.text("Decile checks (Q_C and Q_G decile against mean robustness): not run, no "
+                    "dataset with the graded outcome was given (`grip-env calibrate --data DIR`, "
+                    "or the study's calibration stage).")
 
 
 def summary_table(checks: dict[str, dict[str, Any]]) -> pd.DataFrame:
