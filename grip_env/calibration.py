@@ -332,8 +332,11 @@ def icc_check(trials: pd.DataFrame) -> dict[str, Any]:
         return _check("icc", None, [None, None], f"ICC(1) >= {ICC_TARGET}", None)
     result = icc1(table.to_numpy())
     passed = None if result["value"] is None else bool(result["value"] >= ICC_TARGET)
+    residual = rows["robustness"] - rows.groupby("grip")["robustness"].transform("mean")
     return _check("icc", result["value"], result["ci"], f"ICC(1) >= {ICC_TARGET}", passed,
-                  grips=result["n"], trials=result["k"])
+                  grips=result["n"], trials=result["k"],
+                  friction_residual_spearman=_spearman(rows["friction"].to_numpy(float),
+                                                       residual.to_numpy(float)))  # fmt: skip
 
 
 def decile_table(table: pd.DataFrame, column: str, bins: int = 10) -> pd.DataFrame:

@@ -21,6 +21,7 @@ from grip_env.calibration import (
     decile_check,
     design_config,
     icc1,
+    icc_check,
     outside_cone,
     retest_check,
     spearman_bootstrap,
@@ -123,6 +124,20 @@ def test_decile_check_sees_a_monotone_trend_and_its_absence():
     assert decile_check(table, "Q_G", resamples=200)["passed"] is None
     with pytest.raises(ValueError, match="robustness_mean"):
         decile_check(table.drop(columns="robustness_mean"), "Q_C")
+
+
+def test_icc_check_reports_how_much_the_friction_draw_decides():
+    rng = np.random.default_rng(7)
+    rows = []
+    for g in range(20):
+        for k in range(8):
+            friction = rng.uniform(0.4, 0.9)
+            rows.append({"object_id": "o", "grip": f"g{g}", "part": "retest", "end": "best",
+                         "Q_C": 1.0, "Q_G": 1.0, "trial": k, "success": True, "mass_kg": 0.2,
+                         "friction": friction, "robustness": g + 40 * friction})  # fmt: skip
+    check = icc_check(pd.DataFrame(rows))
+    assert check["friction_residual_spearman"] > 0.95  # the residual is the friction's doing
+    assert check["grips"] == 20 and check["trials"] == 8
 
 
 def test_settings_reject_bad_sizes():

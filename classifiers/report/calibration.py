@@ -142,7 +142,10 @@ def _retest(report: Report, checks: dict[str, Any], trials: pd.DataFrame | None,
         f"{_ci(retest['ci'])} ({_verdict(retest['passed'])}); within one object the mean "
         f"Spearman is {_number(retest.get('within_object_mean'))}. ICC(1) of per-trial "
         f"robustness with the grip as class: {_number(icc.get('measured'))} "
-        f"{_ci(icc.get('ci'))} ({_verdict(icc.get('passed'))})."
+        f"{_ci(icc.get('ci'))} ({_verdict(icc.get('passed'))}). Within a grip, the trial's "
+        f"friction draw against its robustness residual has Spearman "
+        f"{_number(icc.get('friction_residual_spearman'))} (near 0: friction does not decide "
+        "the outcome)."
     )
     if trials is None or trials.empty:
         return
