@@ -135,9 +135,13 @@ def test_icc_check_reports_how_much_the_friction_draw_decides():
             rows.append({"object_id": "o", "grip": f"g{g}", "part": "retest", "end": "best",
                          "Q_C": 1.0, "Q_G": 1.0, "trial": k, "success": True, "mass_kg": 0.2,
                          "friction": friction, "robustness": g + 40 * friction})  # fmt: skip
-    check = icc_check(pd.DataFrame(rows))
-    assert check["friction_residual_spearman"] > 0.95  # the residual is the friction's doing
+    frame = pd.DataFrame(rows)
+    check = icc_check(frame)
+    assert check["friction_residual_spearman"] > 0.9  # the residual is the friction's doing
     assert check["grips"] == 20 and check["trials"] == 8
+    unrelated = frame.assign(robustness=frame["grip"].str[1:].astype(float)
+                             + rng.normal(0, 1, len(frame)))  # fmt: skip
+    assert abs(icc_check(unrelated)["friction_residual_spearman"]) < 0.2
 
 
 def test_settings_reject_bad_sizes():
