@@ -32,6 +32,8 @@ MAX_OBJECT_SIZE_MM = 2_000.0
 """Largest object extent: the open hand spans about 0.3 m; a 2 m part is not a grasp problem."""
 MAX_IMAGE_PIXELS = 4096 * 4096
 """Largest object image read (as ``perception.resolution_px`` at most 4096)."""
+MAX_SEED = 2**32 - 1
+"""Largest seed: scikit-learn and Stable-Baselines3 take 32-bit seeds."""
 
 Friction = Annotated[float, Field(ge=0.0, le=3.0)]
 ObjectSize = Annotated[float, Field(ge=5.0, le=1000.0)]
@@ -170,7 +172,7 @@ class DatasetConfig(_Section):
     """Dataset generation."""
 
     trials: int = Field(4, ge=1, le=1000, description="simulated trials per grip")
-    seed: int = Field(0, ge=0, description="run seed")
+    seed: int = Field(0, ge=0, le=MAX_SEED, description="run seed")
     workers: int = Field(2, ge=1, le=1024, description="parallel workers")
     backend: Literal["process", "ray"] = Field("process", description="parallel backend")
     max_grips_per_object: int = Field(30, ge=1, le=10_000, description="grips kept per object")
@@ -197,7 +199,7 @@ class LearningConfig(_Section):
     )
     folds: int = Field(5, ge=2, le=100, description="grouped CV folds")
     repeats: int = Field(3, ge=1, le=100, description="CV repeats over seeds")
-    seed: int = Field(0, ge=0, description="learning seed")
+    seed: int = Field(0, ge=0, le=MAX_SEED, description="learning seed")
     test_fraction: float = Field(0.25, gt=0.0, lt=1.0, description="held-out object fraction")
 
 
@@ -210,7 +212,7 @@ class SelectorConfig(_Section):
     reward: Literal["success", "robustness"] = Field(
         "success", description="reward of a pick: success (0/1) or robustness / reference level"
     )
-    seed: int = Field(0, ge=0, description="training seed")
+    seed: int = Field(0, ge=0, le=MAX_SEED, description="training seed")
 
 
 class Config(_Section):

@@ -51,6 +51,8 @@ BAD_SETTINGS = [
     ("dataset:\n  workers: 1000000000000\n", r"dataset\.workers.*1000000000000"),
     ("objects:\n  procedural_count: 99999999999999999999\n", r"objects\.procedural_count"),
     ("sim:\n  finger_force_n: .nan\n", r"sim\.finger_force_n"),
+    ("learning:\n  seed: 4294967296\n", r"learning\.seed.*4294967296"),
+    ("selector:\n  seed: 99999999999999999999\n", r"selector\.seed"),
 ]
 
 
