@@ -21,6 +21,7 @@ import pandas as pd
 import yaml
 from interrupt_driver import RAY_HOOK
 
+import grip_env
 from grip_env.config import Config
 from grip_env.dataset import load, validate
 
@@ -145,9 +146,19 @@ def assert_no_partial_files(out: Path) -> None:
     assert all(problem.endswith("no shard (run unfinished)") for problem in validate(out))
 
 
-@functools.cache
 def reference_dataset(config: Path) -> pd.DataFrame:
-    """The dataset of an uninterrupted run of ``config`` (computed once per test session)."""
+    """The dataset of an uninterrupted run of ``config``, computed once per state of the
+    source (a tree being edited while the tests run gets a fresh reference)."""
+    return _reference(config, _source_state())
+
+
+def _source_state() -> tuple[tuple[str, int], ...]:
+    package = Path(grip_env.__file__).parent
+    return tuple(sorted((str(p), p.stat().st_mtime_ns) for p in package.rglob("*.py")))
+
+
+@functools.cache
+def _reference(config: Path, source: tuple[tuple[str, int], ...]) -> pd.DataFrame:
     out = Path(tempfile.mkdtemp(prefix="grip-env-reference-")) / "data"
     try:
         done = subprocess.run(generate_command(config, out, "--workers", "1"),

@@ -45,7 +45,6 @@ CASES = [
     (signal.SIGINT, "planning", ("--workers", "2")),
     (signal.SIGTERM, "physics", ("--workers", "2")),
     (signal.SIGHUP, "write", ("--workers", "2")),
-    (signal.SIGTERM, "planning", ("--workers", "1")),
     (signal.SIGINT, "physics", ("--workers", "1")),
 ]
 
