@@ -170,3 +170,7 @@ def test_calibrate_quick_writes_a_report_from_real_trials(tmp_path: Path):
         assert name in text
     bad = CliRunner().invoke(app, ["calibrate", "--quick", "--workers", "0"])
     assert bad.exit_code == 2
+    a_file = tmp_path / "taken"
+    a_file.write_text("x")
+    refused = CliRunner().invoke(app, ["calibrate", "--quick", "--out", str(a_file)])
+    assert refused.exit_code == 2 and "existing file" in refused.output  # before any trial

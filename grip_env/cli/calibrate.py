@@ -9,6 +9,7 @@ import typer
 
 from grip_env.cli.errors import user_errors
 from grip_env.cli.options import ConfigFile
+from grip_env.cli.paths import output_dir
 
 
 def calibrate(
@@ -30,6 +31,7 @@ def calibrate(
     ICC(1) of robustness; with `--data`, Spearman of Q_C (and Q_G) decile with mean robustness.
     """
     with user_errors():
+        output_dir(out)
         from classifiers.report.calibration import write_calibration
         from grip_env.calibration import CalibrationSettings
         from grip_env.calibration import calibrate as run
