@@ -146,3 +146,17 @@ def test_override_validates():
 def test_readme_configuration_reference_is_current():
     readme = (DEFAULT_CONFIG_PATH.parents[1] / "README.md").read_text()
     assert config_reference_markdown() in readme
+
+
+def test_check_setting_bounds_a_cli_override_like_its_config_key():
+    from grip_env.config import check_setting
+
+    assert check_setting("dataset", "workers", 3) == 3
+    with pytest.raises(ValueError, match=r"^--workers: .*1024 \(got 1000000000000\)"):
+        check_setting("dataset", "workers", 10**12, "--workers")
+    with pytest.raises(ValueError, match=r"^--objects: .*\(got 99999999999999999999\)"):
+        check_setting("objects", "procedural_count", 99999999999999999999, "--objects")
+    with pytest.raises(ValueError, match=r"^selector\.timesteps"):
+        check_setting("selector", "timesteps", 0)
+    with pytest.raises(ValueError, match=r"unknown config key dataset\.nope"):
+        check_setting("dataset", "nope", 1)
