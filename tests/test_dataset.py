@@ -250,6 +250,17 @@ def test_resume_after_a_killed_worker(tmp_path: Path) -> None:
     pd.testing.assert_frame_equal(load(run(out, workers=2)), load(run(tmp_path / "clean")))
 
 
+def test_job_error_in_a_pool_worker_reaches_the_caller_and_ends_the_workers(
+    tmp_path: Path,
+) -> None:
+    import multiprocessing
+
+    with pytest.raises(RuntimeError, match="simulated crash"):
+        run(tmp_path / "d", workers=2, job=failing_after_two)
+    assert not [p for p in multiprocessing.active_children() if p.name == "grip-env-worker"]
+    assert not json.loads((tmp_path / "d" / "manifest.json").read_text())["complete"]
+
+
 def test_resume_recomputes_a_deleted_shard(tmp_path: Path) -> None:
     out = run(tmp_path / "d")
     next((out / "grips").glob("part-000003-*")).unlink()
