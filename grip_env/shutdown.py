@@ -97,8 +97,8 @@ def stop_on_signals(advice: str = "") -> Iterator[None]:
         _STATE.deferring += 1  # a signal from here on is only recorded: the work is over
         # after a signal the watchdog stays armed until the process has exited, so that
         # exit handlers (Ray's shutdown talking to processes the signal killed) cannot hang it
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
+        for signum, handler in previous.items():  # None: installed outside Python
+            signal.signal(signum, signal.SIG_DFL if handler is None else handler)
         _STATE.__init__()
 
 
