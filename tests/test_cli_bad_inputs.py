@@ -172,8 +172,6 @@ def test_select_timesteps_are_bounded_before_any_training(tmp_path, steps):
 
 
 # ----------------------------------------------------------------- generate
-@pytest.mark.xfail(run=False, reason="generate.py must bound them with check_setting (lead); "
-                   "unbounded, the run would start real work")
 @pytest.mark.parametrize(("flag", "value"), [
     ("--objects", "99999999999999999999"), ("--workers", "1000000000000"),
 ])
@@ -183,8 +181,6 @@ def test_generate_huge_counts_are_refused(tmp_path, flag, value):
                         *[item for pair in args.items() for item in pair]), flag, value)
 
 
-@pytest.mark.xfail(run=False, reason="generate.py must refuse --address without ray (lead); "
-                   "unchecked, the run would start real work")
 def test_generate_address_needs_the_ray_backend(tmp_path):
     assert_refused(*run("generate", "--out", tmp_path / "g", "--objects", "1",
                         "--backend", "process", "--address", "ray://host:10001"), "--address")
