@@ -102,7 +102,7 @@ class SimConfig(_Section):
 
     timestep: float = Field(1.0 / 240.0, ge=1e-4, le=0.02, description="physics step (s)")
     solver_iterations: int = Field(
-        150, ge=1, le=1000, description="constraint solver iterations (chosen by convergence)"
+        100, ge=1, le=1000, description="constraint solver iterations (chosen by convergence)"
     )
     finger_force_n: float = Field(15.0, gt=0.0, le=200.0, description="fingertip force")
     finger_friction: float = Field(1.0, gt=0.0, le=3.0, description="finger pad lateral friction")
@@ -119,14 +119,17 @@ class SimConfig(_Section):
         10.0, gt=0.0, le=180.0, description="rotation in the palm frame still held"
     )
     ramp_levels_g: tuple[float, float] = Field(
-        (0.5, 64.0), description="disturbance ramp: first and last level (g)"
+        (0.5, 128.0), description="disturbance ramp: first and last level (g)"
     )
     ramp_ratio: float = Field(
         2.0**0.5, gt=1.0, le=4.0, description="ratio between ramp levels"
     )
     ramp_steps_per_level: int = Field(3, ge=1, le=1000, description="steps each level is held")
+    ramp_directions: Literal["planar", "spatial"] = Field(
+        "planar", description="ramped disturbances: in the grip's plane, or also along its normal"
+    )
     reference_level_g: float = Field(
-        4.0, gt=0.0, le=1000.0, description="success: holds this disturbance level"
+        32.0, gt=0.0, le=1000.0, description="success: holds this disturbance level"
     )
     fingertip_clearance_mm: float = Field(
         4.0, ge=0.0, le=100.0, description="lowest finger point above the table while closing"

@@ -21,14 +21,18 @@ KNUCKLE_RADIUS_MM = barrett.KNUCKLE_RADIAL_MM  # knuckle from the finger's line 
 KNUCKLE_HEIGHT_MM = 75.4  # knuckle height along the palm normal (41.5 + 33.9)
 PROXIMAL_MM = barrett.PROXIMAL_LINK_MM
 DISTAL_MM = barrett.DISTAL_LINK_MM
-DISTAL_PAD_MM = 8.0  # half thickness of the distal link: the pad face is this far inside
-DISTAL_BEND_RAD = np.deg2rad(42.0)
-COUPLING = 1.0 / 3.0
+DISTAL_PAD_MM = barrett.DISTAL_PAD_MM
+DISTAL_BEND_RAD = barrett.DISTAL_BEND_RAD
+COUPLING = barrett.JOINT_COUPLING
 JOINT2_MAX = barrett.JOINT2_RANGE_RAD[1]
 JOINT3_MAX = barrett.JOINT3_RANGE_RAD[1]
 PALM_DEPTH_MM = 75.0  # palm cylinder from the base along the palm normal (URDF)
 _HEIGHT_RANGE = (60.0, 260.0)  # palm heights above the contact plane that are searched
 _SWEEP_CHECKS = 40  # best palm heights whose closing sweep is checked against the table
+_HEIGHT_STEP_MM = 2.0  # palm heights tried, this far apart
+_SWEEP_BATCHES = (1, 4, 35)  # checked in these batches, best first
+_MAX_OPENING_RAD = 1.5  # the pre-shape opens joint 2 by at most this
+_OPENING_BISECTIONS = 17
 
 
 def fingertip_in_plane(q2: NDArray, q3: NDArray) -> tuple[NDArray, NDArray]:
@@ -89,7 +93,7 @@ class ContactPosture:
     plane_z_mm: NDArray[np.float64] | float = np.nan
 
 
-MIN_PAD_ANGLE = np.deg2rad(95.0)  # distal link past vertical: its tip corner touches first
+MIN_PAD_ANGLE, MAX_PAD_ANGLE = barrett.PAD_ANGLE_RANGE_RAD  # the pad corner is what touches
 _PAD_LINK_MM = float(np.hypot(DISTAL_MM, DISTAL_PAD_MM))
 _PAD_LINK_ANGLE = float(np.arctan2(DISTAL_PAD_MM, DISTAL_MM))
 
@@ -106,8 +110,8 @@ def _pad_ik(reach: NDArray, height: NDArray) -> tuple[NDArray, NDArray]:
                                            PROXIMAL_MM + _PAD_LINK_MM * np.cos(sign * bend))
         link = q2 + sign * bend - _PAD_LINK_ANGLE
         q3 = link - q2 - DISTAL_BEND_RAD
-        ok = ((np.abs(cos_bend) <= 1.0) & (q2 >= 0.0) & (q2 <= JOINT2_MAX)
-              & (q3 >= 0.0) & (q3 <= JOINT3_MAX) & (link >= MIN_PAD_ANGLE) & (link <= np.pi))
+        ok = ((np.abs(cos_bend) <= 1.0) & (q2 >= 0.0) & (q2 <= JOINT2_MAX) & (q3 >= 0.0)
+              & (q3 <= JOINT3_MAX) & (link >= MIN_PAD_ANGLE) & (link <= MAX_PAD_ANGLE))
         best_q2 = np.where(ok, q2, best_q2)
         best_q3 = np.where(ok, q3, best_q3)
     return best_q2, best_q3
@@ -126,31 +130,46 @@ def contact_postures(
             the pre-shape ``gap_mm`` further out (``opening_posture``) onto the contact.
         palm_floor_mm: lowest the palm's face may come above the table (above the object).
 
-    Among the palm heights (1 mm apart) whose inverse kinematics puts all three pad corners on
-    the plane (distal link past vertical, so the corner is what touches), the ones closest to
+    Among the palm heights (``_HEIGHT_STEP_MM`` apart) whose inverse kinematics puts all three
+    pad corners on the plane (distal link past vertical, so the corner touches), the ones closest to
     the Barrett's natural coupling q3 = q2 / 3 are tried, best first, until one's closing
     clears the table.
     Rows without any such height are NaN and False in the mask.
     """
     reach = np.asarray(reach_mm, float).reshape(-1, 3)
-    heights = np.arange(_HEIGHT_RANGE[0], _HEIGHT_RANGE[1], 1.0)
+    heights = np.arange(_HEIGHT_RANGE[0], _HEIGHT_RANGE[1], _HEIGHT_STEP_MM)
     heights = heights[heights + contact_z_mm - PALM_DEPTH_MM >= palm_floor_mm]
     q2, q3 = _pad_ik(reach[:, :, None], heights[None, None, :])  # (n, 3, H)
     cost = np.abs(q3 - COUPLING * q2).sum(axis=1)  # (n, H), NaN where a finger has no posture
     cost = np.where(np.isnan(cost), np.inf, cost)
     order = np.argsort(cost, axis=1)[:, :_SWEEP_CHECKS]  # the best heights, best first
-    take = order[:, None, :].repeat(3, axis=1)
-    best2, best3 = np.take_along_axis(q2, take, 2), np.take_along_axis(q3, take, 2)
-    open2, open3 = opening_posture(np.nan_to_num(best2), np.nan_to_num(best3), gap_mm)
-    depth = sweep_depth(open2, open3, np.nan_to_num(best2), np.nan_to_num(best3)).max(axis=1)
-    valid = np.isfinite(np.take_along_axis(cost, order, 1))
-    valid &= heights[order] + contact_z_mm - depth >= clearance_mm  # (n, K)
-    found = valid.any(axis=1)
-    first = np.argmax(valid, axis=1)
-    pick = first[:, None, None].repeat(3, axis=1)
-    chosen2 = np.where(found[:, None], np.take_along_axis(best2, pick, 2)[..., 0], np.nan)
-    chosen3 = np.where(found[:, None], np.take_along_axis(best3, pick, 2)[..., 0], np.nan)
-    height = np.where(found, heights[np.take_along_axis(order, first[:, None], 1)[:, 0]], np.nan)
+    n = len(reach)
+    chosen2, chosen3 = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
+    height, found = np.full(n, np.nan), np.zeros(n, bool)
+    start = 0
+    for width in _SWEEP_BATCHES:  # most grips clear the table at their best height
+        if start >= order.shape[1]:
+            break
+        rows = np.flatnonzero(~found & np.isfinite(cost[np.arange(n), order[:, start]]))
+        if not rows.size:
+            break
+        cols = order[rows, start:start + width]  # (m, w)
+        take = cols[:, None, :].repeat(3, axis=1)
+        best2 = np.take_along_axis(q2[rows], take, 2)
+        best3 = np.take_along_axis(q3[rows], take, 2)
+        open2, open3 = opening_posture(np.nan_to_num(best2), np.nan_to_num(best3), gap_mm)
+        depth = sweep_depth(open2, open3, np.nan_to_num(best2), np.nan_to_num(best3)).max(axis=1)
+        valid = np.isfinite(np.take_along_axis(cost[rows], cols, 1))
+        valid &= heights[cols] + contact_z_mm - depth >= clearance_mm  # (m, w)
+        hit = valid.any(axis=1)
+        first = np.argmax(valid, axis=1)[hit]
+        done = rows[hit]
+        pick = first[:, None, None].repeat(3, axis=1)
+        chosen2[done] = np.take_along_axis(best2[hit], pick, 2)[..., 0]
+        chosen3[done] = np.take_along_axis(best3[hit], pick, 2)[..., 0]
+        height[done] = heights[cols[hit, first]]
+        found[done] = True
+        start += width
     return ContactPosture(chosen2, chosen3, height), found
 
 
@@ -173,18 +192,23 @@ def contact_posture(
 
 
 def opening_posture(q2: NDArray, q3: NDArray, gap_mm: float) -> tuple[NDArray, NDArray]:
-    """The pre-shape ``gap_mm`` further out, on the coupled path that closes onto (q2, q3)."""
+    """The pre-shape ``gap_mm`` further out, on the coupled path that closes onto (q2, q3).
+
+    The path opens joint 2 by ``s`` and joint 3 by ``s / 3`` (neither below 0); ``s`` is found by
+    bisection to 0.01 mrad, the first opening whose reach is ``gap_mm`` beyond the contact's.
+    """
     q2, q3 = np.asarray(q2, float), np.asarray(q3, float)
-    back = np.linspace(0.0, 1.5, 76)
-    path_q2 = np.maximum(q2[..., None] - back, 0.0)
-    path_q3 = np.maximum(q3[..., None] - COUPLING * back, 0.0)
-    r0, _ = fingertip_in_plane(q2, q3)
-    r, _ = fingertip_in_plane(path_q2, path_q3)
-    index = np.argmax(r >= r0[..., None] + gap_mm, axis=-1)
-    index = np.where((r >= r0[..., None] + gap_mm).any(axis=-1), index, len(back) - 1)
-    pick = index[..., None]
-    return (np.take_along_axis(path_q2, pick, -1)[..., 0],
-            np.take_along_axis(path_q3, pick, -1)[..., 0])
+    target = fingertip_in_plane(q2, q3)[0] + gap_mm
+
+    def along(s: NDArray) -> tuple[NDArray, NDArray]:
+        return np.maximum(q2 - s, 0.0), np.maximum(q3 - COUPLING * s, 0.0)
+
+    low, high = np.zeros_like(q2), np.minimum(q2, _MAX_OPENING_RAD)
+    for _ in range(_OPENING_BISECTIONS):
+        mid = (low + high) / 2
+        short = fingertip_in_plane(*along(mid))[0] < target
+        low, high = np.where(short, mid, low), np.where(short, high, mid)
+    return along(high)
 
 
 def sweep_depth(q2_from: NDArray, q3_from: NDArray, q2_to: NDArray, q3_to: NDArray) -> NDArray:

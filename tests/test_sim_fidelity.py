@@ -161,7 +161,7 @@ def test_a_centred_grip_resists_more_than_a_heavier_copy_of_it():
         a = scene.run(plan, noise)
     with TrialScene(BOX, heavy) as scene:
         b = scene.run(plan, noise)
-    assert a.held and a.robustness_g >= light.sim.reference_level_g
+    assert a.held and a.robustness_g >= 4.0
     assert b.robustness_g < a.robustness_g
 
 

@@ -1,9 +1,10 @@
 """The graded outcome: how large a disturbance a lifted grip resists, in g.
 
-After the lift and hold, the world is saved. For each of eight disturbances (along the palm
-frame's +z (pulling the object out of the hand, with gravity), -z, +-x, +-y, and a twist either
-way about the palm normal) the saved moment is restored and the disturbance is raised level by
-level, geometrically from ``sim.ramp_levels_g[0]`` by ``sim.ramp_ratio``, each level held
+After the lift and hold, the world is saved. For each disturbance (by default the six in the
+grip's plane: along the palm frame's +-x and +-y, and a twist either way about the palm normal;
+``sim.ramp_directions: spatial`` adds pulling the object out of the hand along gravity and
+pushing it in) the saved moment is restored and the disturbance is raised level by level,
+geometrically from ``sim.ramp_levels_g[0]`` by ``sim.ramp_ratio``, each level held
 ``sim.ramp_steps_per_level`` steps. A level of ``a`` g is a force ``m a g`` through the centre of
 mass, or for the twist the torque ``m a g k`` that gives a tangential acceleration of ``a`` g at
 the object's radius of gyration ``k``. The level held in a direction is the last one before the
@@ -24,11 +25,22 @@ from grip_env.config import SimConfig
 
 GRAVITY = 9.81
 
-#: (kind, palm-frame axis, sign): forces along the palm axes, twists about the palm normal.
-DISTURBANCES: tuple[tuple[str, int, float], ...] = (
-    ("force", 2, +1.0), ("force", 0, +1.0), ("force", 0, -1.0), ("force", 1, +1.0),
-    ("force", 1, -1.0), ("force", 2, -1.0), ("torque", 2, +1.0), ("torque", 2, -1.0),
+#: (kind, palm-frame axis, sign) in the grip's plane: forces along the palm's x and y axes and
+#: twists about its normal, the wrenches the planar grip's geometry resists.
+PLANAR_DISTURBANCES: tuple[tuple[str, int, float], ...] = (
+    ("force", 0, +1.0), ("force", 0, -1.0), ("force", 1, +1.0), ("force", 1, -1.0),
+    ("torque", 2, +1.0), ("torque", 2, -1.0),
 )
+#: Out of the plane: pulling the object out of the hand (with gravity) and pushing it in. Every
+#: grip resists these by friction alone, about mu * (sum of normal forces) whatever its geometry.
+NORMAL_DISTURBANCES: tuple[tuple[str, int, float], ...] = (("force", 2, +1.0), ("force", 2, -1.0))
+
+
+def disturbances(config: SimConfig) -> tuple[tuple[str, int, float], ...]:
+    """The disturbances a trial is ramped along (``sim.ramp_directions``)."""
+    if config.ramp_directions == "planar":
+        return PLANAR_DISTURBANCES
+    return NORMAL_DISTURBANCES + PLANAR_DISTURBANCES
 
 
 def ramp_levels(config: SimConfig) -> NDArray[np.float64]:
@@ -56,10 +68,10 @@ class RampProbe:
 
 
 def robustness(probe: RampProbe, mass_kg: float, gyration_m: float, config: SimConfig) -> float:
-    """The highest level (g) held in every direction; also counts the steps taken."""
+    """The highest level (g) held in every direction (gravity acts throughout)."""
     levels = ramp_levels(config)
     weakest = len(levels)  # index of the first level that failed in some direction
-    for kind, axis, sign in DISTURBANCES:
+    for kind, axis, sign in disturbances(config):
         probe.restore()
         unit = sign * probe.palm_axes[axis]
         scale = mass_kg * GRAVITY * (gyration_m if kind == "torque" else 1.0)

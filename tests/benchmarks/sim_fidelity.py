@@ -1,0 +1,192 @@
+"""Measurements behind BENCHMARKS.md's "Simulator" section (run by hand, they take minutes).
+
+    python -m tests.benchmarks.sim_fidelity convergence
+    python -m tests.benchmarks.sim_fidelity paired --b sim.solver_iterations=300 --trials 1200
+    python -m tests.benchmarks.sim_fidelity chaos
+    python -m tests.benchmarks.sim_fidelity paired --variant first-piece-friction
+
+* ``convergence``: a symmetric grip closes on a pinned 90 x 55 mm box; for each solver
+  iteration count, each finger's joint-2 motor torque against its command and its fingertip
+  normal force against ``sim.finger_force_n``.
+* ``paired``: the same (grip, trial) pairs under config A (the default) and config B (dotted
+  overrides); the paired difference in success and in robustness with 95 % intervals, and the
+  share of trials whose success flips.
+* ``chaos``: the same pairs with the palm moved by 1 nm: the flip rate a change must beat.
+
+Grips: every default object's candidates, a stratified sample of ``--per-object`` per object.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import replace
+
+import numpy as np
+import pandas as pd
+
+from grip_env.config import Config
+from grip_env.objects import load_object_set, make_shape
+from grip_env.pipeline import candidates
+from grip_env.sim import TrialScene, grip_plans
+from grip_env.sim.execution import grip_keys
+from grip_env.sim.trial import APPROACH_MM, APPROACH_STEPS
+from grip_env.sim.uncertainty import sample_noise, trial_rng
+
+
+def convergence(iterations: tuple[int, ...] = (50, 100, 150, 200, 300)) -> list[dict]:
+    """Motor torque / command and fingertip normal force per finger on a pinned box."""
+    box = make_shape("rectangle")
+    grip = pd.DataFrame([{"hand_x": 0.0, "hand_y": 0.0, "hand_yaw": np.pi / 2, "spread": 0.0,
+                          "p1_x": 25.0, "p1_y": 27.5, "p2_x": -25.0, "p2_y": 27.5,
+                          "p3_x": 0.0, "p3_y": -27.5}])
+    plan = grip_plans(grip)[0]
+    rows = []
+    for n in iterations:
+        config = Config().override(sim={"solver_iterations": n})
+        with TrialScene(box, config) as scene:
+            c = scene.world.client
+            noise = sample_noise(trial_rng(0, 0, 0), config)
+            noise = replace(noise, offset_mm=(0.0, 0.0), yaw_error=0.0)
+            palm, yaw, z = scene._place(plan, noise)
+            c.createConstraint(scene.object.uid, -1, -1, -1, c.JOINT_FIXED, [0, 0, 0],
+                               [0, 0, 0], [0, 0, 0.015])
+            for height in np.linspace(z + APPROACH_MM, z, APPROACH_STEPS + 1)[1:]:
+                scene.hand.move(np.array([*palm, height]), yaw)
+                scene.world.step()
+            for _ in range(120):
+                scene.hand.drive_fingers(scene.hand.touching(scene.object.uid))
+                scene.world.step()
+            torques = scene.hand.motor_torques()[:, 0]
+            commands = np.array([f.tau2 for f in scene.hand.fingers])
+            normals = _finger_normal_forces(scene)
+        rows.append({"iterations": n, "torque_ratio": (torques / commands).round(3).tolist(),
+                     "normal_force_n": normals.round(2).tolist()})
+    return rows
+
+
+def _finger_normal_forces(scene: TrialScene) -> np.ndarray:
+    c, hand = scene.world.client, scene.hand
+    points = c.getContactPoints(bodyA=hand.uid, bodyB=scene.object.uid)
+    forces = np.zeros(3)
+    for i, finger in enumerate(hand.fingers):
+        forces[i] = sum(p[9] for p in points if p[3] in finger.links)
+    return forces
+
+
+def sample_grips(per_object: int, config: Config) -> list[tuple[object, pd.DataFrame]]:
+    """A stratified sample of each default object's candidates over its Q_C ranking."""
+    out = []
+    for obj in load_object_set("default"):
+        table = candidates(obj, config=config)
+        if len(table):
+            picks = np.unique(np.linspace(0, len(table) - 1, per_object).round().astype(int))
+            out.append((obj, table.iloc[picks]))
+    return out
+
+
+#: Fixes that can be undone one at a time, to measure what each changes (config B runs them).
+VARIANTS = ("none", "first-piece-friction", "no-palm-lead")
+
+
+def _apply(variant: str) -> None:
+    """Undo one fix in this (worker) process."""
+    if variant == "first-piece-friction":
+        from grip_env.sim import world
+
+        def base_only(self, body, mass_kg, friction, spinning_friction=1.0):
+            inertia = [i * mass_kg for i in body.inertia_per_kg]
+            self.client.changeDynamics(body.uid, -1, mass=mass_kg, localInertiaDiagonal=inertia,
+                                       lateralFriction=friction,
+                                       spinningFriction=spinning_friction)
+
+        world.World.set_dynamics = base_only
+    elif variant == "no-palm-lead":
+        from grip_env.sim import hand
+
+        hand.PALM_LEAD_STEPS = 0
+
+
+def _run(args: tuple) -> list[tuple]:
+    obj, grips, config, trials, shift_mm, variant = args
+    _apply(variant)
+    rows = []
+    with TrialScene(obj, config) as scene:
+        for plan, key in zip(grip_plans(grips), grip_keys(grips), strict=True):
+            for k in range(trials):
+                noise = sample_noise(trial_rng(0, key, k), config)
+                if shift_mm:
+                    noise = replace(noise, offset_mm=(noise.offset_mm[0] + shift_mm,
+                                                      noise.offset_mm[1]))
+                r = scene.run(plan, noise)
+                rows.append((obj.name, key, k, r.success, r.robustness_g, r.held, r.steps))
+    return rows
+
+
+def outcomes(config: Config, per_object: int, trials: int, shift_mm: float = 0.0,
+             workers: int = 2, variant: str = "none") -> pd.DataFrame:
+    """One row per (object, grip, trial) under ``config`` (with one fix undone: ``variant``)."""
+    jobs = [(obj, g, config, trials, shift_mm, variant)
+            for obj, g in sample_grips(per_object, Config())]
+    with ProcessPoolExecutor(workers) as pool:
+        rows = [row for part in pool.map(_run, jobs) for row in part]
+    return pd.DataFrame(rows, columns=["object", "grip", "trial", "success", "robustness",
+                                       "held", "steps"])
+
+
+def paired_difference(a: pd.DataFrame, b: pd.DataFrame) -> dict:
+    """B minus A over the same trials: success (pp) and robustness (g) with 95 % intervals."""
+    m = a.merge(b, on=["object", "grip", "trial"], suffixes=("_a", "_b"))
+    ds = m["success_b"].astype(float) - m["success_a"].astype(float)
+    dr = m["robustness_b"] - m["robustness_a"]
+
+    def interval(d: pd.Series, scale: float) -> list[float]:
+        half = 1.96 * d.std(ddof=1) / np.sqrt(len(d))
+        return [round(scale * (d.mean() - half), 2), round(scale * (d.mean() + half), 2)]
+
+    return {"trials": len(m), "success_a": round(m["success_a"].mean(), 4),
+            "success_b": round(m["success_b"].mean(), 4),
+            "success_diff_pp": round(100 * ds.mean(), 2), "success_ci_pp": interval(ds, 100),
+            "robustness_diff_g": round(dr.mean(), 3), "robustness_ci_g": interval(dr, 1),
+            "flip_rate": round(float((m["success_a"] != m["success_b"]).mean()), 4),
+            "steps_a": round(m["steps_a"].mean(), 1), "steps_b": round(m["steps_b"].mean(), 1)}
+
+
+def _overrides(items: list[str]) -> Config:
+    sections: dict[str, dict] = {}
+    for item in items:
+        key, value = item.split("=", 1)
+        section, name = key.split(".", 1)
+        sections.setdefault(section, {})[name] = json.loads(value)
+    return Config().override(**sections) if sections else Config()
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("what", choices=("convergence", "paired", "chaos"))
+    parser.add_argument("--a", nargs="*", default=[], help="overrides of config A")
+    parser.add_argument("--b", nargs="*", default=[], help="overrides of config B")
+    parser.add_argument("--per-object", type=int, default=20)
+    parser.add_argument("--trials", type=int, default=4, help="trials per grip")
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--variant", choices=VARIANTS, default="none",
+                        help="config B runs with this fix undone")
+    args = parser.parse_args()
+    started = time.perf_counter()
+    if args.what == "convergence":
+        result: object = convergence()
+    else:
+        a = outcomes(_overrides(args.a), args.per_object, args.trials, workers=args.workers)
+        b = outcomes(_overrides(args.b if args.what == "paired" else args.a), args.per_object,
+                     args.trials, shift_mm=1e-6 if args.what == "chaos" else 0.0,
+                     workers=args.workers, variant=args.variant)
+        result = paired_difference(a, b)
+    print(json.dumps({"what": args.what, "a": args.a, "b": args.b, "variant": args.variant,
+                      "result": result,
+                      "seconds": round(time.perf_counter() - started, 1)}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
