@@ -52,26 +52,24 @@ from numpy.typing import NDArray
 
 from grip_env.config import SynthesisConfig
 from grip_env.features import force_line_from_deviations
+from grip_env.hand_geometry import (
+    DISTAL_BEND_RAD,
+    DISTAL_LINK_MM,
+    DISTAL_PAD_MM,
+    JOINT2_RANGE_RAD,
+    JOINT3_RANGE_RAD,
+    JOINT_COUPLING,
+    KNUCKLE_RADIAL_MM,
+    PAD_ANGLE_RANGE_RAD,
+    PROXIMAL_LINK_MM,
+    SPREAD_AXIS_OFFSET_MM,
+    THUMB_KNUCKLE_MM,
+)
 from grip_env.params import DEFAULT_PARAMS, GraspParams
 
 if TYPE_CHECKING:
     from grip_env.grasps import Grasps
     from grip_env.objects import PlanarObject
-
-# Hand geometry (barrett-bh8-280.md; link lengths are the manufacturer's figures).
-SPREAD_AXIS_OFFSET_MM = 25.0  #: spread axes of fingers 1 and 2 at (+-25, 0) in the palm
-KNUCKLE_RADIAL_MM = 50.0  #: joint 2 from its spread axis, radially
-THUMB_KNUCKLE_MM = 50.0  #: thumb joint 2 from the palm centre
-PROXIMAL_LINK_MM = 70.0  #: joint 2 to joint 3
-DISTAL_LINK_MM = 50.0  #: joint 3 to fingertip
-DISTAL_PAD_MM = 8.0  #: half thickness of the distal link: its pad face is this far off its axis
-DISTAL_BEND_RAD = float(np.deg2rad(42.0))  #: distal link bent towards the palm at joint 3 = 0
-PALM_HEIGHT_MM = 84.0  #: palm base to finger plane
-MAX_SPREAD_RAD = np.pi  #: mechanical spread range is [0, pi]
-JOINT2_RANGE_RAD = (0.0, 2.44)
-JOINT3_RANGE_RAD = (0.0, 0.84)
-JOINT_COUPLING = 1.0 / 3.0  #: joint 3 follows joint 2 / 3 until breakaway (the Barrett clutch)
-
 
 def fingertip_reach(joint2: NDArray, knuckle_mm: float = KNUCKLE_RADIAL_MM) -> NDArray:
     """Reach (mm) of the fingertip pad corner from the finger's line origin, coupled closing.
@@ -86,12 +84,6 @@ def fingertip_reach(joint2: NDArray, knuckle_mm: float = KNUCKLE_RADIAL_MM) -> N
             - DISTAL_PAD_MM * np.sin(a))
 
 
-#: Direction of the distal link in its closing plane (a, from the palm plane outwards) at which
-#: its pad corner is what touches an object's side: past vertical (the link leans inwards below
-#: the corner, so nothing above the contact height is further in; 5 degrees past, as
-#: ``grip_env.finger.MIN_PAD_ANGLE``), up to pointing straight back at the finger's axis (beyond
-#: that its back corner is further in than its pad).
-PAD_ANGLE_RANGE_RAD = (float(np.deg2rad(95.0)), float(np.pi))
 #: Joint 2 over which the coupled closing touches with its pad: PAD_ANGLE_RANGE_RAD at
 #: a = q2 + bend + q2 / 3, within joint 2's and joint 3's ranges. The reach falls monotonically.
 _PAD_JOINT2 = [(a - DISTAL_BEND_RAD) / (1 + JOINT_COUPLING) for a in PAD_ANGLE_RANGE_RAD]

@@ -17,6 +17,7 @@ from typing import Annotated, Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from grip_env.hand_geometry import FINGER_WIDTH_MM
 from grip_env.params import GraspParams
 
 DEFAULT_CONFIG_PATH = Path(__file__).resolve().parents[1] / "configs" / "default.yaml"
@@ -94,7 +95,9 @@ class SynthesisConfig(_Section):
     min_extension_mm: float = Field(15.0, ge=0.0, le=500.0, description="shortest finger reach")
     max_extension_mm: float = Field(160.0, gt=0.0, le=1000.0, description="longest finger reach")
     max_spread_rad: float = Field(1.5, gt=0.0, le=3.2, description="largest usable spread")
-    finger_width_mm: float = Field(25.0, gt=0.0, le=100.0, description="finger width")
+    finger_width_mm: float = Field(
+        FINGER_WIDTH_MM, gt=0.0, le=100.0, description="finger width (the URDF's)"
+    )
 
 
 class SimConfig(_Section):
@@ -119,17 +122,17 @@ class SimConfig(_Section):
         10.0, gt=0.0, le=180.0, description="rotation in the palm frame still held"
     )
     ramp_levels_g: tuple[float, float] = Field(
-        (0.5, 128.0), description="disturbance ramp: first and last level (g)"
+        (2.0, 128.0), description="disturbance ramp: first and last level (g)"
     )
     ramp_ratio: float = Field(
-        2.0**0.5, gt=1.0, le=4.0, description="ratio between ramp levels"
+        2.0**0.25, gt=1.0, le=4.0, description="ratio between ramp levels"
     )
     ramp_steps_per_level: int = Field(3, ge=1, le=1000, description="steps each level is held")
     ramp_directions: Literal["planar", "spatial"] = Field(
         "planar", description="ramped disturbances: in the grip's plane, or also along its normal"
     )
     reference_level_g: float = Field(
-        32.0, gt=0.0, le=1000.0, description="success: holds this disturbance level"
+        45.0, gt=0.0, le=1000.0, description="success: holds this disturbance level"
     )
     fingertip_clearance_mm: float = Field(
         4.0, ge=0.0, le=100.0, description="lowest finger point above the table while closing"

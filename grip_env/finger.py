@@ -16,17 +16,18 @@ import numpy as np
 from numpy.typing import NDArray
 
 from grip_env import barrett
+from grip_env import hand_geometry as hg
 
-KNUCKLE_RADIUS_MM = barrett.KNUCKLE_RADIAL_MM  # knuckle from the finger's line origin (S_i or O)
-KNUCKLE_HEIGHT_MM = 75.4  # knuckle height along the palm normal (41.5 + 33.9)
-PROXIMAL_MM = barrett.PROXIMAL_LINK_MM
-DISTAL_MM = barrett.DISTAL_LINK_MM
-DISTAL_PAD_MM = barrett.DISTAL_PAD_MM
-DISTAL_BEND_RAD = barrett.DISTAL_BEND_RAD
-COUPLING = barrett.JOINT_COUPLING
-JOINT2_MAX = barrett.JOINT2_RANGE_RAD[1]
-JOINT3_MAX = barrett.JOINT3_RANGE_RAD[1]
-PALM_DEPTH_MM = 75.0  # palm cylinder from the base along the palm normal (URDF)
+KNUCKLE_RADIUS_MM = hg.KNUCKLE_RADIAL_MM  # knuckle from the finger's line origin (S_i or O)
+KNUCKLE_HEIGHT_MM = hg.KNUCKLE_HEIGHT_MM
+PROXIMAL_MM = hg.PROXIMAL_LINK_MM
+DISTAL_MM = hg.DISTAL_LINK_MM
+DISTAL_PAD_MM = hg.DISTAL_PAD_MM
+DISTAL_BEND_RAD = hg.DISTAL_BEND_RAD
+COUPLING = hg.JOINT_COUPLING
+JOINT2_MAX = hg.JOINT2_RANGE_RAD[1]
+JOINT3_MAX = hg.JOINT3_RANGE_RAD[1]
+PALM_DEPTH_MM = hg.PALM_DEPTH_MM
 _HEIGHT_RANGE = (60.0, 260.0)  # palm heights above the contact plane that are searched
 _SWEEP_CHECKS = 40  # best palm heights whose closing sweep is checked against the table
 _HEIGHT_STEP_MM = 2.0  # palm heights tried, this far apart
@@ -93,7 +94,7 @@ class ContactPosture:
     plane_z_mm: NDArray[np.float64] | float = np.nan
 
 
-MIN_PAD_ANGLE, MAX_PAD_ANGLE = barrett.PAD_ANGLE_RANGE_RAD  # the pad corner is what touches
+MIN_PAD_ANGLE, MAX_PAD_ANGLE = hg.PAD_ANGLE_RANGE_RAD  # the pad corner is what touches
 _PAD_LINK_MM = float(np.hypot(DISTAL_MM, DISTAL_PAD_MM))
 _PAD_LINK_ANGLE = float(np.arctan2(DISTAL_PAD_MM, DISTAL_MM))
 

@@ -25,13 +25,13 @@ with the palm facing down the hand frame is mirrored, so planar finger 1 is URDF
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from importlib.resources import files
 from pathlib import Path
 
 import numpy as np
 import pybullet
 from numpy.typing import NDArray
 
-from grip_env import barrett
 from grip_env.config import SimConfig
 from grip_env.finger import (  # noqa: F401  (re-exported: the hand's kinematics)
     COUPLING,
@@ -51,10 +51,10 @@ from grip_env.finger import (  # noqa: F401  (re-exported: the hand's kinematics
 )
 from grip_env.sim.world import MM, World
 
-HAND_URDF = Path(__file__).resolve().parents[1] / "assets" / "barrett_bh8_280.urdf"
+#: The hand's URDF, package data (a file on disk in a wheel or an editable install alike).
+HAND_URDF = Path(str(files("grip_env") / "assets" / "barrett_bh8_280.urdf"))
 
-# Finger geometry in its closing plane (mm, rad): grip_env.barrett's figures, as in the URDF.
-SPREAD_AXIS_OFFSET_MM = barrett.SPREAD_AXIS_OFFSET_MM
+# The finger's geometry is grip_env.hand_geometry's (as in the URDF), through grip_env.finger.
 GEAR_FACTOR = 5.0  # joint 3's gear-train torque before breakaway, relative to tau3
 GEAR_GAIN = 0.5  # position gain of the gear train (stiff, still stable at 240 Hz)
 PALM_LEAD_STEPS = 4

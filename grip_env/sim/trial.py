@@ -101,7 +101,8 @@ class TrialScene:
         self.world = World(timestep=sim.timestep, solver_iterations=sim.solver_iterations)
         self.world.add_table()
         self.object = self.world.add_object(obj, self.thickness_mm, self.mass_kg,
-                                            self.config.grasp.mu)
+                                            self.config.grasp.mu,
+                                            tolerance_mm=self.config.objects.sim_tolerance_mm)
         self.gyration_m = float(np.sqrt(self.object.inertia_per_kg[2]))
         self.hand = Hand(self.world, sim)
         self.hand.teleport(np.array([0.0, 0.0, 400.0]), 0.0)
