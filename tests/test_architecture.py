@@ -180,3 +180,11 @@ def test_the_study_and_its_report_do_not_import_each_other():
     study = _imported_modules("classifiers/study.py")
     report = _imported_modules("classifiers/report/study_report.py")
     assert not ("classifiers.report.study_report" in study and "classifiers.study" in report)
+
+
+def test_only_the_world_touches_the_pybullet_client():
+    """The hand and the trial go through ``World`` by name, as panda-gym's one PyBullet wrapper."""
+    sim = Path(__file__).resolve().parents[1] / "grip_env" / "sim"
+    for name in ("hand.py", "trial.py", "disturbance.py", "execution.py", "uncertainty.py"):
+        text = (sim / name).read_text()
+        assert ".client" not in text and "import pybullet" not in text, name

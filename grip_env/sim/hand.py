@@ -29,7 +29,6 @@ from importlib.resources import files
 from pathlib import Path
 
 import numpy as np
-import pybullet
 from numpy.typing import NDArray
 
 from grip_env.config import SimConfig
@@ -113,33 +112,25 @@ class Hand:
     close_speed_rad_s: float = 1.5
 
     def __post_init__(self) -> None:
-        c = self.world.client
-        flags = (pybullet.URDF_USE_INERTIA_FROM_FILE | pybullet.URDF_USE_SELF_COLLISION
-                 | pybullet.URDF_USE_SELF_COLLISION_EXCLUDE_ALL_PARENTS)
-        self.uid = c.loadURDF(str(HAND_URDF), basePosition=[0, 0, 1], flags=flags)
-        self._com_offset = np.asarray(c.getDynamicsInfo(self.uid, -1)[3]) / MM
+        world = self.world
+        self.uid = world.load_robot(HAND_URDF)
+        self._com_offset = world.com_offset_mm(self.uid)
         pairs = zip(FLEX_JOINTS, FINGER_LINKS, strict=True)
         self.fingers = [_Finger(joints, links) for joints, links in pairs]
         self._flex = [j for f in self.fingers for j in f.joints]
-        torsion = self.config.pad_torsion_mm * MM
-        for link in range(c.getNumJoints(self.uid)):
-            c.changeDynamics(self.uid, link, lateralFriction=self.config.finger_friction,
-                             spinningFriction=torsion, frictionAnchor=1)
-        self.constraint = c.createConstraint(
-            self.uid, -1, -1, -1, pybullet.JOINT_FIXED, [0, 0, 0], [0, 0, 0], [0, 0, 1]
-        )
+        for link in range(world.link_count(self.uid)):
+            world.set_pad_friction(self.uid, link, self.config.finger_friction,
+                                   self.config.pad_torsion_mm)
+        self.constraint = world.hold(self.uid)
         self.spread = 0.0
         self._peak = np.zeros((3, 2))
         self._origin = np.zeros((3, 2))
         self._target: tuple[tuple[float, ...], float] = ((0.0, 0.0, 0.0), 0.0)
-        self._get_states = c.getJointStates
-        self._limit = c.changeDynamics
-        self._motors = c.setJointMotorControlArray
 
     # ------------------------------------------------------------------ palm
-    def _com_target(self, position_mm: NDArray, yaw: float) -> tuple[list[float], tuple]:
-        com = (np.asarray(position_mm, float) + palm_to_world(yaw, self._com_offset)) * MM
-        return com.tolist(), palm_quaternion(yaw)
+    def _com_target(self, position_mm: NDArray, yaw: float) -> tuple[NDArray, tuple]:
+        com = np.asarray(position_mm, float) + palm_to_world(yaw, self._com_offset)
+        return com, palm_quaternion(yaw)
 
     def teleport(self, position_mm: NDArray, yaw: float) -> None:
         """Put the palm base at ``position_mm`` (world) with ``yaw``; only when not in contact.
@@ -147,10 +138,7 @@ class Hand:
         PyBullet places a body by its centre of mass, so the base is shifted by the hand's
         centre-of-mass offset to land exactly at ``position_mm``.
         """
-        c = self.world.client
-        com, orn = self._com_target(position_mm, yaw)
-        c.resetBasePositionAndOrientation(self.uid, com, orn)
-        c.resetBaseVelocity(self.uid, [0, 0, 0], [0, 0, 0])
+        self.world.place(self.uid, *self._com_target(position_mm, yaw))
         self._target = (tuple(float(v) for v in position_mm), float(yaw))
         self.move(position_mm, yaw)
 
@@ -165,10 +153,7 @@ class Hand:
         lead = PALM_LEAD_STEPS * (position - np.asarray(self._target[0]))
         self._target = (tuple(float(v) for v in position), float(yaw))
         com, orn = self._com_target(position + lead, yaw)
-        self.world.client.changeConstraint(
-            self.constraint, jointChildPivot=com, jointChildFrameOrientation=orn,
-            maxForce=self.max_palm_force_n,
-        )
+        self.world.drive_hold(self.constraint, com, orn, self.max_palm_force_n)
 
     def palm_pose_mm(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Palm base position (mm) and quaternion."""
@@ -186,22 +171,19 @@ class Hand:
 
         ``joint3`` defaults to the coupled ``joint2 / 3``.
         """
-        c = self.world.client
+        world = self.world
         q2 = np.asarray(joint2, float)
         q3 = COUPLING * q2 if joint3 is None else np.asarray(joint3, float)
         self.spread = float(spread)
         for joint in SPREAD_JOINTS:
-            c.resetJointState(self.uid, joint, self.spread)
+            world.set_joint(self.uid, joint, self.spread)
         for finger, a, b in zip(self.fingers, q2, q3, strict=True):
-            c.resetJointState(self.uid, finger.joints[0], float(a))
-            c.resetJointState(self.uid, finger.joints[1], float(b))
+            world.set_joint(self.uid, finger.joints[0], a)
+            world.set_joint(self.uid, finger.joints[1], b)
             finger.broken_away = False
         self._origin = np.stack([q2, q3], axis=1)
         self._peak = self._origin.copy()
-        c.setJointMotorControlArray(
-            self.uid, list(SPREAD_JOINTS), pybullet.POSITION_CONTROL,
-            targetPositions=[self.spread] * 2, forces=[10.0] * 2,
-        )
+        world.position_motors(self.uid, list(SPREAD_JOINTS), [self.spread] * 2, [10.0] * 2)
         self._command_motors()
 
     def set_finger_torques(self, contact_q2: NDArray, contact_q3: NDArray | None = None) -> None:
@@ -220,15 +202,12 @@ class Hand:
 
     def joint_states(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Flexion joint positions and velocities, shape (3, 2) each, planar finger order."""
-        states = self._get_states(self.uid, self._flex)
-        q = np.array([s[0] for s in states]).reshape(3, 2)
-        dq = np.array([s[1] for s in states]).reshape(3, 2)
-        return q, dq
+        q, dq, _ = self.world.joint_states(self.uid, self._flex)
+        return q.reshape(3, 2), dq.reshape(3, 2)
 
     def motor_torques(self) -> NDArray[np.float64]:
         """Torque each flexion motor applied in the last step (3, 2), N·m."""
-        states = self._get_states(self.uid, self._flex)
-        return np.array([s[3] for s in states]).reshape(3, 2)
+        return self.world.joint_states(self.uid, self._flex)[2].reshape(3, 2)
 
     def drive_fingers(self, touching: NDArray[np.bool_] | None = None) -> NDArray[np.float64]:
         """One control update of the finger motors; returns the flexion velocities (3, 2).
@@ -269,12 +248,10 @@ class Hand:
                     velocity.append(joint)
                     velocity_forces.append(tau)
         if velocity:
-            self._motors(self.uid, velocity, pybullet.VELOCITY_CONTROL,
-                         targetVelocities=[self.close_speed_rad_s] * len(velocity),
-                         forces=velocity_forces)
+            self.world.velocity_motors(self.uid, velocity,
+                                       [self.close_speed_rad_s] * len(velocity), velocity_forces)
         if position:
-            self._motors(self.uid, position, pybullet.POSITION_CONTROL, targetPositions=targets,
-                         forces=position_forces, positionGains=[GEAR_GAIN] * len(position))
+            self.world.position_motors(self.uid, position, targets, position_forces, GEAR_GAIN)
 
     def state(self) -> HandState:
         """The controller's own state, to restore together with a PyBullet state."""
@@ -292,6 +269,5 @@ class Hand:
 
     def touching(self, body: int) -> NDArray[np.bool_]:
         """(3, 2): whether each finger's proximal and distal links (planar order) touch ``body``."""
-        contacts = self.world.client.getContactPoints(bodyA=self.uid, bodyB=body)
-        links = {point[3] for point in contacts}
+        links = self.world.touching_links(self.uid, body)
         return np.array([[f.links[-2] in links, f.links[-1] in links] for f in self.fingers])

@@ -106,7 +106,7 @@ class TrialScene:
         self.gyration_m = float(np.sqrt(self.object.inertia_per_kg[2]))
         self.hand = Hand(self.world, sim)
         self.hand.teleport(np.array([0.0, 0.0, 400.0]), 0.0)
-        self.state = self.world.client.saveState()
+        self.state = self.world.save()
         self._postures: dict[GripPlan, ContactPosture] = {}
 
     def close(self) -> None:
@@ -173,7 +173,7 @@ class TrialScene:
     def _place(self, plan: GripPlan, noise: TrialNoise) -> tuple[NDArray, float, float]:
         """Reset, pre-shape the hand for the plan and put it (with error) just above its height."""
         sim = self.config.sim
-        self.world.client.restoreState(self.state)
+        self.world.restore(self.state)
         self.world.set_dynamics(self.object, self.mass_kg * noise.mass_scale, noise.friction)
         posture = self.posture(plan)
         q2_open, q3_open = opening_posture(posture.q2, posture.q3, sim.preshape_gap_mm)
@@ -211,21 +211,20 @@ class TrialScene:
 
     def _robustness(self, yaw: float, noise: TrialNoise, counter: _StepCounter) -> float:
         """The disturbance ramp from this moment (``grip_env.sim.disturbance``)."""
-        c, sim = self.world.client, self.config.sim
-        saved, hand_state = c.saveState(), self.hand.state()
+        world, sim = self.world, self.config.sim
+        saved, hand_state = world.save(), self.hand.state()
         reference = self._object_in_palm()
         uid = self.object.uid
 
         def restore() -> None:
-            c.restoreState(saved)
+            world.restore(saved)
             self.hand.restore(hand_state)
 
         def push(kind: str, vector: NDArray) -> None:
             if kind == "torque":
-                c.applyExternalTorque(uid, -1, vector.tolist(), c.WORLD_FRAME)
+                world.twist(uid, vector)
             else:
-                com = c.getBasePositionAndOrientation(uid)[0]
-                c.applyExternalForce(uid, -1, vector.tolist(), com, c.WORLD_FRAME)
+                world.push(uid, vector)
 
         def moved() -> bool:
             drift, turn = self._moved_from(reference)
@@ -236,7 +235,7 @@ class TrialScene:
         try:
             return robustness(probe, self.mass_kg * noise.mass_scale, self.gyration_m, sim)
         finally:
-            c.removeState(saved)
+            world.forget(saved)
 
     def _object_in_palm(self) -> tuple[NDArray[np.float64], Rotation]:
         palm_pos, palm_orn = self.hand.palm_pose_mm()

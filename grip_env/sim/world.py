@@ -11,6 +11,7 @@ import os
 import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
@@ -209,9 +210,100 @@ class World:
         )
 
     def pose_mm(self, body: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Position (mm) and quaternion (x, y, z, w) of a body's base."""
+        """Position (mm) and quaternion (x, y, z, w) of a body's base (its centre of mass)."""
         pos, orn = self.client.getBasePositionAndOrientation(body)
         return np.asarray(pos) / MM, np.asarray(orn)
+
+    # ------------------------------------------------------------------ robots
+    def load_robot(self, urdf: str | Path) -> int:
+        """A URDF with its own inertia and self-collision (between links that are not ancestors)."""
+        flags = (pybullet.URDF_USE_INERTIA_FROM_FILE | pybullet.URDF_USE_SELF_COLLISION
+                 | pybullet.URDF_USE_SELF_COLLISION_EXCLUDE_ALL_PARENTS)
+        return self.client.loadURDF(str(urdf), basePosition=[0, 0, 1], flags=flags)
+
+    def link_count(self, body: int) -> int:
+        """Number of links (= joints) of ``body``, the base not counted."""
+        return self.client.getNumJoints(body)
+
+    def com_offset_mm(self, body: int) -> NDArray[np.float64]:
+        """The base's centre of mass in its link frame (mm)."""
+        return np.asarray(self.client.getDynamicsInfo(body, -1)[3]) / MM
+
+    def set_pad_friction(self, body: int, link: int, lateral: float, torsion_mm: float) -> None:
+        """Friction of one link: lateral coefficient, torsional friction (torque per normal
+        force, mm), with a friction anchor so resting contacts do not drift."""
+        self.client.changeDynamics(body, link, lateralFriction=lateral,
+                                   spinningFriction=torsion_mm * MM, frictionAnchor=1)
+
+    def hold(self, body: int) -> int:
+        """A fixed constraint from the world to ``body``'s base; returns its id."""
+        return self.client.createConstraint(body, -1, -1, -1, pybullet.JOINT_FIXED, [0, 0, 0],
+                                            [0, 0, 0], [0, 0, 1])
+
+    def drive_hold(self, constraint: int, com_mm: NDArray, orientation: tuple,
+                   max_force_n: float) -> None:
+        """Move a ``hold`` constraint's target: the held base's centre of mass (mm) and pose."""
+        self.client.changeConstraint(constraint, jointChildPivot=(np.asarray(com_mm) * MM).tolist(),
+                                     jointChildFrameOrientation=orientation,
+                                     maxForce=max_force_n)
+
+    def place(self, body: int, com_mm: NDArray, orientation: tuple) -> None:
+        """Teleport ``body`` (its centre of mass, mm) and stop it; only when not in contact."""
+        c = self.client
+        c.resetBasePositionAndOrientation(body, (np.asarray(com_mm) * MM).tolist(), orientation)
+        c.resetBaseVelocity(body, [0, 0, 0], [0, 0, 0])
+
+    def set_joint(self, body: int, joint: int, position: float) -> None:
+        """Teleport one joint (rad), at rest."""
+        self.client.resetJointState(body, joint, float(position))
+
+    def velocity_motors(self, body: int, joints: list[int], speeds: list[float],
+                        torques: list[float]) -> None:
+        """Velocity-controlled joint motors of limited torque (N·m)."""
+        self.client.setJointMotorControlArray(body, joints, pybullet.VELOCITY_CONTROL,
+                                              targetVelocities=speeds, forces=torques)
+
+    def position_motors(self, body: int, joints: list[int], targets: list[float],
+                        torques: list[float], gain: float | None = None) -> None:
+        """Position-controlled joint motors of limited torque (N·m); PyBullet's gain if None."""
+        gains = {} if gain is None else {"positionGains": [gain] * len(joints)}
+        self.client.setJointMotorControlArray(body, joints, pybullet.POSITION_CONTROL,
+                                              targetPositions=targets, forces=torques, **gains)
+
+    def joint_states(
+        self, body: int, joints: list[int]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """Positions, velocities and applied motor torques of ``joints``."""
+        states = self.client.getJointStates(body, joints)
+        return tuple(np.array([s[k] for s in states]) for k in (0, 1, 3))  # type: ignore[return-value]
+
+    def touching_links(self, body: int, other: int) -> set[int]:
+        """The links of ``body`` in contact with ``other``."""
+        return {point[3] for point in self.client.getContactPoints(bodyA=body, bodyB=other)}
+
+    # ------------------------------------------------------------------ states and loads
+    def save(self) -> int:
+        """Save the whole world in memory; returns a state id (``restore``, ``forget``)."""
+        return self.client.saveState()
+
+    def restore(self, state: int) -> None:
+        """Return the world to a saved state."""
+        self.client.restoreState(state)
+
+    def forget(self, state: int) -> None:
+        """Free a saved state."""
+        self.client.removeState(state)
+
+    def push(self, body: int, force_n: NDArray) -> None:
+        """A world-frame force (N) through ``body``'s centre of mass, for the next step."""
+        com = self.client.getBasePositionAndOrientation(body)[0]
+        self.client.applyExternalForce(body, -1, np.asarray(force_n).tolist(), com,
+                                       pybullet.WORLD_FRAME)
+
+    def twist(self, body: int, torque_nm: NDArray) -> None:
+        """A world-frame torque (N·m) on ``body``, for the next step."""
+        self.client.applyExternalTorque(body, -1, np.asarray(torque_nm).tolist(),
+                                        pybullet.WORLD_FRAME)
 
     # ------------------------------------------------------------------ camera
     def render_top_down(
