@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, NoReturn
+from typing import TYPE_CHECKING, Annotated, NoReturn
 
 import typer
 
@@ -11,14 +11,24 @@ from grip_env.cli.errors import user_errors
 from grip_env.cli.options import ConfigFile
 from grip_env.shutdown import stop_on_signals
 
+if TYPE_CHECKING:
+    from grip_env.objects import PlanarObject
+
 
 def generate(
     out: Annotated[Path, typer.Option("--out", "-o", help="dataset directory (created if needed)")],
     config: ConfigFile = None,
     objects: Annotated[
         str | None,
-        typer.Option(help="object set name (e.g. default) or a number of procedural objects "
+        typer.Option(help="object set name (e.g. default), a number of procedural objects, or "
+                          "your own: a folder or glob of images (with --mm-per-px) or vertex "
+                          "files (.csv x,y or .json [[x, y], ...], in mm) "
                           "(default: config objects.set + objects.procedural_count)"),
+    ] = None,
+    mm_per_px: Annotated[
+        float | None,
+        typer.Option("--mm-per-px", help="scale of the images given by --objects (required "
+                                         "for images)"),
     ] = None,
     trials: Annotated[
         int | None, typer.Option(help="simulated trials per grip (default: config dataset.trials)")
@@ -59,12 +69,13 @@ def generate(
 
         cfg = load_config(config)
         _check_flags(objects, trials, seed, workers)
+        chosen_objects = _objects(objects, mm_per_px)
         chosen = backend or cfg.dataset.backend
         if address is not None and chosen != "ray":
             raise ValueError(f"--address {address} needs --backend ray (the backend is {chosen})")
         try:
             path = generate_dataset(
-                cfg, out, objects=objects, trials=trials, seed=seed, workers=workers,
+                cfg, out, objects=chosen_objects, trials=trials, seed=seed, workers=workers,
                 backend=backend, address=address, progress=progress, overwrite=overwrite,
             )
         except WorkerLost as exc:
@@ -88,6 +99,25 @@ def _check_flags(
             check_setting("dataset", key, value, flag)
     if objects is not None and objects.strip().isdigit():
         check_setting("objects", "procedural_count", int(objects), "--objects")
+
+
+def _objects(spec: str | None, mm_per_px: float | None) -> str | list[PlanarObject] | None:
+    """What ``--objects`` names: a set or a count (as given), or the objects of its files."""
+    from grip_env.objects import OBJECT_SETS, SHAPE_NAMES
+    from grip_env.objects.sources import is_path_spec, objects_from_path
+
+    named = spec is None or spec.strip().lstrip("-").isdigit() or spec in OBJECT_SETS or (
+        spec in SHAPE_NAMES)
+    if named:
+        if mm_per_px is not None:
+            raise ValueError(f"--mm-per-px {mm_per_px:g} is for image files given by --objects")
+        return spec
+    if not is_path_spec(spec):
+        raise ValueError(
+            f"--objects: unknown object set {spec!r}, and no such file, folder or glob "
+            f"(sets: {', '.join(OBJECT_SETS)}, a shape name, or a number)"
+        )
+    return objects_from_path(spec, mm_per_px)
 
 
 def _fail(message: str) -> NoReturn:

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import re
 from collections import Counter
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -11,7 +13,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from grip_env.config import Config
+from grip_env.config import Config, check_contour_budget
 from grip_env.dataset.files import write_atomically
 from grip_env.objects import PlanarObject, load_object_set, procedural_objects
 from grip_env.objects.simulated import DEFAULT_TOLERANCE_MM
@@ -28,19 +30,40 @@ class DatasetObject:
     obj: PlanarObject
 
 
-def resolve_objects(config: Config, objects: str | int | None, seed: int) -> list[DatasetObject]:
-    """The objects a run covers, with unique ids.
+ObjectsSpec = str | int | Sequence[PlanarObject] | None
+_UNSAFE = re.compile(r"[^A-Za-z0-9_.+-]+")
+
+
+def resolve_objects(config: Config, objects: ObjectsSpec, seed: int) -> list[DatasetObject]:
+    """The objects a run covers, with unique ids that are safe file names.
 
     Args:
         config: supplies ``objects.set``, ``procedural_count`` and ``procedural_size_mm``
-            when ``objects`` is None.
+            when ``objects`` is None, and the contour budget (``perception``).
         objects: a named object set (or shape name), a number of procedural objects (an int or
-            a string of digits), or None for the config's set plus its procedural objects.
+            a string of digits), a list of ``PlanarObject``, or None for the config's set plus
+            its procedural objects.
         seed: the run seed; procedural objects are drawn from it.
 
     Raises:
-        ValueError: unknown object set, negative count, or no object at all.
+        ValueError: unknown object set, negative count, no object at all, or an object too
+            large or detailed to process (naming its source file when it has one).
     """
+    shapes = _shapes(config, objects, seed)
+    if not shapes:
+        raise ValueError("the run has no objects: choose an object set or a count >= 1")
+    for shape in shapes:
+        _check_budget(shape, config)
+    return [DatasetObject(i, object_id, obj) for i, (object_id, obj) in
+            enumerate(zip(_unique_ids([s.name for s in shapes]), shapes, strict=True))]
+
+
+def own_objects(objects: ObjectsSpec) -> bool:
+    """Whether ``objects`` is the caller's own list (whose contours identify the run)."""
+    return not isinstance(objects, (str, int, type(None)))
+
+
+def _shapes(config: Config, objects: ObjectsSpec, seed: int) -> list[PlanarObject]:
     size = config.objects.procedural_size_mm
     if isinstance(objects, str) and objects.strip().lstrip("-").isdigit():
         objects = int(objects)
@@ -49,25 +72,39 @@ def resolve_objects(config: Config, objects: str | int | None, seed: int) -> lis
     if isinstance(objects, int):
         if objects < 1:
             raise ValueError(f"number of objects must be >= 1, got {objects}")
-        shapes = procedural_objects(objects, seed, size)
-    elif objects is not None:
-        shapes = load_object_set(objects)
-    else:
-        named = config.objects.set
-        shapes = [] if named == "procedural" else load_object_set(named)
-        shapes += procedural_objects(config.objects.procedural_count, seed, size)
-    if not shapes:
-        raise ValueError("the run has no objects: choose an object set or a count >= 1")
-    return [DatasetObject(i, object_id, obj) for i, (object_id, obj) in
-            enumerate(zip(_unique_ids([s.name for s in shapes]), shapes, strict=True))]
+        return procedural_objects(objects, seed, size)
+    if isinstance(objects, str):
+        return load_object_set(objects)
+    if objects is not None:
+        shapes = list(objects)
+        wrong = [type(s).__name__ for s in shapes if not isinstance(s, PlanarObject)]
+        if wrong:
+            raise ValueError(f"objects must be PlanarObject instances, got a {wrong[0]}")
+        return shapes
+    named = config.objects.set
+    shapes = [] if named == "procedural" else load_object_set(named)
+    return shapes + procedural_objects(config.objects.procedural_count, seed, size)
+
+
+def _check_budget(obj: PlanarObject, config: Config) -> None:
+    low, high = obj.contour.min(axis=0), obj.contour.max(axis=0)
+    try:
+        check_contour_budget(obj.name, len(obj.contour), float(obj.polygon.length),
+                             float((high - low).max()), config.perception)
+    except ValueError as exc:
+        if obj.source in ("polygon", "mask"):
+            raise
+        raise ValueError(f"object file {obj.source}: {exc}") from None
 
 
 def _unique_ids(names: list[str]) -> list[str]:
-    """Object names, with ``-<n>`` appended to repeated ones."""
-    repeated = {name for name, count in Counter(names).items() if count > 1}
+    """Object names as safe file names (letters, digits, ``_.+-``; no leading dot), with
+    ``-<n>`` appended to repeated ones."""
+    safe = [_UNSAFE.sub("_", name).lstrip(".") or "object" for name in names]
+    repeated = {name for name, count in Counter(safe).items() if count > 1}
     seen: Counter[str] = Counter()
     ids = []
-    for name in names:
+    for name in safe:
         seen[name] += 1
         ids.append(f"{name}-{seen[name]}" if name in repeated else name)
     return ids

@@ -16,7 +16,14 @@ from tqdm.auto import tqdm
 
 from grip_env.config import Config
 from grip_env.dataset.backends import check_backend, run_jobs
-from grip_env.dataset.catalog import OBJECTS_FILE, DatasetObject, resolve_objects, write_objects
+from grip_env.dataset.catalog import (
+    OBJECTS_FILE,
+    DatasetObject,
+    ObjectsSpec,
+    own_objects,
+    resolve_objects,
+    write_objects,
+)
 from grip_env.dataset.files import check_writable, sha256_of
 from grip_env.dataset.jobs import ObjectJob, ObjectTask, object_seeds, simulate_object
 from grip_env.dataset.lock import dataset_lock
@@ -45,7 +52,7 @@ class DatasetMismatchError(ValueError):
 def generate(
     config: Config,
     out_dir: str | Path,
-    objects: str | int | None = None,
+    objects: ObjectsSpec = None,
     trials: int | None = None,
     seed: int | None = None,
     workers: int | None = None,
@@ -61,7 +68,8 @@ def generate(
         config: the run configuration; ``trials``, ``seed``, ``workers`` and ``backend`` default
             to its ``dataset`` section.
         out_dir: dataset directory (created if needed).
-        objects: a named object set, a number of procedural objects, or None for ``config.objects``.
+        objects: a named object set, a number of procedural objects, a list of ``PlanarObject``
+            (ids from their names, made safe file names), or None for ``config.objects``.
         trials: simulated trials per grip (>= 1).
         seed: run seed; object ``i`` gets a seed derived from (seed, i).
         workers: parallel workers (>= 1); the dataset does not depend on it.
@@ -91,7 +99,7 @@ def generate(
     entries = resolve_objects(config, objects, config.dataset.seed)
     check_writable(directory)
     with dataset_lock(directory):
-        manifest = _open_run(directory, config, entries, overwrite)
+        manifest = _open_run(directory, config, entries, overwrite, own_objects(objects))
         seeds = [record["seed"] for record in manifest["objects"]]
         pending = [
             ObjectTask(e.index, e.object_id, e.obj, config, seeds[e.index])
@@ -115,11 +123,11 @@ def _effective_config(config: Config, trials: int | None, seed: int | None) -> C
 
 
 def _open_run(
-    directory: Path, config: Config, entries: list[DatasetObject], overwrite: bool
+    directory: Path, config: Config, entries: list[DatasetObject], overwrite: bool, own: bool
 ) -> Manifest:
     """The manifest to continue: the existing one if it is the same run, else a fresh one."""
     if (directory / MANIFEST_FILE).exists():
-        old, differences = _compare_with_existing(directory, config, entries)
+        old, differences = _compare_with_existing(directory, config, entries, own)
         if old is not None and not differences:
             return old
         if not overwrite:
@@ -132,20 +140,20 @@ def _open_run(
         _remove_dataset(directory)
     objects_sha = write_objects(directory, entries)
     manifest = new_manifest(config, entries, object_seeds(config.dataset.seed, len(entries)),
-                            objects_sha)
+                            objects_sha, own)
     write_manifest(directory, manifest)
     return manifest
 
 
 def _compare_with_existing(
-    directory: Path, config: Config, entries: list[DatasetObject]
+    directory: Path, config: Config, entries: list[DatasetObject], own: bool
 ) -> tuple[Manifest | None, list[str]]:
     """The dataset already in ``directory`` and how its run differs from this one."""
     try:
         old = read_manifest(directory)
     except FormatVersionError as exc:
         return None, [f"format_version: {exc.version!r} -> {FORMAT_VERSION}"]
-    return old, identity_differences(old["identity"], run_identity(config, entries))
+    return old, identity_differences(old["identity"], run_identity(config, entries, own))
 
 
 def _remove_dataset(directory: Path) -> None:

@@ -50,12 +50,30 @@ class FormatVersionError(ValueError):
         )
 
 
-def run_identity(config: Config, entries: list[DatasetObject]) -> dict[str, Any]:
-    """Everything that determines a dataset's rows: config (minus execution fields) and objects."""
+def run_identity(
+    config: Config, entries: list[DatasetObject], own_objects: bool = False
+) -> dict[str, Any]:
+    """Everything that determines a dataset's rows: config (minus execution fields) and objects.
+
+    Named and procedural objects are fixed by their ids and the config; a caller's own objects
+    (``own_objects``) also by the SHA-256 of their contours, so an edited file is a new run.
+    """
     settings = config.model_dump(mode="json")
     for name in EXECUTION_FIELDS:
         settings["dataset"].pop(name, None)
-    return {"config": settings, "object_ids": [entry.object_id for entry in entries]}
+    identity = {"config": settings, "object_ids": [entry.object_id for entry in entries]}
+    if own_objects:
+        identity["object_contours_sha256"] = contours_sha256(entries)
+    return identity
+
+
+def contours_sha256(entries: list[DatasetObject]) -> str:
+    """SHA-256 of the objects' contours (float64 bytes, in run order)."""
+    digest = hashlib.sha256()
+    for entry in entries:
+        digest.update(len(entry.obj.contour).to_bytes(8, "little"))
+        digest.update(entry.obj.contour.astype("<f8").tobytes())
+    return digest.hexdigest()
 
 
 def fingerprint(identity: dict[str, Any]) -> str:
@@ -64,10 +82,11 @@ def fingerprint(identity: dict[str, Any]) -> str:
 
 
 def new_manifest(
-    config: Config, entries: list[DatasetObject], object_seeds: list[int], objects_sha256: str
+    config: Config, entries: list[DatasetObject], object_seeds: list[int], objects_sha256: str,
+    own_objects: bool = False,
 ) -> Manifest:
-    """The manifest of a run that has no shard yet."""
-    identity = run_identity(config, entries)
+    """The manifest of a run that has no shard yet (``own_objects``: see :func:`run_identity`)."""
+    identity = run_identity(config, entries, own_objects)
     return {
         "format": FORMAT,
         "format_version": FORMAT_VERSION,
