@@ -52,7 +52,7 @@ def _root(
 
 
 _COMMAND_MODULES = (
-    "show", "study", "generate", "validate", "train", "ablate", "select", "calibrate"
+    "show", "study", "generate", "validate", "train", "ablate", "select", "calibrate", "predict"
 )
 
 

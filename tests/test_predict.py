@@ -1,0 +1,161 @@
+"""``grip-env predict`` on a dataset generated for real, with models saved by ``grip-env train``;
+crafted model files are refused without running their code."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import skops.io as sio
+import torch
+import yaml
+from sklearn.base import BaseEstimator
+from sklearn.pipeline import Pipeline
+from typer.testing import CliRunner
+
+from classifiers.baselines import ColumnSelector
+from classifiers.persistence import load_model
+from grip_env.cli import _register_commands, app
+from grip_env.columns import FEATURES
+from grip_env.dataset import load
+
+_register_commands()
+RUNNER = CliRunner()
+
+
+def cli(*args: object) -> tuple[int, str]:
+    result = RUNNER.invoke(app, [str(a) for a in args])
+    return result.exit_code, result.output
+
+
+def assert_refused(code: int, output: str, *fragments: str) -> None:
+    lines = [line for line in output.splitlines() if line.strip()]
+    assert code == 2, output
+    assert len(lines) == 1 and lines[0].startswith("error: "), output
+    for fragment in fragments:
+        assert fragment in lines[0], output
+
+
+@pytest.fixture(scope="module")
+def trained(generated_dataset_dir: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """``grip-env train`` output on the generated dataset: logreg, the torch MLP, a regressor."""
+    out = tmp_path_factory.mktemp("trained")
+    config = out / "learn.yaml"
+    config.write_text(yaml.safe_dump({"learning": {
+        "models": ["logreg", "mlp_torch"], "regressors": ["ridge"], "folds": 2, "repeats": 1}}))
+    code, output = cli("train", "--data", generated_dataset_dir, "--out", out / "train",
+                       "--config", config)
+    assert code == 0, output
+    return out / "train" / "models"
+
+
+def test_predict_scores_every_grip_as_the_python_lines_do(
+    trained: Path, generated_dataset_dir: Path, tmp_path: Path
+) -> None:
+    out = tmp_path / "predictions.parquet"
+    code, output = cli("predict", "--model", trained / "logreg.json",
+                       "--data", generated_dataset_dir, "--out", out)
+    assert code == 0, output
+    assert "in-sample" in output  # trained on these grips: said so
+    table = pd.read_parquet(out)
+    grips = load(generated_dataset_dir)
+    assert list(table.columns) == ["grip_id", "object_id", "p_success", "model"]
+    assert table["grip_id"].tolist() == grips["grip_id"].tolist()
+    assert table["object_id"].tolist() == grips["object_id"].tolist()
+    assert set(table["model"]) == {"logreg"}
+    # the README's Python lines give the same numbers
+    model, info = load_model(trained, "logreg")
+    expected = model.predict_proba(grips)[:, list(model.classes_).index(True)]
+    np.testing.assert_allclose(table["p_success"], expected)
+    assert ((table["p_success"] >= 0) & (table["p_success"] <= 1)).all()
+    assert table["p_success"].std() > 0  # the features move it
+    assert info["features"] == list(FEATURES)
+
+
+def test_predict_with_the_torch_mlp_and_a_regressor(
+    trained: Path, generated_dataset_dir: Path, tmp_path: Path
+) -> None:
+    grips = load(generated_dataset_dir)
+    code, output = cli("predict", "--model", trained / "mlp_torch.pt",
+                       "--data", generated_dataset_dir, "--out", tmp_path / "mlp.parquet")
+    assert code == 0, output
+    mlp = pd.read_parquet(tmp_path / "mlp.parquet")
+    assert len(mlp) == len(grips) and mlp["p_success"].between(0, 1).all()
+    code, output = cli("predict", "--model", trained / "regressor_ridge",
+                       "--data", generated_dataset_dir, "--out", tmp_path / "ridge.parquet")
+    assert code == 0, output
+    ridge = pd.read_parquet(tmp_path / "ridge.parquet")
+    assert list(ridge.columns) == ["grip_id", "object_id", "robustness_pred", "model"]
+    model, _ = load_model(trained, "regressor_ridge")
+    np.testing.assert_allclose(ridge["robustness_pred"], model.predict(grips))
+
+
+def test_bad_model_data_or_out_end_in_one_line(
+    trained: Path, generated_dataset_dir: Path, tmp_path: Path
+) -> None:
+    model = trained / "logreg.json"
+    data = generated_dataset_dir
+    assert_refused(*cli("predict", "--model", trained, "--data", data), "directory",
+                   "logreg.json")
+    assert_refused(*cli("predict", "--model", trained / "nope.json", "--data", data),
+                   "nope.json")
+    assert_refused(*cli("predict", "--model", model, "--data", tmp_path), "not a grip-env dataset")
+    assert_refused(*cli("predict", "--model", model, "--data", data, "--out", tmp_path / "p.csv"),
+                   ".parquet")
+    assert_refused(*cli("predict", "--model", model, "--data", data, "--out", tmp_path),
+                   "directory")
+
+
+# ----------------------------------------------------------------------------- crafted files
+class Planted(BaseEstimator):
+    """An estimator whose restoring leaves a mark: a loader that ran it would be caught."""
+
+    marker: Path | None = None
+
+    def __setstate__(self, state: dict) -> None:
+        Path(state["marker"]).write_text("ran")
+        self.__dict__.update(state)
+
+
+class _Touch:
+    def __init__(self, marker: Path) -> None:
+        self.marker = marker
+
+    def __reduce__(self) -> tuple:
+        return (Path.write_text, (self.marker, "ran"))
+
+
+def test_a_skops_model_with_an_untrusted_type_is_refused_unrun(
+    generated_dataset_dir: Path, tmp_path: Path
+) -> None:
+    marker = tmp_path / "ran.txt"
+    planted = Planted()
+    planted.__dict__["marker"] = str(marker)
+    pipeline = Pipeline([("select", ColumnSelector(tuple(FEATURES))), ("model", planted)])
+    sio.dump(pipeline, tmp_path / "evil.skops")
+    (tmp_path / "evil.json").write_text(json.dumps(
+        {"name": "evil", "format": "skops", "columns": list(FEATURES)}))
+    assert_refused(*cli("predict", "--model", tmp_path / "evil.json",
+                        "--data", generated_dataset_dir, "--out", tmp_path / "p.parquet"),
+                   "trusted", "Planted")
+    assert not marker.exists() and not (tmp_path / "p.parquet").exists()
+
+
+def test_a_torch_model_holding_a_pickled_call_is_refused_unrun(
+    generated_dataset_dir: Path, tmp_path: Path
+) -> None:
+    marker = tmp_path / "ran.txt"
+    torch.save({"weights": _Touch(marker)}, tmp_path / "evil.pt")
+    (tmp_path / "evil.json").write_text(json.dumps({
+        "name": "evil", "format": "torch_state_dict", "estimator": "TorchMLPClassifier",
+        "columns": list(FEATURES), "params": {}, "fitted": {}}))
+    assert_refused(*cli("predict", "--model", tmp_path / "evil.json",
+                        "--data", generated_dataset_dir, "--out", tmp_path / "p.parquet"),
+                   "cannot load model")
+    assert not marker.exists()
+    (tmp_path / "evil.pt").write_bytes(b"not a torch file")
+    assert_refused(*cli("predict", "--model", tmp_path / "evil.json",
+                        "--data", generated_dataset_dir), "cannot load model")
