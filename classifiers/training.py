@@ -4,6 +4,9 @@
 
 - ``metrics.json``: grouped, repeated CV of every model
   (:func:`classifiers.evaluation.evaluate_models`) plus the dataset checksum;
+- ``metrics.json["held_out"]``: every model fitted on the training objects of the study's split
+  (:func:`grip_env.dataset.split.held_out_objects`) and scored on its held-out objects, the same
+  objects the RL selector and its baselines are scored on;
 - ``roc.png``, ``calibration.png``: curves of the out-of-fold predictions of the CV's first
   repeat, pooled (each grip scored by a model that never saw its object);
 - ``models/<name>.{json,skops|pt}``: each model refitted on the whole table, with its metadata
@@ -25,6 +28,7 @@ import pandas as pd
 from classifiers.evaluation import (
     LABEL_COLUMN,
     evaluate_models,
+    fold_metrics,
     grouped_folds,
     positive_probability,
 )
@@ -34,6 +38,7 @@ from classifiers.plots import plot_calibration, plot_roc
 from classifiers.regression import TARGET_COLUMN, evaluate_regressors, has_target
 from grip_env.columns import FEATURES
 from grip_env.config import Config
+from grip_env.dataset.split import held_out_objects, split_table
 
 
 def train_and_save(
@@ -46,6 +51,7 @@ def train_and_save(
     out_dir.mkdir(parents=True, exist_ok=True)
     checksum = dataset_checksum(table)
     metrics = evaluate_models(table, learning.models, FEATURES, learning)
+    metrics["held_out"] = held_out_scores(table, config)
     metrics["dataset"] = {"sha256": checksum, "rows": len(table)}
     (out_dir / "metrics.json").write_text(json.dumps(metrics, indent=2))
     _held_out_plots(table, config, out_dir)
@@ -57,6 +63,28 @@ def train_and_save(
     if has_target(table):
         train_regressors(table, out_dir, config, checksum)
     return metrics
+
+
+def held_out_scores(table: pd.DataFrame, config: Config) -> dict[str, Any]:
+    """Each of ``learning.models`` fitted on the split's training objects, scored on the rest.
+
+    Returns ``{"split": {"train", "test", "test_fraction", "seed"}, "models": {name: metrics}}``;
+    a metric is None where it is undefined (one class among the held-out grips).
+    """
+    learning = config.learning
+    train_ids, test_ids = held_out_objects(table["object_id"].astype(str), learning)
+    train, test = split_table(table, learning)
+    split = {"train": list(train_ids), "test": list(test_ids),
+             "test_fraction": learning.test_fraction, "seed": learning.seed}  # fmt: skip
+    labels = train[LABEL_COLUMN].to_numpy().astype(bool)
+    if test.empty or np.unique(labels).size < 2:
+        return {"split": split, "models": {}}
+    scores = {}
+    for name in learning.models:
+        model = make_model(name, learning.seed, FEATURES).fit(train, labels)
+        scores[name] = {k: (None if not np.isfinite(v) else float(v))
+                        for k, v in fold_metrics(model, test).items()}  # fmt: skip
+    return {"split": split, "models": scores}
 
 
 def train_regressors(

@@ -38,9 +38,9 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from grip_env.config import Config
+from grip_env.dataset.split import held_out_objects
 from grip_env.envs.observation import CandidateSet, candidate_set
 from grip_env.envs.select import GripSelectEnv
-from grip_env.envs.split import split_objects
 
 CLASSIFIER_CHOICES: tuple[str, ...] = ("logreg", "svm")
 METRICS: tuple[str, ...] = ("success_rate", "success_within_attempts", "expected_attempts")
@@ -142,7 +142,7 @@ def training_baselines(table: pd.DataFrame, config: Config) -> dict[str, float]:
     if robust and (selector.max_attempts > 1 or "robustness_mean" not in table.columns):
         return {}
     ids = table["object_id"].astype(str)
-    train_ids, _ = split_objects(ids, learning.test_fraction, learning.seed)
+    train_ids, _ = held_out_objects(ids, learning)
     rows: dict[str, list[float]] = {"random": [], "best Q_C": [], "oracle": []}
     for _, frame in table[ids.isin(train_ids).to_numpy()].groupby("object_id"):
         shown = frame.sort_values("Q_C", kind="stable").head(selector.max_candidates)
@@ -177,7 +177,7 @@ def evaluate_selectors(
     table = check_grip_table(data)
     ids = table["object_id"].astype(str)
     learning, selector = config.learning, config.selector
-    train_ids, test_ids = split_objects(ids, learning.test_fraction, learning.seed)
+    train_ids, test_ids = held_out_objects(ids, learning)
     sets = _test_candidate_sets(table, config, test_ids)
     if not sets:
         raise ValueError("no test object has a candidate grip")

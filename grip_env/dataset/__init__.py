@@ -12,6 +12,7 @@ from grip_env.dataset.jobs import ObjectJob, ObjectTask, simulate_object, with_o
 from grip_env.dataset.loading import dataset_manifest, load
 from grip_env.dataset.manifest import FORMAT_VERSION, FormatVersionError
 from grip_env.dataset.sampling import keep_grips, kept_ranks
+from grip_env.dataset.split import held_out_objects, split_objects, split_table
 from grip_env.dataset.validation import validate
 
 __all__ = [
@@ -24,12 +25,15 @@ __all__ = [
     "WorkerLost",
     "dataset_manifest",
     "generate",
+    "held_out_objects",
     "keep_grips",
     "kept_ranks",
     "load",
     "load_objects",
     "read_objects",
     "simulate_object",
+    "split_objects",
+    "split_table",
     "validate",
     "with_outcomes",
 ]

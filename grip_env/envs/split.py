@@ -1,58 +1,9 @@
-"""Train/test split by object, shared by the environments, the classifiers and the RL selector."""
+"""The environments' train/test split by object: :mod:`grip_env.dataset.split`, re-exported.
 
-from __future__ import annotations
+The split is decided in one place, the dataset layer, so the environments, the classifiers and
+the RL selector hold out the same objects.
+"""
 
-from collections.abc import Iterable
-from typing import Literal
+from grip_env.dataset.split import SPLITS, Split, objects_in_split, split_objects
 
-import numpy as np
-
-Split = Literal["train", "test", "all"]
-SPLITS: tuple[str, ...] = ("train", "test", "all")
-
-
-def split_objects(
-    object_ids: Iterable[str], test_fraction: float = 0.25, seed: int = 0
-) -> tuple[tuple[str, ...], tuple[str, ...]]:
-    """Split object ids into ``(train, test)``, deterministically and without overlap.
-
-    The unique ids are sorted, then permuted by ``numpy.random.default_rng(seed)``; the first
-    ``round(test_fraction * n)`` ids (at least one and at most ``n - 1`` when ``n >= 2``) form the
-    test set. The result depends only on the set of ids, ``test_fraction`` and ``seed``, never on
-    the order the ids come in. One object alone goes to train. Both tuples come back sorted.
-
-    Raises:
-        ValueError: no ids, or ``test_fraction`` outside the open interval (0, 1).
-    """
-    if not 0.0 < test_fraction < 1.0:
-        raise ValueError(f"test_fraction must be in (0, 1), got {test_fraction!r}")
-    ids = sorted({str(object_id) for object_id in object_ids})
-    if not ids:
-        raise ValueError("split_objects needs at least one object id, got none")
-    n = len(ids)
-    n_test = 0 if n == 1 else min(max(round(test_fraction * n), 1), n - 1)
-    order = np.random.default_rng(seed).permutation(n)
-    test = sorted(ids[i] for i in order[:n_test])
-    train = sorted(ids[i] for i in order[n_test:])
-    return tuple(train), tuple(test)
-
-
-def objects_in_split(
-    object_ids: Iterable[str], split: str, test_fraction: float = 0.25, seed: int = 0
-) -> tuple[str, ...]:
-    """The ids of ``split`` ("train", "test" or "all") as given by :func:`split_objects`.
-
-    Raises:
-        ValueError: unknown ``split``, or a split that holds no object.
-    """
-    if split not in SPLITS:
-        raise ValueError(f"split must be one of {SPLITS}, got {split!r}")
-    ids = tuple(object_ids)
-    train, test = split_objects(ids, test_fraction, seed)
-    chosen = {"train": train, "test": test, "all": tuple(sorted(train + test))}[split]
-    if not chosen:
-        raise ValueError(
-            f"split {split!r} holds no object ({len(train) + len(test)} objects, "
-            f"test_fraction={test_fraction})"
-        )
-    return chosen
+__all__ = ["SPLITS", "Split", "objects_in_split", "split_objects"]
