@@ -1,8 +1,12 @@
 """The main job: dataset, classifiers, ablation, RL selector, label calibration, report.
 
-Every stage reuses what an earlier run already produced in ``out`` when the config sections it
-depends on and the dataset are unchanged (:func:`stage_key`, kept in ``<stage>/stage.json``), so an
-interrupted study resumes and a new learning seed recomputes only the learning stages.
+Every stage records what it read in ``<stage>/stage.json``: the config fields it depends on
+(:data:`STAGE_INPUTS`), the dataset's checksum and the grip-env version, hashed into its key
+(:func:`stage_key`). A rerun into the same folder reuses a stage whose key is unchanged and
+recomputes, and says so, a stage whose inputs changed. The dataset is the dataset layer's own
+resumable run: it is reused unless a setting it depends on changed, so adding a model to
+``learning.models`` retrains the classifiers (and the selector, whose baselines they are) on the
+same grips and leaves the dataset, the ablation and the calibration alone.
 """
 
 from __future__ import annotations
@@ -11,6 +15,7 @@ import hashlib
 import json
 import time
 from collections.abc import Callable
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -18,6 +23,8 @@ import pandas as pd
 
 from grip_env.config import Config
 
+#: ``--quick``: a tiny profile for tests; a field is replaced only where the config leaves it at
+#: its default, so settings the user chose are kept (and the log says which were replaced).
 QUICK_OVERRIDES: dict[str, dict[str, Any]] = {
     "objects": {"set": "basic", "procedural_count": 2},
     "dataset": {"trials": 2, "max_grips_per_object": 8},
@@ -25,11 +32,42 @@ QUICK_OVERRIDES: dict[str, dict[str, Any]] = {
                  "regressors": ("ridge", "rank_qc", "rank_qg", "random")},
     "selector": {"timesteps": 512, "max_candidates": 16},
 }
+STAGE_FILE = "stage.json"
+#: The config fields (a section, or ``section.field``) each stage reads.
+STAGE_INPUTS: dict[str, tuple[str, ...]] = {
+    "classifiers": ("learning",),
+    "ablation": ("learning.folds", "learning.repeats", "learning.seed"),
+    "selector": ("learning.models", "learning.seed", "learning.test_fraction", "selector", "sim"),
+    "calibration": ("grasp", "objects", "perception", "synthesis", "sim", "uncertainty",
+                    "dataset.seed"),
+}
+
+
+def quick_overrides(config: Config) -> dict[str, dict[str, Any]]:
+    """The ``--quick`` replacements that apply to ``config``: those of fields left at default."""
+    defaults, current = Config().model_dump(), config.model_dump()
+    applied = {}
+    for section, fields in QUICK_OVERRIDES.items():
+        chosen = {k: v for k, v in fields.items() if current[section][k] == defaults[section][k]}
+        if chosen:
+            applied[section] = chosen
+    return applied
 
 
 def study_config(config: Config, quick: bool = False) -> Config:
-    """The configuration a study runs on (``quick`` shrinks every stage for tests)."""
-    return config.override(**QUICK_OVERRIDES) if quick else config
+    """The configuration a study runs on (``quick`` shrinks every stage left at its default)."""
+    overrides = quick_overrides(config) if quick else {}
+    return config.override(**overrides) if overrides else config
+
+
+def describe_quick(config: Config) -> str:
+    """One line: what ``--quick`` replaces in ``config`` and what it keeps from it."""
+    applied = quick_overrides(config)
+    changed = [f"{s}.{k}={_show(v)}" for s, fields in applied.items() for k, v in fields.items()]
+    kept = [f"{s}.{k}" for s, fields in QUICK_OVERRIDES.items() for k in fields
+            if k not in applied.get(s, {})]  # fmt: skip
+    line = "--quick sets " + (", ".join(changed) if changed else "nothing")
+    return line + (f"; keeps {', '.join(kept)} from the config" if kept else "")
 
 
 def run_study(
@@ -38,23 +76,10 @@ def run_study(
     """Run every stage into ``out`` and return the path of ``report.md``."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    if quick:
+        log(f"[study] {describe_quick(config)}")
     config = study_config(config, quick)
     timings: dict[str, float] = {}
-
-    def stage(name: str, done: Path, run: Callable[[], object]) -> None:
-        key = stage_key(name, config, checksum, quick)
-        marker = done.parent / STAGE_FILE
-        if done.exists() and _stored_key(marker) == key:
-            log(f"[study] {name}: reusing {done}")
-            return
-        if done.exists():
-            log(f"[study] {name}: its settings or the dataset changed, recomputing")
-        log(f"[study] {name} ...")
-        start = time.perf_counter()
-        run()
-        marker.write_text(json.dumps({"stage": name, "key": key}, indent=2))
-        timings[name] = time.perf_counter() - start
-        log(f"[study] {name} done in {timings[name]:.1f} s")
 
     from classifiers.ablation import run_ablation
     from classifiers.persistence import dataset_checksum
@@ -63,12 +88,31 @@ def run_study(
     from grip_env.dataset import generate, load
 
     data_dir = out / "dataset"
-    log("[study] dataset (resumes or reuses what is already in place) ...")
+    before = _manifest_created(data_dir)
     start = time.perf_counter()
     generate(config, data_dir)
     timings["dataset"] = time.perf_counter() - start
+    reused = before is not None and before == _manifest_created(data_dir)
+    log(f"[study] dataset: {'reusing' if reused else 'generated'} {data_dir}")
     table = load(data_dir)
     checksum = dataset_checksum(table)
+
+    def stage(name: str, done: Path, run: Callable[[], object]) -> None:
+        record = stage_record(name, config, checksum, quick)
+        marker = done.parent / STAGE_FILE
+        if done.exists() and _stored_key(marker) == record["key"]:
+            log(f"[study] {name}: reusing {done}")
+            return
+        if done.exists():
+            log(f"[study] {name}: {changed_inputs(_stored(marker), record)} changed, recomputing")
+        log(f"[study] {name} ...")
+        start = time.perf_counter()
+        run()
+        timings[name] = time.perf_counter() - start
+        record["written"] = datetime.now(UTC).isoformat(timespec="seconds")
+        marker.write_text(json.dumps(record, indent=2))
+        log(f"[study] {name} done in {timings[name]:.1f} s")
+
     stage("classifiers", out / "classifiers" / "metrics.json",
           lambda: train_and_save(table, out / "classifiers", config))
     stage("ablation", out / "ablation" / "ablation.json",
@@ -84,35 +128,90 @@ def run_study(
     return write_report(out, config, table)
 
 
-STAGE_FILE = "stage.json"
-_STAGE_SECTIONS = {
-    "classifiers": ("learning",),
-    "ablation": ("learning",),
-    "selector": ("learning", "selector", "sim"),
-    "calibration": ("grasp", "objects", "perception", "synthesis", "sim", "uncertainty"),
-}
+def stage_record(
+    name: str, config: Config, dataset_sha256: str, quick: bool = False
+) -> dict[str, Any]:
+    """What stage ``name`` reads (its config fields, the dataset, the version) and its key."""
+    inputs = stage_inputs(name, config)
+    if name == "calibration":
+        inputs["quick"] = quick  # the calibration has its own quick settings
+    return {"stage": name, "key": _hash(inputs, dataset_sha256, package_version()),
+            "package_version": package_version(), "dataset_sha256": dataset_sha256,
+            "inputs": inputs}  # fmt: skip
 
 
 def stage_key(name: str, config: Config, dataset_sha256: str, quick: bool = False) -> str:
-    """What a stage's result depends on, hashed: its config sections and the dataset.
+    """SHA-256 of what stage ``name`` reads: its config fields, the dataset, the version.
 
     A rerun reuses a stage only when its key is unchanged, so a new learning seed recomputes
-    the learning stages (on the same dataset) and leaves the calibration alone.
+    the learning stages (on the same dataset) and leaves the calibration alone, and an upgrade of
+    grip-env recomputes every stage.
     """
+    return stage_record(name, config, dataset_sha256, quick)["key"]
+
+
+def stage_inputs(name: str, config: Config) -> dict[str, Any]:
+    """The values of the config fields :data:`STAGE_INPUTS` lists for ``name``."""
     data = config.model_dump(mode="json")
-    depends = {section: data[section] for section in _STAGE_SECTIONS[name]}
-    if name == "calibration":
-        depends["dataset_seed"] = config.dataset.seed  # seeds the procedural objects
-        depends["quick"] = quick
-    depends["dataset"] = dataset_sha256
+    found = {}
+    for path in STAGE_INPUTS[name]:
+        section, _, field = path.partition(".")
+        found[path] = data[section][field] if field else data[section]
+    return found
+
+
+def changed_inputs(old: dict[str, Any] | None, new: dict[str, Any]) -> str:
+    """Which inputs differ between two stage records, for the rerun's log line."""
+    if not old or "inputs" not in old:
+        return "its inputs (no record of them)"
+    names = [k for k, v in new["inputs"].items() if old["inputs"].get(k) != v]
+    if old.get("dataset_sha256") != new["dataset_sha256"]:
+        names.append("the dataset")
+    if old.get("package_version") != new["package_version"]:
+        names.append(f"grip-env {old.get('package_version')} -> {new['package_version']}")
+    return ", ".join(names) or "its inputs"
+
+
+def package_version() -> str:
+    """The installed grip-env's version (the package's own in a bare checkout)."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("grip-env")
+    except PackageNotFoundError:
+        from grip_env import __version__
+
+        return __version__
+
+
+def _hash(inputs: dict[str, Any], dataset_sha256: str, version: str) -> str:
+    depends = {"inputs": inputs, "dataset": dataset_sha256, "package_version": version}
     return hashlib.sha256(json.dumps(depends, sort_keys=True).encode()).hexdigest()
 
 
-def _stored_key(marker: Path) -> str | None:
+def _stored(marker: Path) -> dict[str, Any] | None:
     try:
-        return json.loads(marker.read_text()).get("key")
-    except (OSError, ValueError, AttributeError):
+        found = json.loads(marker.read_text())
+    except (OSError, ValueError):
         return None
+    return found if isinstance(found, dict) else None
+
+
+def _stored_key(marker: Path) -> str | None:
+    return (_stored(marker) or {}).get("key")
+
+
+def _manifest_created(data_dir: Path) -> str | None:
+    try:
+        manifest = json.loads((data_dir / "manifest.json").read_text())
+    except (OSError, ValueError):
+        return None
+    return f"{manifest.get('created')}/{manifest.get('complete')}" if isinstance(
+        manifest, dict) else None
+
+
+def _show(value: Any) -> str:
+    return ",".join(map(str, value)) if isinstance(value, tuple | list) else repr(value)
 
 
 def run_calibration(

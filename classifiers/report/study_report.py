@@ -32,7 +32,7 @@ def write_report(out: Path, config: Config, table: pd.DataFrame) -> Path:
         "positioning, friction and mass uncertainty. Everything below was produced by "
         "`grip-env study` from the configuration listed at the end."
     )
-    report.text(f"Written {datetime.now(UTC):%Y-%m-%d %H:%M} UTC from commit {_commit()}.")
+    report.text(f"Written {datetime.now(UTC):%Y-%m-%d %H:%M} UTC from commit {source_commit()}.")
     objects = _study_objects(config)
     _dataset_section(report, table, objects, fig_dir, config)
     _feature_section(report, table, fig_dir)
@@ -163,7 +163,22 @@ def _classifier_section(report: Report, out: Path) -> None:
             f"model's top-ranked grip on a test object hold): **{top}** "
             f"({_fmt(models[top]['top1_success'])})."
         )
+    _held_out_table(report, metrics.get("held_out"))
     _stage_figures(report, out, "classifiers")
+
+
+def _held_out_table(report: Report, held_out: dict[str, Any] | None) -> None:
+    """Each model trained on the split's training objects, scored on its held-out objects."""
+    if not held_out or not held_out.get("models"):
+        return
+    shown = ["roc_auc", "balanced_accuracy", "brier", "top1_success"]
+    frame = pd.DataFrame(held_out["models"]).T.reindex(columns=shown).rename_axis("model")
+    split = held_out["split"]
+    report.table(frame.astype(float).round(3),
+                 caption=f"Trained on the {len(split['train'])} training objects, scored on the "
+                 f"{len(split['test'])} held-out objects the RL selector is scored on "
+                 f"(test_fraction {split['test_fraction']:g}, seed {split['seed']}): one split, "
+                 "so no interval; the cross-validated table above is the estimate.")
 
 
 def _calibration_section(report: Report, out: Path, fig_dir: Path) -> None:
@@ -288,13 +303,14 @@ def _provenance_section(report: Report, out: Path, config: Config) -> None:
     params = pd.DataFrame({"value": config.grasp.model_dump()}).rename_axis("parameter")
     report.table(params, caption="Grasping parameters (GraspParams).", float_format="{:g}")
     versions = {"python": platform.python_version(), "machine": platform.platform(),
-                "commit": _commit()}  # fmt: skip
+                "commit": source_commit()}  # fmt: skip
     for name in ("grip-env", *_PACKAGES):
         try:
             versions[name] = metadata.version(name)
         except metadata.PackageNotFoundError:
             versions[name] = "not installed"
     report.table(pd.DataFrame({"version": versions}).rename_axis("package"))
+    _stage_table(report, out)
     timings = _json(out / "timings.json") or {}
     if timings:
         report.table(pd.DataFrame({"seconds": timings}).rename_axis("stage"),
@@ -303,8 +319,25 @@ def _provenance_section(report: Report, out: Path, config: Config) -> None:
     report.code(yaml.safe_dump(config.model_dump(mode="json"), sort_keys=False), "yaml")
 
 
+def _stage_table(report: Report, out: Path) -> None:
+    """Each stage's record: the key of what it read, the grip-env version, when it was written."""
+    rows = {}
+    for folder in ("classifiers", "ablation", "selector", "calibration"):
+        record = _json(out / folder / "stage.json")
+        if record:
+            rows[folder] = {"key": str(record.get("key", ""))[:12],
+                            "grip-env": record.get("package_version", "?"),
+                            "dataset": str(record.get("dataset_sha256", ""))[:12],
+                            "written": record.get("written", "?"),
+                            "inputs": ", ".join(record.get("inputs", {}))}  # fmt: skip
+    if rows:
+        report.table(pd.DataFrame(rows).T.rename_axis("stage"),
+                     caption="Stage provenance (stage.json): a rerun recomputes a stage only "
+                     "when the hash of its inputs, the dataset and the grip-env version changes.")
+
+
 # ---------------------------------------------------------------------------------- helpers
-def _commit() -> str:
+def source_commit() -> str:
     """The source checkout's commit (``+dirty`` with local changes), or "unknown"."""
     root = Path(__file__).resolve().parents[2]
     try:

@@ -10,20 +10,37 @@ import typer
 from grip_env.cli.errors import user_errors
 from grip_env.cli.options import ConfigFile
 from grip_env.cli.paths import output_dir
+from grip_env.shutdown import stop_on_signals
 
 
 def study(
     config: ConfigFile = None,
     out: Annotated[Path, typer.Option("--out", "-o", help="study folder")] = Path("runs/default"),
-    quick: Annotated[bool, typer.Option("--quick", help="tiny profile for tests")] = False,
+    quick: Annotated[
+        bool,
+        typer.Option("--quick", help="tiny profile for tests: shrinks the settings the config "
+                                     "leaves at their defaults, and says which"),
+    ] = False,
+    update_readme: Annotated[
+        bool,
+        typer.Option("--update-readme",
+                     help="rewrite the results block of README (between its results markers)"),
+    ] = False,
+    readme: Annotated[
+        Path, typer.Option(help="the README --update-readme rewrites")
+    ] = Path("README.md"),
 ) -> None:
     """Run the whole study and write OUT/report.md and OUT/report.html.
 
     Generates the dataset, trains and evaluates the classifiers, runs the ablation, trains and
-    evaluates the RL selector, then writes the report. Rerunning reuses every finished stage.
+    evaluates the RL selector, then writes the report. A rerun reuses every stage whose inputs
+    (config fields, dataset, grip-env version) are unchanged and recomputes the others.
+    Exit codes: 0 done, 1 internal error, 2 bad input, 130/143/129 stopped by a signal.
     """
-    with user_errors():
+    with stop_on_signals(f"rerun the same command to finish {out}"), user_errors():
         output_dir(out)
+        if update_readme and not readme.is_file():
+            raise ValueError(f"--readme {readme} is not a file")
         from classifiers.study import run_study
         from grip_env.config import load_config
         from grip_env.dataset import DatasetMismatchError
@@ -35,7 +52,20 @@ def study(
             raise ValueError(
                 f"{reason}; choose another --out, or delete {out / 'dataset'} to regenerate it"
             ) from None
+        if update_readme:
+            _update_readme(out, readme)
     typer.echo(f"report: {report}")
+
+
+def _update_readme(out: Path, readme: Path) -> None:
+    from classifiers.report.readme import results_block, update_readme
+    from classifiers.report.study_report import source_commit
+    from classifiers.study import package_version
+    from grip_env.dataset import load
+
+    block = results_block(out, load(out / "dataset"), source_commit(), package_version())
+    update_readme(readme, block)
+    typer.echo(f"updated the results block of {readme}")
 
 
 def register(app: typer.Typer) -> None:

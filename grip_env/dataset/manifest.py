@@ -28,6 +28,8 @@ FORMAT_VERSION = 2
 MANIFEST_FILE = "manifest.json"
 #: Config fields that change how a dataset is computed, not what it holds.
 EXECUTION_FIELDS = ("workers", "backend")
+#: Config sections only the learning stages read: a dataset is the same run whatever they say.
+LEARNING_SECTIONS = ("learning", "selector")
 _VERSIONED_PACKAGES = ("numpy", "pandas", "pyarrow", "pybullet", "scipy", "shapely", "pydantic")
 
 Manifest = dict[str, Any]
@@ -53,7 +55,8 @@ class FormatVersionError(ValueError):
 def run_identity(
     config: Config, entries: list[DatasetObject], own_objects: bool = False
 ) -> dict[str, Any]:
-    """Everything that determines a dataset's rows: config (minus execution fields) and objects.
+    """Everything that determines a dataset's rows: config (minus execution fields and the
+    learning sections) and objects.
 
     Named and procedural objects are fixed by their ids and the config; a caller's own objects
     (``own_objects``) also by the SHA-256 of their contours, so an edited file is a new run.
@@ -64,7 +67,7 @@ def run_identity(
     identity = {"config": settings, "object_ids": [entry.object_id for entry in entries]}
     if own_objects:
         identity["object_contours_sha256"] = contours_sha256(entries)
-    return identity
+    return without_learning(identity)
 
 
 def contours_sha256(entries: list[DatasetObject]) -> str:
@@ -74,6 +77,12 @@ def contours_sha256(entries: list[DatasetObject]) -> str:
         digest.update(len(entry.obj.contour).to_bytes(8, "little"))
         digest.update(entry.obj.contour.astype("<f8").tobytes())
     return digest.hexdigest()
+
+
+def without_learning(identity: dict[str, Any]) -> dict[str, Any]:
+    """A run identity without :data:`LEARNING_SECTIONS` (older manifests recorded them)."""
+    settings = {k: v for k, v in identity.get("config", {}).items() if k not in LEARNING_SECTIONS}
+    return {**identity, "config": settings}
 
 
 def fingerprint(identity: dict[str, Any]) -> str:
@@ -134,6 +143,8 @@ def read_manifest(directory: Path) -> Manifest:
     if version != FORMAT_VERSION:
         raise FormatVersionError(directory, version)
     _check_files(path, manifest)
+    if isinstance(manifest.get("identity"), dict):
+        manifest["identity"] = without_learning(manifest["identity"])
     return manifest
 
 

@@ -1,0 +1,78 @@
+"""Stage provenance: what each study stage read is hashed, and a rerun recomputes only what
+changed (the real reruns are in test_study.py)."""
+
+from __future__ import annotations
+
+import importlib.metadata
+
+import pytest
+
+from classifiers import study
+from classifiers.study import (
+    QUICK_OVERRIDES,
+    describe_quick,
+    quick_overrides,
+    stage_key,
+    stage_record,
+    study_config,
+)
+from grip_env.config import Config
+
+STAGES = ("classifiers", "ablation", "selector", "calibration")
+
+
+def test_an_upgrade_of_grip_env_changes_every_stage_key(monkeypatch):
+    base = {name: stage_key(name, Config(), "d") for name in STAGES}
+    monkeypatch.setattr(study, "package_version", lambda: "99.0")
+    assert all(stage_key(name, Config(), "d") != base[name] for name in STAGES)
+    assert stage_record("ablation", Config(), "d")["package_version"] == "99.0"
+
+
+def test_the_package_version_is_the_installed_one():
+    try:
+        expected = importlib.metadata.version("grip-env")
+    except importlib.metadata.PackageNotFoundError:
+        pytest.skip("grip-env is not installed")
+    assert study.package_version() == expected
+
+
+def test_adding_a_model_recomputes_the_classifiers_and_the_selector_only():
+    base = Config()
+    more = base.override(learning={"models": (*base.learning.models, "random")[-3:]})
+    changed = {name for name in STAGES
+               if stage_key(name, base, "d") != stage_key(name, more, "d")}  # fmt: skip
+    assert changed == {"classifiers", "selector"}
+    record = stage_record("classifiers", more, "d")
+    assert record["inputs"]["learning"]["models"] == list(more.learning.models)
+    assert study.changed_inputs(stage_record("selector", base, "d"),
+                                stage_record("selector", more, "d")) == "learning.models"
+
+
+def test_the_calibration_key_tells_quick_from_full():
+    assert stage_key("calibration", Config(), "d", quick=True) != stage_key(
+        "calibration", Config(), "d", quick=False)
+
+
+def test_quick_replaces_only_what_the_config_leaves_at_its_default():
+    everything = quick_overrides(Config())
+    assert everything == QUICK_OVERRIDES
+    mine = Config().override(learning={"models": ("svm",)}, dataset={"trials": 3})
+    shrunk = study_config(mine, quick=True)
+    assert shrunk.learning.models == ("svm",) and shrunk.dataset.trials == 3
+    assert shrunk.learning.folds == QUICK_OVERRIDES["learning"]["folds"]
+    line = describe_quick(mine)
+    assert "learning.folds=2" in line and "keeps dataset.trials, learning.models" in line
+    assert "learning.models=" not in line
+    assert study_config(mine, quick=False) is mine
+
+
+def test_the_dataset_identity_ignores_the_learning_sections():
+    from grip_env.dataset.manifest import identity_differences, run_identity, without_learning
+
+    base = run_identity(Config(), [])
+    other = Config().override(learning={"seed": 5, "models": ("svm",)}, selector={"seed": 3})
+    assert run_identity(other, []) == base
+    assert "learning" not in base["config"] and "selector" not in base["config"]
+    old = {**base, "config": {**base["config"], "learning": {"seed": 1}}}  # an older manifest
+    assert identity_differences(without_learning(old), base) == []
+    assert identity_differences(run_identity(Config().override(dataset={"seed": 9}), []), base)
