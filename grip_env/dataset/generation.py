@@ -105,6 +105,8 @@ def generate(
             ObjectTask(e.index, e.object_id, e.obj, config, seeds[e.index])
             for e in entries if not _is_done(directory, manifest, e)
         ]
+        if backend == "process":  # no more processes than objects left (one: none at all)
+            workers = max(1, min(workers, len(pending)))
         _run(directory, manifest, job, pending, len(entries), workers, backend, address, progress)
     return directory
 
