@@ -186,6 +186,28 @@ def test_generate_address_needs_the_ray_backend(tmp_path):
                         "--backend", "process", "--address", "ray://host:10001"), "--address")
 
 
+def test_generate_of_an_oversized_image_in_a_folder_is_refused_before_decoding(tmp_path):
+    folder = tmp_path / "parts"
+    folder.mkdir()
+    Image.new("L", (5000, 4000)).save(folder / "big.png")
+    assert_refused(*run("generate", "--out", tmp_path / "g", "--objects", folder,
+                        "--mm-per-px", "0.1"), "big.png", "5000 x 4000 pixels")
+    assert not (tmp_path / "g").exists()
+
+
+def test_generate_of_own_objects_is_bounded_by_the_contour_budget(tmp_path):
+    config = tmp_path / "fine.yaml"
+    config.write_text("perception:\n  contour_spacing_mm: 0.1\n")
+    teeth = [[x, y] for i in range(20) for x, y in
+             ((40.0 * i, 1900.0), (40.0 * i + 20, 1900.0), (40.0 * i + 20, 10.0),
+              (40.0 * i + 40, 10.0))]
+    path = tmp_path / "comb.json"
+    path.write_text(json.dumps([[0.0, 0.0], [800.0, 0.0], *teeth[::-1]]))
+    assert_refused(*run("generate", "--out", tmp_path / "g", "--objects", path,
+                        "--config", config), "comb.json", "contour_spacing_mm 0.1")
+    assert not (tmp_path / "g").exists()
+
+
 @pytest.mark.parametrize("command", [["ablate", "--data", "."], ["select", "--data", "."],
                                      ["study"]])
 def test_every_out_folder_is_checked_before_the_work(tmp_path, command):
