@@ -10,6 +10,7 @@ import typer
 from grip_env.cli.errors import user_errors
 from grip_env.cli.options import ConfigFile, DatasetDir, OutputDir
 from grip_env.cli.paths import output_dir
+from grip_env.shutdown import stop_on_signals
 
 
 class Policy(StrEnum):
@@ -43,7 +44,7 @@ def select(
     best Q_C, best Q_G, classifiers and the oracle), OUT/model.zip (Stable-Baselines3), the
     TensorBoard logs OUT/tb and OUT/learning_curve.png.
     """
-    with user_errors():
+    with stop_on_signals(f"rerun the same command to redo {out}"), user_errors():
         from grip_env.config import check_setting, load_config
 
         output_dir(out)
