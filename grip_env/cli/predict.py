@@ -29,7 +29,7 @@ def predict(
     model: Annotated[
         Path,
         typer.Option("--model", "-m",
-                     help="a saved model: TRAIN_OUT/models/<name>.json (or its .skops/.pt file)"),
+                     help="a saved model: TRAIN_OUT/models/NAME.json (or its .skops/.pt file)"),
     ],
     data: DatasetDir,
     out: Annotated[
