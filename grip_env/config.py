@@ -219,6 +219,15 @@ class SelectorConfig(_Section):
         "success", description="reward of a pick: success (0/1) or robustness / reference level"
     )
     seed: int = Field(0, ge=0, le=MAX_SEED, description="training seed")
+    n_envs: int = Field(4, ge=1, le=256, description="environment copies stepped together")
+    rollout_steps: int = Field(
+        512, ge=16, le=1_000_000, description="PPO rollout, steps over all environment copies"
+    )
+    batch_size: int = Field(128, ge=2, le=1_000_000, description="PPO minibatch size")
+    n_epochs: int = Field(5, ge=1, le=1000, description="PPO epochs per rollout")
+    learning_rate: float = Field(1e-3, gt=0.0, le=1.0, description="PPO learning rate")
+    gamma: float = Field(0.99, ge=0.0, le=1.0, description="PPO discount factor")
+    ent_coef: float = Field(0.01, ge=0.0, le=1.0, description="PPO entropy coefficient")
 
 
 class Config(_Section):

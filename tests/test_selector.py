@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 from itertools import permutations
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -187,6 +188,24 @@ def test_run_selector_writes_report_model_and_curve(grips, small_config, tmp_pat
     assert len(policies["rl"]["per_object"]) == len(split["test"])
     assert report["training"]["policy"] == policy
     assert MaskablePPO.load(tmp_path / "model.zip").num_timesteps == report["training"]["timesteps"]
+    _assert_held_out_scalars(tmp_path / "tb", report)
+
+
+def _assert_held_out_scalars(tb: Path, report: dict) -> None:
+    """TensorBoard has the held-out first-pick success of each rollout, with its references."""
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    (run,) = [path for path in tb.iterdir() if path.is_dir()]
+    events = EventAccumulator(str(run))
+    events.Reload()
+    assert {"eval/held_out_first_pick_success", "eval/best_qc", "eval/oracle"} <= set(
+        events.Tags()["scalars"])
+    logged = [e.value for e in events.Scalars("eval/held_out_first_pick_success")]
+    curve = report["training"]["held_out_curve"]
+    assert len(curve) >= 1 and np.allclose(logged, [v for _, v in curve][: len(logged)])
+    oracle = events.Scalars("eval/oracle")[-1].value
+    assert np.isclose(oracle, report["policies"]["oracle"]["success_rate"]["mean"])
+    assert all(0.0 <= v <= oracle + 1e-6 for v in logged)
 
 
 def test_unknown_policy_is_refused(grips, small_config, tmp_path):
@@ -218,9 +237,10 @@ def test_live_training_executes_grips_in_pybullet(tmp_path):
     config = load_config().override(
         objects={"set": "basic", "procedural_count": 0}, selector={"max_candidates": 16}
     )
-    model = train_selector(None, config, tmp_path, live=True, timesteps=32, progress=False)
-    assert model.num_timesteps == 32  # a short run collects a short rollout, not 512 live steps
-    timesteps, rewards = model.episode_curve
+    trained = train_selector(None, config, tmp_path, live=True, timesteps=32, progress=False)
+    assert trained.model.num_timesteps == 32  # a short run collects a short rollout, not 512
+    timesteps, rewards = trained.timesteps, trained.rewards
+    assert trained.held_out == ()  # live training has no recorded held-out outcomes
     assert list(timesteps) == list(range(1, 33))  # one attempt per episode: each step ends one
     assert set(rewards) <= {0.0, 1.0}
     assert (tmp_path / "model.zip").exists()

@@ -51,13 +51,13 @@ def run_selector(
     table = check_grip_table(table_or_dir)
     out = Path(out_dir)
     start = time.perf_counter()
-    model = train_selector(table, config, out, policy, timesteps, live, progress)
+    trained = train_selector(table, config, out, policy, timesteps, live, progress)
     seconds = time.perf_counter() - start
-    report = evaluate_selectors(model, table, config)
-    _, rewards = model.episode_curve
+    report = evaluate_selectors(trained.model, table, config)
+    rewards = trained.rewards
     report["training"] = {
         "policy": policy,
-        "timesteps": int(model.num_timesteps),
+        "timesteps": int(trained.model.num_timesteps),
         "backend": "live" if live else "replay",
         "seconds": round(seconds, 2),
         "episodes": len(rewards),
@@ -65,6 +65,7 @@ def run_selector(
         "model": MODEL_FILE,
         "learning_curve": CURVE_FILE,
         "tensorboard": "tb",
+        "held_out_curve": [[int(t), round(v, 6)] for t, v in trained.held_out],
     }
     (out / REPORT_FILE).write_text(json.dumps(report, indent=2))
     return report

@@ -213,6 +213,12 @@ def evaluate_selectors(
     }  # fmt: skip
 
 
+def held_out_candidate_sets(table: pd.DataFrame, config: Config) -> list[CandidateSet]:
+    """The candidate sets of the held-out objects (:func:`~grip_env.dataset.held_out_objects`)."""
+    _, test_ids = held_out_objects(table["object_id"].astype(str), config.learning)
+    return _test_candidate_sets(table, config, test_ids)
+
+
 def _test_candidate_sets(
     table: pd.DataFrame, config: Config, test_ids: Sequence[str]
 ) -> list[CandidateSet]:

@@ -8,6 +8,13 @@ The replay backend trains on the training objects of the object-level split that
 use (``config.learning.test_fraction`` and ``config.learning.seed``); ``live=True`` executes the
 grips in PyBullet instead (slow: one simulated trial per step).
 
+The PPO hyper-parameters (``n_envs``, ``rollout_steps``, ``batch_size``, ``n_epochs``,
+``learning_rate``, ``gamma``, ``ent_coef``) are the ``selector`` section of the config; nothing
+here has a default of its own. With the replay backend, every rollout also scores the current
+policy's deterministic first pick on the held-out objects (the ones ``selector.json`` reports) and
+logs it to TensorBoard as ``eval/held_out_first_pick_success``, beside the constant
+``eval/best_qc`` and ``eval/oracle`` of the same objects.
+
 ``config.selector.reward`` chooses what a pick earns: ``"success"`` (the environment's 0/1 draw)
 or ``"robustness"`` (:class:`RobustnessReward`: the picked grip's recorded ``robustness_mean``
 divided by ``sim.reference_level_g``, so 1 means holding the reference level on average).
@@ -17,6 +24,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -32,11 +40,11 @@ from stable_baselines3.common.vec_env import DummyVecEnv
 import grip_env  # noqa: F401  (registers GripSelect-v0)
 from classifiers.selector.plots import plot_learning_curve
 from classifiers.selector.policy import CandidateSetPolicy
-from grip_env.config import Config
+from grip_env.config import Config, SelectorConfig
 
 POLICIES: tuple[str, ...] = ("set", "flat")
 ENV_ID = "GripSelect-v0"
-N_ENVS = 4
+N_ENVS = SelectorConfig().n_envs
 MODEL_FILE = "model.zip"
 CURVE_FILE = "learning_curve.png"
 _OUTCOME_COLUMNS = ("success_rate", "successes")
@@ -133,26 +141,29 @@ def make_selector_env(
 
 def make_selector_model(
     env: DummyVecEnv, policy: str, seed: int = 0, tensorboard_log: str | Path | None = None,
-    timesteps: int | None = None,
+    timesteps: int | None = None, settings: SelectorConfig | None = None,
 ) -> MaskablePPO:
     """A fresh MaskablePPO on ``env`` with the ``"set"`` or ``"flat"`` policy.
 
-    A rollout is 512 steps over all envs, shortened when ``timesteps`` asks for less (so a short
-    live run does not simulate a full rollout it will never use).
+    Hyper-parameters come from ``settings`` (default: the ``selector`` section's defaults). A
+    rollout is ``settings.rollout_steps`` over all envs, shortened when ``timesteps`` asks for
+    less (so a short live run does not simulate a full rollout it will never use).
     """
     check_policy(policy)
+    settings = settings or SelectorConfig()
     policy_class = CandidateSetPolicy if policy == "set" else "MultiInputPolicy"
-    rollout = 512 if timesteps is None else min(512, timesteps)
+    rollout = settings.rollout_steps if timesteps is None else min(settings.rollout_steps,
+                                                                   timesteps)
     n_steps = max(16, rollout // env.num_envs)
     return MaskablePPO(
         policy_class,
         env,
-        learning_rate=1e-3,
+        learning_rate=settings.learning_rate,
         n_steps=n_steps,
-        batch_size=min(128, n_steps * env.num_envs),
-        n_epochs=5,
-        gamma=0.99,
-        ent_coef=0.01,
+        batch_size=min(settings.batch_size, n_steps * env.num_envs),
+        n_epochs=settings.n_epochs,
+        gamma=settings.gamma,
+        ent_coef=settings.ent_coef,
         seed=seed,
         tensorboard_log=None if tensorboard_log is None else str(tensorboard_log),
         verbose=0,
@@ -176,6 +187,58 @@ class EpisodeRecorder(BaseCallback):
         return True
 
 
+class HeldOutEvaluation(BaseCallback):
+    """After each rollout, the policy's first-pick success on the held-out objects, to
+    TensorBoard (``eval/held_out_first_pick_success``) and to :attr:`curve`."""
+
+    def __init__(self, table: pd.DataFrame, config: Config) -> None:
+        super().__init__()
+        from classifiers.selector.evaluation import held_out_candidate_sets
+
+        self.sets = held_out_candidate_sets(table, config)
+        self.max_attempts = config.selector.max_attempts
+        self.curve: list[tuple[int, float]] = []
+        rates = [s.success_rate[: s.count] for s in self.sets]
+        self.reference = {
+            "eval/best_qc": float(np.mean([r[np.argsort(s.rows["Q_C"].to_numpy(float),
+                                                        kind="stable")[0]]
+                                           for s, r in zip(self.sets, rates, strict=True)])),
+            "eval/oracle": float(np.mean([r.max() for r in rates])),
+        } if self.sets else {}  # fmt: skip
+
+    def _on_step(self) -> bool:
+        return True
+
+    def _on_rollout_end(self) -> None:
+        if not self.sets:
+            return
+        from classifiers.selector.evaluation import policy_order
+
+        first = [s.success_rate[policy_order(self.model, s, 1)[0]] for s in self.sets]
+        value = float(np.mean(first))
+        self.curve.append((self.num_timesteps, value))
+        self.logger.record("eval/held_out_first_pick_success", value)
+        for key, reference in self.reference.items():
+            self.logger.record(key, reference)
+
+
+@dataclass(frozen=True)
+class SelectorTraining:
+    """What :func:`train_selector` returns: the model and its curves.
+
+    Attributes:
+        model: the trained MaskablePPO (also saved as ``model.zip``).
+        timesteps, rewards: each finished training episode's end timestep and reward.
+        held_out: ``(timestep, first-pick success on the held-out objects)`` after each
+            rollout (replay only; empty for live training).
+    """
+
+    model: MaskablePPO
+    timesteps: np.ndarray
+    rewards: np.ndarray
+    held_out: tuple[tuple[int, float], ...] = ()
+
+
 @contextmanager
 def torch_threads(count: int) -> Iterator[None]:
     """Run torch on ``count`` threads (small networks are fastest single-threaded)."""
@@ -195,7 +258,7 @@ def train_selector(
     timesteps: int | None = None,
     live: bool = False,
     progress: bool = True,
-) -> MaskablePPO:
+) -> SelectorTraining:
     """Train a selector on the training objects; writes ``model.zip``, ``tb/`` and the curve PNG.
 
     Args:
@@ -208,23 +271,27 @@ def train_selector(
         progress: show a progress bar.
 
     Returns:
-        The trained model; ``model.episode_curve`` holds ``(timesteps, rewards)`` of the episodes.
+        The model with its episode curve and its held-out evaluations.
     """
     check_policy(policy)
-    steps = config.selector.timesteps if timesteps is None else timesteps
+    settings = config.selector
+    steps = settings.timesteps if timesteps is None else timesteps
     if int(steps) != steps or steps < 1:
         raise ValueError(f"timesteps must be a positive integer, got {timesteps!r}")
     table = None if live else check_grip_table(data)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    seed = config.selector.seed
-    env = make_selector_env(table, config, "train", 1 if live else N_ENVS, seed)
-    recorder = EpisodeRecorder()
+    env = make_selector_env(table, config, "train", 1 if live else settings.n_envs, settings.seed)
+    callbacks: list[BaseCallback] = [EpisodeRecorder()]
+    if table is not None:
+        callbacks.append(HeldOutEvaluation(table, config))
     with torch_threads(1):
-        model = make_selector_model(env, policy, seed, out / "tb", timesteps=int(steps))
-        model.learn(int(steps), callback=recorder, progress_bar=progress,
+        model = make_selector_model(env, policy, settings.seed, out / "tb", timesteps=int(steps),
+                                    settings=settings)  # fmt: skip
+        model.learn(int(steps), callback=callbacks, progress_bar=progress,
                     tb_log_name=f"selector_{policy}")  # fmt: skip
     model.save(out / MODEL_FILE)
+    recorder = callbacks[0]
     baselines = None
     if table is not None:
         from classifiers.selector.evaluation import training_baselines
@@ -232,6 +299,7 @@ def train_selector(
         baselines = training_baselines(table, config)
     plot_learning_curve(recorder.timesteps, recorder.rewards, out / CURVE_FILE,
                         baselines=baselines)  # fmt: skip
-    model.episode_curve = (np.asarray(recorder.timesteps), np.asarray(recorder.rewards))
     env.close()
-    return model
+    held_out = tuple(callbacks[1].curve) if table is not None else ()
+    return SelectorTraining(model, np.asarray(recorder.timesteps), np.asarray(recorder.rewards),
+                            held_out)  # fmt: skip
