@@ -214,7 +214,7 @@ def grouped_search(
     model: BaseEstimator,
     grid: Mapping[str, Sequence[Any]],
     table: pd.DataFrame,
-    folds: int = 5,
+    folds: int = LearningConfig().folds,
     scoring: str = "roc_auc",
 ) -> GridSearchCV:
     """A fitted ``GridSearchCV`` whose inner folds are grouped by object (``GroupKFold``)."""

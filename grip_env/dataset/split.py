@@ -13,18 +13,20 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
+from grip_env.config import LearningConfig
+
 if TYPE_CHECKING:
     import pandas as pd
-
-    from grip_env.config import LearningConfig
 
 Split = Literal["train", "test", "all"]
 SPLITS: tuple[str, ...] = ("train", "test", "all")
 GROUP_COLUMN = "object_id"
+_DEFAULTS = LearningConfig()  # the defaults below are the config's
 
 
 def split_objects(
-    object_ids: Iterable[str], test_fraction: float = 0.25, seed: int = 0
+    object_ids: Iterable[str], test_fraction: float = _DEFAULTS.test_fraction,
+    seed: int = _DEFAULTS.seed,
 ) -> tuple[tuple[str, ...], tuple[str, ...]]:
     """Split object ids into ``(train, test)``, deterministically and without overlap.
 
@@ -67,7 +69,8 @@ def split_table(
 
 
 def objects_in_split(
-    object_ids: Iterable[str], split: str, test_fraction: float = 0.25, seed: int = 0
+    object_ids: Iterable[str], split: str, test_fraction: float = _DEFAULTS.test_fraction,
+    seed: int = _DEFAULTS.seed,
 ) -> tuple[str, ...]:
     """The ids of ``split`` ("train", "test" or "all") as given by :func:`split_objects`.
 
