@@ -6,11 +6,14 @@ same angle (mirrored axes in the URDF). Each finger is one finite-torque motor b
 
 * joint 2 is velocity-controlled towards closing with torque limit ``tau2``; joint 3 follows
   ``q3_0 + (q2 - q2_0) / 3`` through the gear train (the Barrett clutch before breakaway);
-* the worm gear is not backdrivable: a joint pushed back more than ``BACKLASH_RAD`` behind the
-  furthest it has closed is held there with ``HOLD_FACTOR`` times its motor torque. (A joint
-  limit raised to that peak would let the solver solve the lock with the contacts, but
-  PyBullet's joint limits yield under an active joint motor: measured 47 mrad at 40 N on a
-  thumb, see BENCHMARKS.md; so the lock is still this hold mode.)
+* the worm gear is not backdrivable: a joint pushed back more than ``BACKLASH_RAD`` (5 mrad)
+  behind the furthest it has closed is locked there, once and for the rest of the trial, by a
+  stiff position motor of ``HOLD_FACTOR`` times its motor torque: a constraint the solver
+  solves together with the contacts, as the real hand's stalled finger is held by its gear.
+  The backlash is what separates a real backdrive from the solver's jitter: at 2 mrad every
+  finger on a pinned box locks on jitter and the squeeze decays from 16 N to 2 N. (A joint limit
+  raised to the peak would be the textbook lock, but PyBullet's joint limits yield under an
+  active joint motor: measured 47 mrad at 40 N on a thumb; see BENCHMARKS.md.)
 * once the proximal link is stopped by the object, joint 3 is released from the coupling and
   closes on its own with torque limit ``tau3`` (breakaway), locked behind by its own worm gear.
 
@@ -57,7 +60,8 @@ HAND_URDF = Path(str(files("grip_env") / "assets" / "barrett_bh8_280.urdf"))
 GEAR_FACTOR = 5.0  # joint 3's gear-train torque before breakaway, relative to tau3
 GEAR_GAIN = 0.5  # position gain of the gear train (stiff, still stable at 240 Hz)
 PALM_LEAD_STEPS = 4
-BACKLASH_RAD = 0.005  # a joint pushed back further than this is held by its worm gear
+BACKLASH_RAD = 0.005  # backdrive beyond this locks the worm gear (0.6 mm at the fingertip)
+GEAR_UPDATE_RAD = 1e-3  # joint 3's geared target follows joint 2 in steps this small
 HOLD_FACTOR = 5.0  # worm-gear holding torque relative to the motor torque
 
 # URDF joint indices, listed in planar finger order (planar 1 = URDF finger 2, see module doc).
@@ -98,6 +102,7 @@ class HandState:
 
     peak: NDArray[np.float64]
     origin: NDArray[np.float64]
+    held: NDArray[np.bool_]
     broken_away: tuple[bool, ...]
     palm_target: tuple[tuple[float, ...], float]
 
@@ -125,6 +130,7 @@ class Hand:
         self.spread = 0.0
         self._peak = np.zeros((3, 2))
         self._origin = np.zeros((3, 2))
+        self._held = np.zeros((3, 2), bool)
         self._target: tuple[tuple[float, ...], float] = ((0.0, 0.0, 0.0), 0.0)
 
     # ------------------------------------------------------------------ palm
@@ -183,6 +189,7 @@ class Hand:
             finger.broken_away = False
         self._origin = np.stack([q2, q3], axis=1)
         self._peak = self._origin.copy()
+        self._held = np.zeros((3, 2), bool)
         world.position_motors(self.uid, list(SPREAD_JOINTS), [self.spread] * 2, [10.0] * 2)
         self._command_motors()
 
@@ -212,24 +219,31 @@ class Hand:
     def drive_fingers(self, touching: NDArray[np.bool_] | None = None) -> NDArray[np.float64]:
         """One control update of the finger motors; returns the flexion velocities (3, 2).
 
-        A joint pushed back more than ``BACKLASH_RAD`` behind the furthest it has closed is held
-        there with ``HOLD_FACTOR`` times its motor torque (the non-backdrivable worm gear).
+        A joint pushed back more than ``BACKLASH_RAD`` behind the furthest it has closed is locked
+        there for the rest of the trial with ``HOLD_FACTOR`` times its motor torque (the
+        non-backdrivable worm gear: once the load exceeds the motor, the gear holds, as the real
+        hand's stalled finger does). Motors are re-commanded only when something changed.
         ``touching`` ((3, 2) proximal/distal contacts) triggers the breakaway of a finger whose
         proximal link is stopped by contact; joint 3 then closes on its own motor.
         """
         q, dq = self.joint_states()
+        advanced = bool((q[:, 0] > self._peak[:, 0] + GEAR_UPDATE_RAD).any())
         self._peak = np.maximum(self._peak, q)
-        held = q < self._peak - BACKLASH_RAD
+        backdriven = q < self._peak - BACKLASH_RAD
+        engaged = bool((backdriven & ~self._held).any())
+        self._held |= backdriven
         if touching is not None:
             for i, finger in enumerate(self.fingers):
                 if touching[i, 0] and dq[i, 0] < 0.1 * self.close_speed_rad_s:
                     finger.broken_away = True
-        self._command_motors(held)
+        if engaged or advanced or touching is not None:
+            self._command_motors()
         return dq
 
-    def _command_motors(self, held: NDArray[np.bool_] | None = None) -> None:
-        """Joints close on their motors; joint 3 follows the gear train until breakaway."""
-        held = np.zeros((3, 2), bool) if held is None else held
+    def _command_motors(self) -> None:
+        """Joints close on their motors; joint 3 follows the gear train until breakaway; a
+        joint once backdriven stays locked at its peak by its worm gear."""
+        held = self._held
         velocity, velocity_forces, position, targets, position_forces = [], [], [], [], []
         for i, finger in enumerate(self.fingers):
             for k, tau in enumerate((finger.tau2, finger.tau3)):
@@ -255,12 +269,13 @@ class Hand:
 
     def state(self) -> HandState:
         """The controller's own state, to restore together with a PyBullet state."""
-        return HandState(self._peak.copy(), self._origin.copy(),
+        return HandState(self._peak.copy(), self._origin.copy(), self._held.copy(),
                          tuple(f.broken_away for f in self.fingers), self._target)
 
     def restore(self, state: HandState) -> None:
         """Bring the controller back to ``state`` (after ``restoreState`` of the same moment)."""
         self._peak, self._origin = state.peak.copy(), state.origin.copy()
+        self._held = state.held.copy()
         for finger, broken in zip(self.fingers, state.broken_away, strict=True):
             finger.broken_away = broken
         self._command_motors()
