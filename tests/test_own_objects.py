@@ -17,6 +17,7 @@ from typer.testing import CliRunner
 from grip_env.cli import _register_commands, app
 from grip_env.config import MAX_OBJECT_VERTICES, Config
 from grip_env.dataset import DatasetMismatchError, generate, load, read_objects, validate
+from grip_env.dataset.catalog import resolve_objects
 from grip_env.objects import PlanarObject
 from grip_env.objects.sources import objects_from_path, read_vertex_file
 
@@ -75,6 +76,8 @@ def test_vertex_files_csv_with_or_without_header_and_json(tmp_path: Path) -> Non
     (tmp_path / "a.csv").write_text("0,0\n40,0\n40,40\n0,40\n")
     (tmp_path / "b.csv").write_text("id,y,x\n1,0,0\n2,0,40\n3,40,40\n4,40,0\n")
     (tmp_path / "c.json").write_text(json.dumps(square))
+    (tmp_path / "d.csv").write_text("\ufeffX,Y\n0,0\n40,0\n40,40\n0,40\n")  # BOM, upper case
+    assert read_vertex_file(tmp_path / "d.csv").tolist() == square
     assert read_vertex_file(tmp_path / "a.csv").tolist() == square
     assert read_vertex_file(tmp_path / "b.csv").tolist() == square  # columns found by header
     assert read_vertex_file(tmp_path / "c.json").tolist() == square
@@ -214,6 +217,16 @@ def test_generate_accepts_a_list_of_objects_and_keeps_names_inside_the_folder(
     assert all(g.split("/")[0] in ids for g in grips["grip_id"])
     with pytest.raises(DatasetMismatchError, match="object_contours_sha256"):
         generate(SMALL, out, objects=[objects[1], objects[0], objects[2]], progress=False)
+
+
+def test_object_ids_are_unique_safe_file_names_whatever_the_names() -> None:
+    triangle = [[0, 0], [70, 0], [35, 60]]
+    names = ["a", "a", "a-1", "../b", "b", "", "a"]
+    entries = resolve_objects(SMALL, [PlanarObject.from_polygon(triangle, name=n) for n in names],
+                              seed=0)
+    ids = [entry.object_id for entry in entries]
+    assert ids == ["a-2", "a-3", "a-1", "_b", "b", "object", "a-4"]
+    assert all(re.fullmatch(r"[A-Za-z0-9_+-][A-Za-z0-9_.+-]*", i) for i in ids)
 
 
 def test_generate_refuses_what_is_not_an_object() -> None:

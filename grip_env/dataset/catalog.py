@@ -99,14 +99,20 @@ def _check_budget(obj: PlanarObject, config: Config) -> None:
 
 def _unique_ids(names: list[str]) -> list[str]:
     """Object names as safe file names (letters, digits, ``_.+-``; no leading dot), with
-    ``-<n>`` appended to repeated ones."""
+    ``-<n>`` appended to repeated ones (skipping any ``-<n>`` another name already is)."""
     safe = [_UNSAFE.sub("_", name).lstrip(".") or "object" for name in names]
     repeated = {name for name, count in Counter(safe).items() if count > 1}
+    taken = set(safe) - repeated
     seen: Counter[str] = Counter()
     ids = []
     for name in safe:
-        seen[name] += 1
-        ids.append(f"{name}-{seen[name]}" if name in repeated else name)
+        if name in repeated:
+            seen[name] += 1
+            while f"{name}-{seen[name]}" in taken:
+                seen[name] += 1
+            name = f"{name}-{seen[name]}"
+        taken.add(name)
+        ids.append(name)
     return ids
 
 

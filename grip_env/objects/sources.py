@@ -126,7 +126,7 @@ def read_vertex_file(path: Path) -> NDArray[np.float64]:
         size = path.stat().st_size
         if size > MAX_VERTEX_FILE_BYTES:
             raise ValueError(f"is {size} bytes, more than {MAX_VERTEX_FILE_BYTES}")
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")  # a byte-order mark is not part of x
     except (OSError, UnicodeDecodeError) as exc:
         raise ValueError(f"cannot read it: {exc}") from None
     vertices = _json_vertices(text) if path.suffix.lower() == ".json" else _csv_vertices(text)
