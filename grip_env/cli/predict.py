@@ -16,6 +16,7 @@ import typer
 from grip_env.cli.errors import user_errors
 from grip_env.cli.options import DatasetDir
 from grip_env.cli.paths import output_file
+from grip_env.shutdown import stop_on_signals
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -39,9 +40,11 @@ def predict(
     """Write one row per grip of DATA: grip_id, object_id, the model's score and its name.
 
     The score is p_success (a classifier: probability that the grip holds) or robustness_pred
-    (a regressor: predicted robustness_mean). Exit code 2 for a bad model, dataset or --out.
+    (a regressor: predicted robustness_mean). The file is written whole or not at all. Exit
+    codes: 0 done; 2 a bad model, dataset or --out; 130, 143, 129 stopped by SIGINT, SIGTERM,
+    SIGHUP.
     """
-    with user_errors():
+    with stop_on_signals(f"nothing was written to {out}: rerun the same command"), user_errors():
         output_file(out, ".parquet")
         directory, name = model_location(model)
         from grip_env.dataset import load
