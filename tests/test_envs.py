@@ -497,3 +497,81 @@ def test_readme_sb3_snippet_runs_on_a_generated_dataset(generated_dataset_dir, c
     exec(compile(code, "README.md", "exec"), {})
     line = capsys.readouterr().out.strip().splitlines()[-1]
     assert line.startswith("first pick holds: selector ") and ", best Q_C " in line
+
+
+# ------------------------------------------------------------------ conventions (issue 20)
+@pytest.mark.parametrize("env_class", [GripSelectEnv, GripAcceptEnv])
+def test_reset_options_pin_the_object(data, env_class):
+    env = env_class(data, max_candidates=8)
+    for seed in range(4):
+        _, info = env.reset(seed=seed, options={"object_id": "hexagon"})
+        assert info["object_id"] == "hexagon" and info["candidates"] == 3
+    with pytest.raises(ValueError, match="object_id 'cube' is not among the 6 objects"):
+        env.reset(options={"object_id": "cube"})
+    with pytest.raises(ValueError, match=r"unknown reset options \['objekt'\]"):
+        env.reset(options={"objekt": "disc"})
+    with pytest.raises(RuntimeError, match="call reset"):  # the refused reset started nothing
+        env.step(0)
+
+
+def test_a_pinned_object_outside_the_split_is_refused(data):
+    _, test = split_objects(NAMES, 0.34, 7)
+    env = select_env(data, split="train", test_fraction=0.34, split_seed=7)
+    with pytest.raises(ValueError, match="split 'train'"):
+        env.reset(options={"object_id": test[0]})
+
+
+@pytest.mark.parametrize("env_class", [GripSelectEnv, GripAcceptEnv])
+def test_step_after_the_end_raises_and_executes_nothing(data, env_class):
+    env = env_class(data, max_candidates=8, max_attempts=1)
+    with pytest.raises(RuntimeError, match="never started"):
+        env.step(0)
+    env.reset(seed=0, options={"object_id": "disc"})
+    terminated = False
+    while not terminated:
+        terminated = env.step(1 if env_class is GripAcceptEnv else 0)[2]
+    masks = env.action_masks().copy()
+    with pytest.raises(RuntimeError, match="episode has ended"):
+        env.step(0)
+    assert np.array_equal(env.action_masks(), masks)  # nothing was executed or masked
+    env.reset(seed=1)
+    env.step(0)  # a new episode steps again
+
+
+def test_a_backend_can_be_passed_in_and_data_is_its_shortcut(data):
+    from grip_env.envs import ReplayBackend
+
+    by_backend = GripSelectEnv(backend=ReplayBackend(data), max_candidates=8)
+    by_data = GripSelectEnv(data, max_candidates=8)
+    first = by_backend.reset(seed=3)[0]
+    assert np.array_equal(first["features"], by_data.reset(seed=3)[0]["features"])
+    with pytest.raises(ValueError, match="either backend= or data="):
+        GripSelectEnv(data, backend=ReplayBackend(data))
+    with pytest.raises(ValueError, match="lacks"):
+        GripSelectEnv(backend=object())
+
+
+def test_constructors_have_explicit_keyword_signatures():
+    import inspect
+
+    for env_class in (GripSelectEnv, GripAcceptEnv):
+        parameters = inspect.signature(env_class).parameters
+        kinds = {p.kind for p in parameters.values()}
+        assert inspect.Parameter.VAR_KEYWORD not in kinds
+        assert inspect.Parameter.VAR_POSITIONAL not in kinds
+        assert {"data", "objects", "backend", "config", "max_candidates", "split"} <= set(
+            parameters)
+
+
+@pytest.mark.parametrize("module", ["select", "accept"])
+def test_docstrings_have_gymnasiums_sections_and_a_running_example(module):
+    import doctest
+    import importlib
+
+    found = importlib.import_module(f"grip_env.envs.{module}")
+    env_class = GripSelectEnv if module == "select" else GripAcceptEnv
+    for section in ("Description", "Action Space", "Observation Space", "Rewards",
+                    "Starting State", "Episode End", "Arguments", "Version History"):
+        assert f"## {section}" in (env_class.__doc__ or "")
+    result = doctest.testmod(found, raise_on_error=False, verbose=False)
+    assert result.attempted >= 5 and result.failed == 0

@@ -19,25 +19,64 @@ PROGRESS = ("position", "attempts", "pool")
 class GripAcceptEnv(GripEnvBase):
     """Decide, candidate after candidate, whether to execute it (1) or skip it (0).
 
-    Each episode draws one object of the split; its best ``max_candidates`` candidates are shown
-    lowest ``Q_C`` first (``candidate_order="q_c"``) or in a new random order each episode
-    (``"shuffled"``). Executing earns ``success_reward`` or ``failure_reward``; skipping earns 0,
-    except that skipping the last candidate ends the episode with ``failure_reward`` (the object
-    was never lifted). The episode terminates on success, after ``max_attempts`` executions, or
-    when the candidates run out. Every action is valid; :meth:`action_masks` is all True.
+    ## Description
 
-    Observation: ``Dict(features=Box(F), progress=Box(0, 1, (3,)))``: the current candidate's
-    normalised features, and ``progress`` = (candidates already shown / K, executions used /
-    max_attempts, the object's candidate count / K). Action: ``Discrete(2)``.
+    Each episode is one object of the split; its best ``max_candidates`` candidates are shown one
+    at a time, lowest ``Q_C`` first (``candidate_order="q_c"``) or in a new random order each
+    episode (``"shuffled"``), and each is skipped or executed.
 
-    ``info`` holds ``object_id``, ``grip_id``, ``Q_C``, ``success_rate`` (recorded rate; None
-    live) of the candidate acted on, ``attempts``, ``executed``, ``success``, ``is_success`` (the
-    same flag, for SB3's ``Monitor``) and ``invalid_action`` (always False). Options are those of
-    :class:`~grip_env.envs.select.GripSelectEnv`.
+    ## Action Space
+
+    ``Discrete(2)``: 0 skips the current candidate, 1 executes it. Every action is valid;
+    :meth:`action_masks` is all True.
+
+    ## Observation Space
+
+    ``Dict(features=Box(F), progress=Box(0, 1, (3,)))``: the current candidate's normalised
+    features, and ``progress`` = (candidates already shown / K, executions used /
+    max_attempts, the object's candidate count / K).
+
+    ## Rewards
+
+    Executing earns ``success_reward`` or ``failure_reward``; skipping earns 0, except that
+    skipping the last candidate earns ``failure_reward`` (the object was never lifted).
+
+    ## Starting State
+
+    As :class:`~grip_env.envs.select.GripSelectEnv`: a uniform draw from the split, or
+    ``reset(options={"object_id": ...})``; the first candidate is shown.
+
+    ## Episode End
+
+    Terminates on success, after ``max_attempts`` executions, or when the candidates run out;
+    never truncated. A ``step`` after the end raises ``RuntimeError``. ``info`` holds
+    ``object_id``, ``grip_id``, ``Q_C``, ``success_rate`` (recorded rate; None live) of the
+    candidate acted on, ``attempts``, ``executed``, ``success``, ``is_success`` (the same flag,
+    for SB3's ``Monitor``) and ``invalid_action`` (always False).
+
+    ## Arguments
+
+    Those of :class:`~grip_env.envs.select.GripSelectEnv` (the same constructor).
+
+    ## Version History
+
+    - v0: initial version.
+
+    ## Example
+
+    >>> import gymnasium, grip_env
+    >>> from classifiers.synthetic import synthetic_grips
+    >>> env = gymnasium.make("GripAccept-v0", data=synthetic_grips(n_objects=6, seed=0),
+    ...                      max_candidates=8)
+    >>> observation, info = env.reset(seed=0, options={"object_id": "3"})
+    >>> observation["features"].shape, observation["progress"].tolist()
+    ((12,), [0.0, 0.0, 1.0])
+    >>> _, reward, terminated, truncated, info = env.step(1)
+    >>> terminated, info["executed"]
+    (True, True)
     """
 
-    def __init__(self, data: Any = None, objects: Any = None, **options: Any) -> None:
-        super().__init__(data, objects, **options)
+    def _make_spaces(self) -> None:
         low, high = self.scaler.bounds()
         self.observation_space = spaces.Dict({
             "features": spaces.Box(low, high, dtype=np.float32),
@@ -56,7 +95,7 @@ class GripAcceptEnv(GripEnvBase):
     ) -> tuple[Observation, dict[str, Any]]:
         """Start an episode on a new object and show its first candidate."""
         super().reset(seed=seed)
-        found = self._found = self._sample_candidates()
+        found = self._found = self._episode_candidates(options)
         self._slots = self._shuffled_slots(found.count)
         self._position, self._attempts, self._outcome = 0, 0, None
         self._shown = int(self._slots[0])
@@ -68,9 +107,9 @@ class GripAcceptEnv(GripEnvBase):
     def step(self, action: Any) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
         """Skip (0) or execute (1) the current candidate."""
         execute = action_index(action, 2) == EXECUTE
+        self._check_running()
         found = self._found
-        if found is None:
-            raise RuntimeError("call reset() before step()")
+        assert found is not None
         row = int(self._slots[min(self._position, found.count - 1)])
         info = self._grip_info(found, row)
         success, reward = False, 0.0
@@ -82,7 +121,7 @@ class GripAcceptEnv(GripEnvBase):
         exhausted = self._position >= found.count
         if exhausted and not execute:
             reward = self.failure_reward
-        terminated = success or self._attempts >= self.max_attempts or exhausted
+        terminated = self._end_if(success or self._attempts >= self.max_attempts or exhausted)
         self._shown = row if terminated else int(self._slots[self._position])
         self._outcome = success if execute and terminated else None
         info.update(

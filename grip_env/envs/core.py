@@ -1,7 +1,10 @@
 """``GripEnvBase``: what the grip environments share (objects, split, candidates, rewards, drawing).
 
 An episode is one object, drawn uniformly with the environment's ``np_random`` from the objects
-of its split that have at least one candidate. Subclasses define the spaces, ``reset`` and ``step``.
+of its split that have at least one candidate, or pinned with ``reset(options={"object_id": id})``.
+A ``step`` after the episode ended raises (call ``reset``). Subclasses define the spaces
+(:meth:`GripEnvBase._make_spaces`), ``reset`` and ``step``; the constructor, with its explicit
+keyword signature, is this class's.
 """
 
 from __future__ import annotations
@@ -39,6 +42,7 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         data: str | Path | pd.DataFrame | None = None,
         objects: ObjectsArg = None,
         *,
+        backend: OutcomeBackend | None = None,
         config: Config | None = None,
         max_candidates: int | None = None,
         max_attempts: int | None = None,
@@ -76,9 +80,7 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
             )
         self.render_mode = render_mode
         self.feature_names = feature_subset(features)
-        self.backend: OutcomeBackend = (
-            LiveBackend(objects, self.config) if data is None else ReplayBackend(data, objects)
-        )
+        self.backend = self._make_backend(data, objects, backend)
         self.render_style = self._checked_style(render_style)
         self._camera = SceneCamera(self.config) if self.render_style == "scene" else None
         self.object_ids = objects_in_split(
@@ -96,6 +98,61 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         self._window: HumanWindow | None = None
         self._identity = np.arange(self.max_candidates)
         self._identity.flags.writeable = False
+        self._ended = True  # no episode yet: step() needs a reset() first
+        self._make_spaces()
+
+    def _make_spaces(self) -> None:
+        """Set ``observation_space``, ``action_space`` and the episode state (subclasses)."""
+        raise NotImplementedError
+
+    def _make_backend(
+        self, data: str | Path | pd.DataFrame | None, objects: ObjectsArg,
+        backend: OutcomeBackend | None,
+    ) -> OutcomeBackend:
+        """``backend`` as given, else replay of ``data``, else live PyBullet on ``objects``."""
+        if backend is None:
+            return LiveBackend(objects, self.config) if data is None else ReplayBackend(data,
+                                                                                        objects)
+        if data is not None or objects is not None:
+            raise ValueError("pass either backend= or data=/objects= (data= is a shortcut for "
+                             "backend=ReplayBackend(data, objects)), not both")  # fmt: skip
+        missing = [name for name in ("object_ids", "candidates", "execute", "close")
+                   if not hasattr(backend, name)]  # fmt: skip
+        if missing:
+            raise ValueError(f"backend {type(backend).__name__} lacks {missing} of OutcomeBackend")
+        return backend
+
+    # ------------------------------------------------------------------ episodes
+    def _episode_candidates(self, options: dict[str, Any] | None) -> CandidateSet:
+        """The episode's object: ``options["object_id"]`` if given, else a uniform draw."""
+        options = dict(options or {})
+        object_id = options.pop("object_id", None)
+        if options:
+            raise ValueError(f"unknown reset options {sorted(options)}; the one option is "
+                             "'object_id'")  # fmt: skip
+        self._ended = False
+        if object_id is None:
+            return self._sample_candidates()
+        if str(object_id) not in self.object_ids:
+            self._ended = True
+            raise ValueError(f"object_id {object_id!r} is not among the {len(self.object_ids)} "
+                             f"objects of split {self.split!r}")  # fmt: skip
+        found = self._candidate_set(self.object_ids.index(str(object_id)))
+        if not found.count:
+            self._ended = True
+            raise ValueError(f"object {object_id!r} has no feasible grip")
+        return found
+
+    def _check_running(self) -> None:
+        """Refuse a step before the first reset or after the episode ended."""
+        if self._ended:
+            raise RuntimeError("the episode has ended (or never started): call reset() before "
+                               "step()")  # fmt: skip
+
+    def _end_if(self, terminated: bool) -> bool:
+        """Record whether the step ended the episode, and return it."""
+        self._ended = bool(terminated)
+        return self._ended
 
     def _checked_style(self, style: str | None) -> str:
         """``"scene"`` (PyBullet, live only; the live default) or ``"sketch"`` (2-D)."""

@@ -17,47 +17,88 @@ Observation = dict[str, NDArray[Any]]
 class GripSelectEnv(GripEnvBase):
     """Pick the grip to execute from all candidates of one object at once.
 
-    Each episode draws one object of the split. The agent sees every candidate's features and
-    picks one; the grip is executed (replayed from recorded trials, or run in PyBullet) and the
-    reward is ``success_reward`` or ``failure_reward``. After a failure the agent may pick again
-    (up to ``max_attempts``); failed candidates are masked. Choosing a masked slot (padding or an
-    already failed grip) is not an error: it earns ``invalid_action_reward``, ends the episode and
-    sets ``info["invalid_action"] = True``.
+    ## Description
 
-    Observation: ``Dict(features=Box(-b, b, (K, F), float32), mask=MultiBinary(K))`` where
-    ``K = max_candidates`` and ``F = len(features)``. Slots hold the K best candidates, lowest
-    ``Q_C`` first (or shuffled: ``candidate_order="shuffled"``); padded slots are zero and masked.
-    Action: ``Discrete(K)``; :meth:`action_masks` gives the valid slots (sb3-contrib MaskablePPO).
+    Each episode is one object of the split. The agent sees every candidate grip's features at
+    once and picks one; the grip is executed (its recorded trials replayed, or run in PyBullet).
+    After a failure it may pick again, up to ``max_attempts``; failed candidates are masked.
 
-    The episode terminates on success, when ``max_attempts`` grips were executed, after an invalid
-    action, or when no valid candidate remains. ``info`` holds ``object_id``, ``grip_id``, ``Q_C``,
-    ``success_rate`` (recorded rate; None live), ``attempts``, ``success``, ``is_success`` (the
-    same flag, under the name SB3's ``Monitor`` and ``EvalCallback`` read: on the last step it is
-    whether the episode succeeded) and ``invalid_action``.
+    ## Action Space
 
-    Args:
-        data: a dataset path or DataFrame (replay backend); None runs grips live in PyBullet.
-        objects: object set name, or names / ``PlanarObject`` list (live: the objects; replay: a
-            filter on the dataset's object ids). None: ``config.objects.set`` live, all replayed.
-        config: grip-env :class:`~grip_env.config.Config` (default: ``Config()``, the values of
-            ``configs/default.yaml``).
-        max_candidates: K (default ``config.selector.max_candidates``).
-        max_attempts: executions per episode (default ``config.selector.max_attempts``).
-        success_reward, failure_reward, invalid_action_reward: reward values.
-        features: feature subset (names from S1..C6, Q_G, Q_C); default the twelve S1..C6.
-        split: ``"train"``, ``"test"`` or ``"all"`` objects, from
-            :func:`~grip_env.envs.split_objects` (``test_fraction``, ``split_seed`` default to
-            ``config.learning.test_fraction`` and ``config.learning.seed``).
-        normalize: ``"log"`` (signed log1p), ``"standard"`` (z-score on the split's candidates)
-            or ``"none"``.
-        candidate_order: ``"q_c"`` (best first) or ``"shuffled"`` (a new order each episode).
-        render_mode: ``None``, ``"rgb_array"`` or ``"human"``.
-        render_style: ``"scene"`` (PyBullet through TinyRenderer; live only, its default) or
-            ``"sketch"`` (2-D contour and contact triangles; the replay default).
+    ``Discrete(K)``, ``K = max_candidates``: the slot of the grip to execute. :meth:`action_masks`
+    gives the valid slots (for sb3-contrib's MaskablePPO). A masked slot (padding, or a grip that
+    already failed) is not an error: it earns ``invalid_action_reward`` and ends the episode.
+
+    ## Observation Space
+
+    ``Dict(features=Box(-b, b, (K, F), float32), mask=MultiBinary(K))``, ``F = len(features)``.
+    Slots hold the object's K best candidates, lowest ``Q_C`` first (or shuffled each episode,
+    ``candidate_order="shuffled"``); padded slots are zero and masked.
+
+    ## Rewards
+
+    ``success_reward`` (1) when the executed grip holds, ``failure_reward`` (0) when it drops,
+    ``invalid_action_reward`` (-1) for a masked slot.
+
+    ## Starting State
+
+    An object drawn uniformly from the split's objects that have a candidate, with the
+    environment's ``np_random`` (``reset(seed=...)`` fixes every draw), or the one named by
+    ``reset(options={"object_id": ...})``.
+
+    ## Episode End
+
+    Terminates on success, after ``max_attempts`` executions, after an invalid action, or when no
+    valid candidate remains; never truncated. A ``step`` after the end raises ``RuntimeError``.
+    ``info`` holds ``object_id``, ``grip_id``, ``Q_C``, ``success_rate`` (recorded rate; None
+    live), ``attempts``, ``success``, ``is_success`` (the same flag, under the name SB3's
+    ``Monitor`` and ``EvalCallback`` read) and ``invalid_action``.
+
+    ## Arguments
+
+    - ``data``: a dataset path or DataFrame, a shortcut for ``backend=ReplayBackend(data,
+      objects)``; with neither ``data`` nor ``backend``, grips run live in PyBullet.
+    - ``objects``: object set name, or names / ``PlanarObject`` list (live: the objects; replay:
+      a filter on the dataset's object ids). None: ``config.objects.set`` live, all replayed.
+    - ``backend``: any :class:`~grip_env.envs.backends.OutcomeBackend` (instead of ``data``).
+    - ``config``: grip-env :class:`~grip_env.config.Config` (default: ``load_config()``).
+    - ``max_candidates``, ``max_attempts``: K and executions per episode (default
+      ``config.selector``).
+    - ``success_reward``, ``failure_reward``, ``invalid_action_reward``: reward values.
+    - ``features``: feature subset (names from S1..C6, Q_G, Q_C); default the twelve S1..C6.
+    - ``split``: ``"train"``, ``"test"`` or ``"all"`` objects, from
+      :func:`grip_env.dataset.split.split_objects` (``test_fraction`` and ``split_seed`` default
+      to ``config.learning.test_fraction`` and ``config.learning.seed``).
+    - ``normalize``: ``"log"`` (signed log1p), ``"standard"`` (z-score on the split's
+      candidates) or ``"none"``.
+    - ``candidate_order``: ``"q_c"`` (best first) or ``"shuffled"``.
+    - ``render_mode``: ``None``, ``"rgb_array"`` or ``"human"``; ``render_style``: ``"scene"``
+      (PyBullet through TinyRenderer; live only, its default) or ``"sketch"`` (2-D contour and
+      contact triangles; the replay default).
+
+    ## Version History
+
+    - v0: initial version.
+
+    ## Example
+
+    >>> import gymnasium, grip_env
+    >>> from classifiers.synthetic import synthetic_grips
+    >>> env = gymnasium.make("GripSelect-v0", data=synthetic_grips(n_objects=6, seed=0),
+    ...                      max_candidates=8)
+    >>> observation, info = env.reset(seed=0, options={"object_id": "3"})
+    >>> info["object_id"], observation["features"].shape, observation["mask"].shape
+    ('3', (8, 12), (8,))
+    >>> _, reward, terminated, truncated, info = env.step(0)
+    >>> terminated, truncated, reward == float(info["success"])
+    (True, False, True)
+    >>> env.step(0)
+    Traceback (most recent call last):
+    ...
+    RuntimeError: the episode has ended (or never started): call reset() before step()
     """
 
-    def __init__(self, data: Any = None, objects: Any = None, **options: Any) -> None:
-        super().__init__(data, objects, **options)
+    def _make_spaces(self) -> None:
         k, width = self.max_candidates, len(self.feature_names)
         low, high = self.scaler.bounds()
         self.observation_space = spaces.Dict({
@@ -82,7 +123,7 @@ class GripSelectEnv(GripEnvBase):
     ) -> tuple[Observation, dict[str, Any]]:
         """Start an episode on a new object; ``info`` has ``object_id`` and ``candidates``."""
         super().reset(seed=seed)
-        found = self._found = self._sample_candidates()
+        found = self._found = self._episode_candidates(options)
         self._slots = slots = self._shuffled_slots(found.count)
         self._features = found.features if slots is self._identity else found.features[slots]
         self._mask = found.mask.copy()
@@ -96,23 +137,25 @@ class GripSelectEnv(GripEnvBase):
     def step(self, action: Any) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
         """Execute the candidate in slot ``action``."""
         slot = action_index(action, self.max_candidates)
+        self._check_running()
         found = self._found
-        if found is None:
-            raise RuntimeError("call reset() before step()")
+        assert found is not None
         row = int(self._slots[slot])
         info = self._grip_info(found, row)
         if not self._mask[slot]:
             self._chosen, self._outcome = None, None
             info.update(attempts=self._attempts, success=False, is_success=False,
                         invalid_action=True)
-            return self._observation(), self.invalid_action_reward, True, False, info
+            return self._observation(), self.invalid_action_reward, self._end_if(True), False, info
         success = self.backend.execute(found, row, self.np_random)
         self._attempts += 1
         self._mask[slot] = 0
         self._remaining -= 1
         self._chosen, self._outcome = row, success
         reward = self.success_reward if success else self.failure_reward
-        terminated = success or self._attempts >= self.max_attempts or not self._remaining
+        terminated = self._end_if(
+            success or self._attempts >= self.max_attempts or not self._remaining
+        )
         info.update(attempts=self._attempts, success=success, is_success=success,
                     invalid_action=False)
         if self.render_mode == "human":
