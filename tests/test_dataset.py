@@ -31,6 +31,7 @@ from grip_env.dataset import (
     kept_ranks,
     load,
     load_objects,
+    read_objects,
     validate,
     with_outcomes,
 )
@@ -119,6 +120,18 @@ def test_objects_table_round_trip(tmp_path: Path) -> None:
     assert [o.name for o in restored] == [o.name for o in originals]
     for before, after in zip(originals, restored, strict=True):
         np.testing.assert_allclose(after.contour, before.contour)
+
+
+def test_objects_table_describes_the_body_at_the_configured_tolerance(tmp_path: Path) -> None:
+    coarse = CONFIG.override(objects={"sim_tolerance_mm": 3.0})
+    fine = CONFIG.override(objects={"sim_tolerance_mm": 0.1})
+    options = {"objects": "ellipse", "workers": 1, "progress": False, "job": toy_job}
+    tables = [read_objects(generate(config, tmp_path / name, **options))
+              for name, config in (("coarse", coarse), ("fine", fine))]
+    assert tables[0]["sim_tolerance_mm"].tolist() == [3.0]
+    assert tables[1]["sim_tolerance_mm"].tolist() == [0.1]
+    assert tables[0]["sim_vertices"][0] < tables[1]["sim_vertices"][0]
+    assert tables[0]["sim_deviation_mm"][0] <= 3.0 and tables[1]["sim_deviation_mm"][0] <= 0.1
 
 
 def test_object_seeds_depend_on_run_seed_and_index_only() -> None:

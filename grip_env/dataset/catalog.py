@@ -87,10 +87,13 @@ def _shapes(config: Config, objects: ObjectsSpec, seed: int) -> list[PlanarObjec
 
 
 def _check_budget(obj: PlanarObject, config: Config) -> None:
+    """Refuse an object too large or detailed to process, or one the simulator cannot build
+    within ``objects.sim_tolerance_mm`` (its shape is then cached for the objects table)."""
     low, high = obj.contour.min(axis=0), obj.contour.max(axis=0)
     try:
         check_contour_budget(obj.name, len(obj.contour), float(obj.polygon.length),
                              float((high - low).max()), config.perception)
+        obj.simulated_shape(config.objects.sim_tolerance_mm)
     except ValueError as exc:
         if obj.source in ("polygon", "mask"):
             raise

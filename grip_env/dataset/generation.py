@@ -140,7 +140,7 @@ def _open_run(
         _remove_dataset(directory)
     elif overwrite:
         _remove_dataset(directory)
-    objects_sha = write_objects(directory, entries)
+    objects_sha = write_objects(directory, entries, config.objects.sim_tolerance_mm)
     manifest = new_manifest(config, entries, object_seeds(config.dataset.seed, len(entries)),
                             objects_sha, own)
     write_manifest(directory, manifest)
