@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -29,9 +30,8 @@ JOINT2_MAX = hg.JOINT2_RANGE_RAD[1]
 JOINT3_MAX = hg.JOINT3_RANGE_RAD[1]
 PALM_DEPTH_MM = hg.PALM_DEPTH_MM
 _HEIGHT_RANGE = (60.0, 260.0)  # palm heights above the contact plane that are searched
-_SWEEP_CHECKS = 40  # best palm heights whose closing sweep is checked against the table
 _HEIGHT_STEP_MM = 2.0  # palm heights tried, this far apart
-_SWEEP_BATCHES = (1, 4, 35)  # checked in these batches, best first
+_TABLE_STEPS = (489, 169)  # closing sweep depth tabulated every 5 mrad of joints 2 and 3
 _MAX_OPENING_RAD = 1.5  # the pre-shape opens joint 2 by at most this
 _OPENING_BISECTIONS = 17
 
@@ -119,59 +119,48 @@ def _pad_ik(reach: NDArray, height: NDArray) -> tuple[NDArray, NDArray]:
 
 
 def contact_postures(
-    reach_mm: NDArray, contact_z_mm: float, clearance_mm: float, palm_floor_mm: float,
+    reach_mm: NDArray, contact_z_mm: float | NDArray, clearance_mm: float, palm_floor_mm: float,
     gap_mm: float,
 ) -> tuple[ContactPosture, NDArray[np.bool_]]:
     """All three pads in one plane, for many grips: postures (n, 3) and which exist (n,).
 
     Args:
         reach_mm: (n, 3) reach of each finger from its line origin along -F_i.
-        contact_z_mm: height of the contact plane above the table (the object's mid-thickness).
+        contact_z_mm: height of the contact plane above the table; a sequence of heights is
+            tried lowest first, each grip taking the lowest it can reach.
         clearance_mm: lowest any finger point may come above the table, while closing from
             the pre-shape ``gap_mm`` further out (``opening_posture``) onto the contact.
         palm_floor_mm: lowest the palm's face may come above the table (above the object).
 
     Among the palm heights (``_HEIGHT_STEP_MM`` apart) whose inverse kinematics puts all three
-    pad corners on the plane (distal link past vertical, so the corner touches), the ones closest to
-    the Barrett's natural coupling q3 = q2 / 3 are tried, best first, until one's closing
-    clears the table.
-    Rows without any such height are NaN and False in the mask.
+    pad corners on the plane (distal link past vertical, so the corner touches) and whose
+    closing clears the table, the one closest to the Barrett's natural coupling q3 = q2 / 3 is
+    chosen. Rows without any such height are NaN and False in the mask.
     """
     reach = np.asarray(reach_mm, float).reshape(-1, 3)
+    planes = np.sort(np.atleast_1d(np.asarray(contact_z_mm, float)))
     heights = np.arange(_HEIGHT_RANGE[0], _HEIGHT_RANGE[1], _HEIGHT_STEP_MM)
-    heights = heights[heights + contact_z_mm - PALM_DEPTH_MM >= palm_floor_mm]
-    q2, q3 = _pad_ik(reach[:, :, None], heights[None, None, :])  # (n, 3, H)
-    cost = np.abs(q3 - COUPLING * q2).sum(axis=1)  # (n, H), NaN where a finger has no posture
-    cost = np.where(np.isnan(cost), np.inf, cost)
-    order = np.argsort(cost, axis=1)[:, :_SWEEP_CHECKS]  # the best heights, best first
+    heights = heights[heights + planes.max() - PALM_DEPTH_MM >= palm_floor_mm]
+    q2, q3 = _pad_ik(reach[:, :, None], heights[None, None, :])  # (n, 3, H): plane-independent
+    solved = ~np.isnan(q2).any(axis=1)  # (n, H)
+    depth = np.where(np.isnan(q2), np.inf, closing_sweep_depth(q2, q3, gap_mm)).max(axis=1)
+    cost = np.abs(q3 - COUPLING * q2).sum(axis=1)
     n = len(reach)
-    chosen2, chosen3 = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
-    height, found = np.full(n, np.nan), np.zeros(n, bool)
-    start = 0
-    for width in _SWEEP_BATCHES:  # most grips clear the table at their best height
-        if start >= order.shape[1]:
-            break
-        rows = np.flatnonzero(~found & np.isfinite(cost[np.arange(n), order[:, start]]))
-        if not rows.size:
-            break
-        cols = order[rows, start:start + width]  # (m, w)
-        take = cols[:, None, :].repeat(3, axis=1)
-        best2 = np.take_along_axis(q2[rows], take, 2)
-        best3 = np.take_along_axis(q3[rows], take, 2)
-        open2, open3 = opening_posture(np.nan_to_num(best2), np.nan_to_num(best3), gap_mm)
-        depth = sweep_depth(open2, open3, np.nan_to_num(best2), np.nan_to_num(best3)).max(axis=1)
-        valid = np.isfinite(np.take_along_axis(cost[rows], cols, 1))
-        valid &= heights[cols] + contact_z_mm - depth >= clearance_mm  # (m, w)
+    best = np.zeros(n, int)
+    plane = np.full(n, np.nan)
+    found = np.zeros(n, bool)
+    for z in planes:
+        valid = (solved & (heights + z - depth >= clearance_mm)
+                 & (heights + z - PALM_DEPTH_MM >= palm_floor_mm) & ~found[:, None])
         hit = valid.any(axis=1)
-        first = np.argmax(valid, axis=1)[hit]
-        done = rows[hit]
-        pick = first[:, None, None].repeat(3, axis=1)
-        chosen2[done] = np.take_along_axis(best2[hit], pick, 2)[..., 0]
-        chosen3[done] = np.take_along_axis(best3[hit], pick, 2)[..., 0]
-        height[done] = heights[cols[hit, first]]
-        found[done] = True
-        start += width
-    return ContactPosture(chosen2, chosen3, height), found
+        best[hit] = np.argmin(np.where(valid, cost, np.inf), axis=1)[hit]
+        plane[hit] = z
+        found |= hit
+    pick = best[:, None, None].repeat(3, axis=1)
+    chosen2 = np.where(found[:, None], np.take_along_axis(q2, pick, 2)[..., 0], np.nan)
+    chosen3 = np.where(found[:, None], np.take_along_axis(q3, pick, 2)[..., 0], np.nan)
+    height = np.where(found, heights[best] if heights.size else np.nan, np.nan)
+    return ContactPosture(chosen2, chosen3, height, plane), found
 
 
 def contact_posture(
@@ -210,6 +199,31 @@ def opening_posture(q2: NDArray, q3: NDArray, gap_mm: float) -> tuple[NDArray, N
         short = fingertip_in_plane(*along(mid))[0] < target
         low, high = np.where(short, mid, low), np.where(short, high, mid)
     return along(high)
+
+
+@lru_cache(maxsize=8)
+def _sweep_table(gap_mm: float) -> tuple[NDArray, NDArray, NDArray]:
+    """Deepest point (mm) of the closing from ``opening_posture`` onto (q2, q3), on a grid."""
+    q2 = np.linspace(0.0, JOINT2_MAX, _TABLE_STEPS[0])
+    q3 = np.linspace(0.0, JOINT3_MAX, _TABLE_STEPS[1])
+    g2, g3 = np.meshgrid(q2, q3, indexing="ij")
+    open2, open3 = opening_posture(g2, g3, gap_mm)
+    return q2, q3, sweep_depth(open2, open3, g2, g3)
+
+
+def closing_sweep_depth(q2: NDArray, q3: NDArray, gap_mm: float) -> NDArray:
+    """``sweep_depth`` from the pre-shape ``gap_mm`` out onto (q2, q3), interpolated from a
+    cached grid (0.1 mm of the direct computation: the depth is smooth in the joints)."""
+    grid2, grid3, table = _sweep_table(float(gap_mm))
+    q2 = np.clip(np.nan_to_num(np.asarray(q2, float)), 0.0, JOINT2_MAX)
+    q3 = np.clip(np.nan_to_num(np.asarray(q3, float)), 0.0, JOINT3_MAX)
+    f2 = q2 / JOINT2_MAX * (len(grid2) - 1)
+    f3 = q3 / JOINT3_MAX * (len(grid3) - 1)
+    i2 = np.minimum(f2.astype(int), len(grid2) - 2)
+    i3 = np.minimum(f3.astype(int), len(grid3) - 2)
+    t2, t3 = f2 - i2, f3 - i3
+    return ((1 - t2) * (1 - t3) * table[i2, i3] + t2 * (1 - t3) * table[i2 + 1, i3]
+            + (1 - t2) * t3 * table[i2, i3 + 1] + t2 * t3 * table[i2 + 1, i3 + 1])
 
 
 def sweep_depth(q2_from: NDArray, q3_from: NDArray, q2_to: NDArray, q3_to: NDArray) -> NDArray:
@@ -256,19 +270,6 @@ def planar_contacts(
     back corner sits up to twice the pad inset below its pad, so the lowest planes are often
     out of reach without sweeping a fingertip through the table.
     """
-    reaches = np.asarray(reaches, float).reshape(-1, 3)
-    n = len(reaches)
-    q2, q3 = np.full((n, 3), np.nan), np.full((n, 3), np.nan)
-    height, plane = np.full(n, np.nan), np.full(n, np.nan)
-    found = np.zeros(n, bool)
-    floor = thickness_mm + palm_clearance_mm
-    for z in thickness_mm / 2 + np.linspace(0.0, rise_mm, planes if rise_mm > 0 else 1):
-        todo = ~found
-        if not todo.any():
-            break
-        posture, ok = contact_postures(reaches[todo], z, clearance_mm, floor, gap_mm)
-        rows = np.flatnonzero(todo)[ok]
-        q2[rows], q3[rows] = posture.q2[ok], posture.q3[ok]
-        height[rows], plane[rows] = posture.height_mm[ok], z
-        found[rows] = True
-    return ContactPosture(q2, q3, height, plane), found
+    planes_z = thickness_mm / 2 + np.linspace(0.0, rise_mm, planes if rise_mm > 0 else 1)
+    return contact_postures(reaches, planes_z, clearance_mm, thickness_mm + palm_clearance_mm,
+                            gap_mm)
