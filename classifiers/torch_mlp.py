@@ -13,12 +13,14 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Any
+from numbers import Integral, Real
+from typing import Any, ClassVar
 
 import numpy as np
 import torch
-from sklearn.base import BaseEstimator, ClassifierMixin, RegressorMixin
+from sklearn.base import BaseEstimator, ClassifierMixin, RegressorMixin, _fit_context
 from sklearn.model_selection import train_test_split
+from sklearn.utils._param_validation import Interval
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 from torch import nn
@@ -46,7 +48,8 @@ class _TorchMLP(BaseEstimator):
 
     Parameters
     ----------
-    hidden_layer_sizes : widths of the hidden ReLU layers.
+    hidden_layer_sizes : widths of the hidden ReLU layers (each >= 1; the one positional
+        parameter, every other one is keyword-only).
     learning_rate : Adam step size.
     weight_decay : Adam L2 penalty.
     dropout : dropout after each hidden layer.
@@ -56,11 +59,27 @@ class _TorchMLP(BaseEstimator):
         early stopping, and so does a split too small to be useful.
     patience : epochs without validation-loss improvement before stopping.
     random_state : seed of weights, shuffling and the validation split.
+
+    Every parameter is checked against :attr:`_parameter_constraints` when ``fit`` starts
+    (scikit-learn's ``InvalidParameterError``, a ``ValueError`` naming the parameter).
     """
+
+    _parameter_constraints: ClassVar[dict[str, list[Any]]] = {
+        "hidden_layer_sizes": ["array-like"],
+        "learning_rate": [Interval(Real, 0.0, None, closed="neither")],
+        "weight_decay": [Interval(Real, 0.0, None, closed="left")],
+        "dropout": [Interval(Real, 0.0, 1.0, closed="left")],
+        "batch_size": [Interval(Integral, 1, None, closed="left")],
+        "max_epochs": [Interval(Integral, 1, None, closed="left")],
+        "validation_fraction": [Interval(Real, 0.0, 1.0, closed="left")],
+        "patience": [Interval(Integral, 1, None, closed="left")],
+        "random_state": [Interval(Integral, 0, None, closed="left"), None],
+    }
 
     def __init__(
         self,
         hidden_layer_sizes: tuple[int, ...] = (64, 64),
+        *,
         learning_rate: float = 1e-3,
         weight_decay: float = 1e-4,
         dropout: float = 0.0,
@@ -176,12 +195,25 @@ class _TorchMLP(BaseEstimator):
 class TorchMLPClassifier(ClassifierMixin, _TorchMLP):
     """MLP classifier (PyTorch, CPU): cross-entropy, stratified early-stopping split.
 
-    Parameters are those of the shared base (see ``_TorchMLP``): ``hidden_layer_sizes``,
+    Parameters
+    ----------
+    Those of the shared base (see ``_TorchMLP``): ``hidden_layer_sizes``, then keyword-only
     ``learning_rate``, ``weight_decay``, ``dropout``, ``batch_size``, ``max_epochs``,
     ``validation_fraction`` (stratified; too small to hold every class disables it),
     ``patience``, ``random_state``.
+
+    Attributes
+    ----------
+    classes_ : ndarray of shape (n_classes,), the labels seen in ``fit``, in column order of
+        ``predict_proba``.
+    n_features_in_ : int, number of features seen in ``fit``.
+    network_ : torch.nn.Module, the fitted network (input standardisation included).
+    n_epochs_ : int, epochs run (early stopping may end before ``max_epochs``).
+    best_validation_loss_ : float, lowest validation loss (inf without a validation split;
+        NaN for a model rebuilt by :meth:`from_state_dict`).
     """
 
+    @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X: Any, y: Any) -> TorchMLPClassifier:
         """Train on ``X`` (n_samples, n_features) and labels ``y``."""
         X, y = validate_data(self, X, y, dtype=np.float32)
@@ -223,8 +255,18 @@ class TorchMLPClassifier(ClassifierMixin, _TorchMLP):
 
 class TorchMLPRegressor(RegressorMixin, _TorchMLP):
     """MLP regressor (PyTorch, CPU): squared error of the standardised target, random
-    early-stopping split; same parameters as :class:`TorchMLPClassifier`."""
+    early-stopping split; same parameters as :class:`TorchMLPClassifier`.
 
+    Attributes
+    ----------
+    n_features_in_ : int, number of features seen in ``fit``.
+    network_ : torch.nn.Module, the fitted network (input standardisation included).
+    n_epochs_ : int, epochs run (early stopping may end before ``max_epochs``).
+    best_validation_loss_ : float, lowest validation loss (inf without a validation split).
+    target_mean_, target_scale_ : float, the target's standardisation.
+    """
+
+    @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X: Any, y: Any) -> TorchMLPRegressor:
         """Train on ``X`` (n_samples, n_features) and real targets ``y``."""
         X, y = validate_data(self, X, y, dtype=np.float32, y_numeric=True)

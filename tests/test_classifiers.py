@@ -40,6 +40,31 @@ def test_torch_mlp_regressor_passes_all_sklearn_estimator_checks(estimator, chec
     check(estimator)
 
 
+@pytest.mark.parametrize("estimator", [TorchMLPClassifier, TorchMLPRegressor])
+@pytest.mark.parametrize(("name", "value"), [("max_epochs", 0), ("learning_rate", 0.0),
+                                             ("dropout", 1.0), ("batch_size", 0),
+                                             ("validation_fraction", 1.0), ("patience", 0),
+                                             ("random_state", -1)])  # fmt: skip
+def test_torch_mlp_refuses_a_bad_parameter_in_fit(estimator, name, value):
+    X = np.random.default_rng(0).random((20, 3))
+    y = X[:, 0] > 0.5
+    model = estimator((4,), **{name: value})  # constructing checks nothing (sklearn convention)
+    with pytest.raises(ValueError, match=f"'{name}' parameter of {estimator.__name__}"):
+        model.fit(X, y)
+
+
+def test_torch_mlp_parameters_after_the_first_are_keyword_only():
+    import inspect
+
+    parameters = list(inspect.signature(TorchMLPClassifier).parameters.values())
+    assert parameters[0].kind is inspect.Parameter.POSITIONAL_OR_KEYWORD
+    assert all(p.kind is inspect.Parameter.KEYWORD_ONLY for p in parameters[1:])
+    assert set(TorchMLPClassifier._parameter_constraints) == {p.name for p in parameters}
+    for attribute in ("classes_", "network_", "n_epochs_", "n_features_in_",
+                      "best_validation_loss_"):
+        assert f"{attribute} :" in TorchMLPClassifier.__doc__
+
+
 @pytest.mark.parametrize("name", MODEL_NAMES)
 def test_every_model_fits_and_predicts(synthetic_grips_table, name):
     table = synthetic_grips_table
