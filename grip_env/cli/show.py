@@ -46,34 +46,16 @@ def _load_object(spec: str, mm_per_px: float, cfg: Config) -> PlanarObject:
     """The object of ``spec``, refused when too large or too detailed to process."""
     from grip_env.config import check_contour_budget
     from grip_env.objects import object_from_spec
-    from grip_env.objects.sources import IMAGE_SUFFIXES
+    from grip_env.objects.sources import IMAGE_SUFFIXES, check_image_size
 
     if Path(spec).suffix.lower() in IMAGE_SUFFIXES and Path(spec).is_file():
-        _check_image_size(Path(spec))
+        check_image_size(Path(spec))
     planar = object_from_spec(spec, mm_per_px)
     low, high = planar.contour.min(axis=0), planar.contour.max(axis=0)
     perimeter = float(planar.polygon.length)
     extent = float((high - low).max())
     check_contour_budget(planar.name, len(planar.contour), perimeter, extent, cfg.perception)
     return planar
-
-
-def _check_image_size(path: Path) -> None:
-    """Refuse an image with more than ``MAX_IMAGE_PIXELS`` before decoding it."""
-    from PIL import Image, UnidentifiedImageError
-
-    from grip_env.config import MAX_IMAGE_PIXELS
-
-    try:
-        with Image.open(path) as image:
-            width, height = image.size
-    except (OSError, UnidentifiedImageError, Image.DecompressionBombError) as exc:
-        raise ValueError(f"cannot read image file {path}: {exc}") from None
-    if width * height > MAX_IMAGE_PIXELS:
-        raise ValueError(
-            f"image {path} is {width} x {height} pixels, more than {MAX_IMAGE_PIXELS} in all; "
-            "downscale it (and raise --mm-per-px to match)"
-        )
 
 
 def _draw(planar: PlanarObject, cfg: Config, grips: int, out: Path) -> Path:
