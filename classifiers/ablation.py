@@ -5,7 +5,10 @@ seeds of :mod:`classifiers.evaluation`, so the per-fold metric differences to th
 (all twelve features) are paired; their mean and corrected 95% t-interval are reported. The
 permutation importance of each of the twelve features (drop of ROC-AUC when the feature is
 shuffled in the held-out fold, ``sklearn.inspection.permutation_importance``) is summarised the
-same way. ``eps`` is the Ferrari–Canny ε of :mod:`grip_env.epsilon`, added when missing.
+same way. ``held_out`` scores the model of each feature set, fitted on the training objects of
+the study's split, on its held-out objects (the RL selector's test objects; one split, so no
+interval; not the leave-one-feature-out sets). ``eps`` is the Ferrari–Canny ε of
+:mod:`grip_env.epsilon`, added when missing.
 
 When the table has the graded outcome, the regression task runs alongside on the same folds:
 one regressor (default ``"svr"``) of ``robustness_mean`` per feature set, scored by Spearman
@@ -30,6 +33,7 @@ from classifiers.evaluation import (
     cross_validate_models,
     cv_description,
     grouped_folds,
+    held_out_metrics,
     interval,
     summarise,
 )
@@ -50,6 +54,9 @@ REFERENCE = "all_twelve"
 SHARED = ("S1", "S2", "S3", "S4")
 GRASP = ("G1", "G2")
 HAND = ("C1", "C2", "C3", "C4", "C5", "C6")
+
+
+_LEAVE_ONE_OUT = frozenset(f"without_{feature}" for feature in FEATURES)
 
 
 def feature_sets() -> dict[str, tuple[str, ...]]:
@@ -103,11 +110,20 @@ def ablation_study(
         "reference": REFERENCE,
         "feature_sets": results,
         "permutation_importance": importance(table, model, learning, importance_repeats),
+        "held_out": held_out_metrics(table, learning, _held_out_models(model, sets, learning)),
         "cv": cv_description(table, FEATURES, learning),
     }
     if has_target(table):
         output["regression"] = regression_ablation(table, learning, regressor, sets)
     return output
+
+
+def _held_out_models(
+    model: str, sets: dict[str, Sequence[str]], learning: LearningConfig
+) -> dict[str, Any]:
+    """``model`` on each named feature set (the leave-one-feature-out sets are left out)."""
+    return {name: make_model(model, learning.seed, features)
+            for name, features in sets.items() if name not in _LEAVE_ONE_OUT}  # fmt: skip
 
 
 def regression_ablation(

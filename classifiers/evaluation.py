@@ -34,6 +34,7 @@ from sklearn.model_selection import GridSearchCV, GroupKFold, StratifiedGroupKFo
 from classifiers.models import check_features, make_model
 from grip_env.columns import FEATURES
 from grip_env.config import LearningConfig
+from grip_env.dataset.split import held_out_objects, split_table
 
 METRICS = ("accuracy", "balanced_accuracy", "roc_auc", "f1", "brier", "top1_success", "top1_rate")
 GROUP_COLUMN = "object_id"
@@ -114,6 +115,31 @@ def top1(test: pd.DataFrame, score: np.ndarray) -> tuple[float, float]:
     )  # fmt: skip
     picks = frame.loc[frame.groupby("group")["score"].idxmax()]
     return float(picks["success"].mean()), float(picks["rate"].mean())
+
+
+def held_out_metrics(
+    table: pd.DataFrame, learning: LearningConfig, models: Mapping[str, BaseEstimator]
+) -> dict[str, Any]:
+    """Each model (cloned) fitted on the split's training objects and scored on its held-out
+    objects (:func:`grip_env.dataset.split.held_out_objects`, those the RL selector is scored on).
+
+    Returns ``{"split": {"train", "test", "test_fraction", "seed"}, "models": {name: metrics}}``;
+    a metric is None where it is undefined, and ``models`` is empty when the training objects
+    hold one class or no object is held out.
+    """
+    train_ids, test_ids = held_out_objects(table[GROUP_COLUMN].astype(str), learning)
+    train, test = split_table(table, learning)
+    split = {"train": list(train_ids), "test": list(test_ids),
+             "test_fraction": learning.test_fraction, "seed": learning.seed}  # fmt: skip
+    labels = train[LABEL_COLUMN].to_numpy().astype(bool)
+    if test.empty or np.unique(labels).size < 2:
+        return {"split": split, "models": {}}
+    scores = {}
+    for name, model in models.items():
+        fitted = clone(model).fit(train, labels)
+        scores[name] = {k: (float(v) if np.isfinite(v) else None)
+                        for k, v in fold_metrics(fitted, test).items()}  # fmt: skip
+    return {"split": split, "models": scores}
 
 
 def cross_validate_models(

@@ -28,8 +28,8 @@ import pandas as pd
 from classifiers.evaluation import (
     LABEL_COLUMN,
     evaluate_models,
-    fold_metrics,
     grouped_folds,
+    held_out_metrics,
     positive_probability,
 )
 from classifiers.models import make_model, make_regressor
@@ -38,7 +38,6 @@ from classifiers.plots import plot_calibration, plot_roc
 from classifiers.regression import TARGET_COLUMN, evaluate_regressors, has_target
 from grip_env.columns import FEATURES
 from grip_env.config import Config
-from grip_env.dataset.split import held_out_objects, split_table
 
 
 def train_and_save(
@@ -66,25 +65,11 @@ def train_and_save(
 
 
 def held_out_scores(table: pd.DataFrame, config: Config) -> dict[str, Any]:
-    """Each of ``learning.models`` fitted on the split's training objects, scored on the rest.
-
-    Returns ``{"split": {"train", "test", "test_fraction", "seed"}, "models": {name: metrics}}``;
-    a metric is None where it is undefined (one class among the held-out grips).
-    """
+    """Each of ``learning.models`` fitted on the split's training objects, scored on the rest
+    (:func:`classifiers.evaluation.held_out_metrics`)."""
     learning = config.learning
-    train_ids, test_ids = held_out_objects(table["object_id"].astype(str), learning)
-    train, test = split_table(table, learning)
-    split = {"train": list(train_ids), "test": list(test_ids),
-             "test_fraction": learning.test_fraction, "seed": learning.seed}  # fmt: skip
-    labels = train[LABEL_COLUMN].to_numpy().astype(bool)
-    if test.empty or np.unique(labels).size < 2:
-        return {"split": split, "models": {}}
-    scores = {}
-    for name in learning.models:
-        model = make_model(name, learning.seed, FEATURES).fit(train, labels)
-        scores[name] = {k: (None if not np.isfinite(v) else float(v))
-                        for k, v in fold_metrics(model, test).items()}  # fmt: skip
-    return {"split": split, "models": scores}
+    models = {name: make_model(name, learning.seed, FEATURES) for name in learning.models}
+    return held_out_metrics(table, learning, models)
 
 
 def train_regressors(

@@ -11,6 +11,7 @@ from classifiers.ablation import REFERENCE, ablation_study, feature_sets, run_ab
 from classifiers.synthetic import synthetic_grips
 from grip_env.columns import FEATURES
 from grip_env.config import Config
+from grip_env.dataset import held_out_objects
 
 CONFIG = Config().override(learning={"folds": 3, "repeats": 1})
 
@@ -45,6 +46,11 @@ def test_ablation_json_shape_and_paired_differences(grips, tmp_path):
     importance = result["permutation_importance"]
     assert set(importance) == set(FEATURES)
     assert importance["C1"]["mean"] > importance["G2"]["mean"]
+    held_out = result["held_out"]
+    assert tuple(held_out["split"]["test"]) == held_out_objects(grips["object_id"],
+                                                                CONFIG.learning)[1]
+    assert set(held_out["models"]) == set(sets)
+    assert 0.0 <= held_out["models"][REFERENCE]["roc_auc"] <= 1.0
     json.dumps(result)  # JSON-able
 
 

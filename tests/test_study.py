@@ -73,6 +73,8 @@ def _assert_one_split(out: Path, metrics: dict, selector: dict) -> None:
     assert list(env.object_ids) == metrics["held_out"]["split"]["test"]
     assert set(selector["split"]["test"]) <= set(env.object_ids)
     assert selector["split"]["train"] == metrics["held_out"]["split"]["train"]
+    ablation = json.loads((out / "ablation" / "ablation.json").read_text())
+    assert ablation["held_out"]["split"] == metrics["held_out"]["split"]
 
 
 def _quick_config():

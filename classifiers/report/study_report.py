@@ -167,16 +167,17 @@ def _classifier_section(report: Report, out: Path) -> None:
     _stage_figures(report, out, "classifiers")
 
 
-def _held_out_table(report: Report, held_out: dict[str, Any] | None) -> None:
+def _held_out_table(report: Report, held_out: dict[str, Any] | None, rows: str = "model",
+                    what: str = "") -> None:
     """Each model trained on the split's training objects, scored on its held-out objects."""
     if not held_out or not held_out.get("models"):
         return
     shown = ["roc_auc", "balanced_accuracy", "brier", "top1_success"]
-    frame = pd.DataFrame(held_out["models"]).T.reindex(columns=shown).rename_axis("model")
+    frame = pd.DataFrame(held_out["models"]).T.reindex(columns=shown).rename_axis(rows)
     split = held_out["split"]
     report.table(frame.astype(float).round(3),
-                 caption=f"Trained on the {len(split['train'])} training objects, scored on the "
-                 f"{len(split['test'])} held-out objects the RL selector is scored on "
+                 caption=f"{what}Trained on the {len(split['train'])} training objects, scored on "
+                 f"the {len(split['test'])} held-out objects the RL selector is scored on "
                  f"(test_fraction {split['test_fraction']:g}, seed {split['seed']}): one split, "
                  "so no interval; the cross-validated table above is the estimate.")
 
@@ -256,6 +257,7 @@ def _ablation_section(report: Report, out: Path) -> None:
             f"Removing the six hand features (C1–C6) changes ROC-AUC by {_fmt(hand)} "
             f"against all twelve; {verdict}."
         )
+    _held_out_table(report, ablation.get("held_out"), "feature set", f"Model {model}. ")
     _regression_ablation(report, ablation.get("regression"))
     importance = ablation.get("permutation_importance", {})
     if importance:
