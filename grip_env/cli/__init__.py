@@ -64,7 +64,8 @@ def _register_commands() -> None:
 def main() -> None:
     """Console-script entry point; a usage error (bad option value, missing argument) is one line.
 
-    Exit codes: 0 done, 1 failed, 2 bad input; commands document their own (e.g. 130 on SIGINT).
+    Exit codes: 0 done, 1 failed (an internal error says so, with a hint to report it), 2 bad
+    input; commands document their own (e.g. 130 on SIGINT).
     """
     _register_commands()
     if len(sys.argv) < 2:
@@ -78,7 +79,10 @@ def main() -> None:
     except Exception as exc:  # click's UsageError and kin (vendored by Typer): one line
         usage = hasattr(exc, "format_message") and isinstance(getattr(exc, "exit_code", 0), int)
         if not usage:
-            raise
+            from grip_env.cli.errors import INTERNAL_ERROR_CODE, report_internal
+
+            report_internal(exc)
+            sys.exit(INTERNAL_ERROR_CODE)
         typer.echo(f"error: {exc.format_message()}{_help_hint(exc)}", err=True)
         sys.exit(exc.exit_code)
     sys.exit(code if isinstance(code, int) else 0)

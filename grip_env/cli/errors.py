@@ -50,10 +50,15 @@ def user_errors() -> Iterator[None]:
         if is_input_error(exc):
             typer.echo(f"error: {exc}", err=True)
             raise typer.Exit(code=INPUT_ERROR_CODE) from None
-        traceback.print_exception(exc)
-        typer.echo(f"internal error: {type(exc).__name__}: {exc}", err=True)
-        typer.echo(REPORT_HINT, err=True)
+        report_internal(exc)
         raise typer.Exit(code=INTERNAL_ERROR_CODE) from None
+
+
+def report_internal(exc: BaseException) -> None:
+    """Print ``exc``'s traceback, then ``internal error: ...`` and :data:`REPORT_HINT`."""
+    traceback.print_exception(exc)
+    typer.echo(f"internal error: {type(exc).__name__}: {exc}", err=True)
+    typer.echo(REPORT_HINT, err=True)
 
 
 def checked(call: Callable[[], T]) -> T:
