@@ -11,6 +11,9 @@ from hypothesis import settings
 
 from grip_env.config import Config
 
+# The shutdown and fault tests' fixtures (``config``, ``reference``) live beside their helpers.
+pytest_plugins = ["generate_runs"]
+
 # CI runs hypothesis derandomised, so a run is reproducible; locally it keeps exploring.
 settings.register_profile("ci", derandomize=True, print_blob=True)
 if os.environ.get("CI"):

@@ -18,6 +18,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pandas as pd
+import pytest
 import yaml
 from interrupt_driver import RAY_HOOK
 
@@ -176,3 +177,15 @@ def assert_resumes_to(config: Path, out: Path, reference: pd.DataFrame, *extra: 
     assert finished.returncode == 0, finished.stderr
     pd.testing.assert_frame_equal(load(out), reference)
     assert validate(out) == []
+
+
+@pytest.fixture
+def config() -> Path:
+    """A small run's config file."""
+    return small_config()
+
+
+@pytest.fixture
+def reference(config: Path) -> pd.DataFrame:
+    """The dataset of an uninterrupted run (shared by the shutdown and fault tests)."""
+    return reference_dataset(config)

@@ -13,27 +13,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cli_runs import assert_refused
+from cli_runs import cli as run
 from PIL import Image
-from typer.testing import CliRunner
-
-from grip_env.cli import _register_commands, app
-
-_register_commands()
-RUNNER = CliRunner()
-
-
-def run(*args: str) -> tuple[int, str]:
-    result = RUNNER.invoke(app, [str(a) for a in args])
-    return result.exit_code, result.output
-
-
-def assert_refused(code: int, output: str, *fragments: str) -> None:
-    """Exit code 2, one ``error:`` line naming every fragment, no traceback."""
-    lines = [line for line in output.splitlines() if line.strip()]
-    assert code == 2, output
-    assert len(lines) == 1 and lines[0].startswith("error: "), output
-    for fragment in fragments:
-        assert fragment in lines[0], output
 
 
 def read_only_dir(tmp_path: Path) -> Path:

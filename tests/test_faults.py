@@ -25,26 +25,13 @@ from generate_runs import (
     assert_resumes_to,
     generate_command,
     paused,
-    reference_dataset,
     shards_on_disk,
-    small_config,
     stop,
     wait_until,
 )
 
 from grip_env.dataset import load, validate
 from grip_env.dataset.shards import shard_path
-
-
-@pytest.fixture
-def config() -> Path:
-    return small_config()
-
-
-@pytest.fixture
-def reference(config: Path) -> pd.DataFrame:
-    """The dataset of an uninterrupted run (shared by the tests of both modules)."""
-    return reference_dataset(config)
 
 
 def _pid_in(marker: Path) -> int:

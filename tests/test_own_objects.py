@@ -11,32 +11,20 @@ import numpy as np
 import pandas as pd
 import pytest
 import yaml
+from cli_runs import assert_refused, cli
 from PIL import Image
-from typer.testing import CliRunner
 
-from grip_env.cli import _register_commands, app
 from grip_env.config import MAX_OBJECT_VERTICES, Config
 from grip_env.dataset import DatasetMismatchError, generate, load, read_objects, validate
 from grip_env.dataset.catalog import resolve_objects
 from grip_env.objects import PlanarObject
 from grip_env.objects.sources import objects_from_path, read_vertex_file
 
-_register_commands()
-RUNNER = CliRunner()
 SMALL = Config().override(dataset={"max_grips_per_object": 3, "trials": 1})
 
 
-def cli(*args: object) -> tuple[int, str]:
-    result = RUNNER.invoke(app, [str(a) for a in args])
-    return result.exit_code, result.output
 
 
-def assert_refused(code: int, output: str, *fragments: str) -> None:
-    lines = [line for line in output.splitlines() if line.strip()]
-    assert code == 2, output
-    assert len(lines) == 1 and lines[0].startswith("error: "), output
-    for fragment in fragments:
-        assert fragment in lines[0], output
 
 
 def save_mask(path: Path, mask: np.ndarray) -> Path:

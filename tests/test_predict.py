@@ -12,31 +12,14 @@ import pytest
 import skops.io as sio
 import torch
 import yaml
+from cli_runs import assert_refused, cli
 from sklearn.base import BaseEstimator
 from sklearn.pipeline import Pipeline
-from typer.testing import CliRunner
 
 from classifiers.baselines import ColumnSelector
 from classifiers.persistence import load_model
-from grip_env.cli import _register_commands, app
 from grip_env.columns import FEATURES
 from grip_env.dataset import load
-
-_register_commands()
-RUNNER = CliRunner()
-
-
-def cli(*args: object) -> tuple[int, str]:
-    result = RUNNER.invoke(app, [str(a) for a in args])
-    return result.exit_code, result.output
-
-
-def assert_refused(code: int, output: str, *fragments: str) -> None:
-    lines = [line for line in output.splitlines() if line.strip()]
-    assert code == 2, output
-    assert len(lines) == 1 and lines[0].startswith("error: "), output
-    for fragment in fragments:
-        assert fragment in lines[0], output
 
 
 @pytest.fixture(scope="module")

@@ -19,26 +19,12 @@ from generate_runs import (
     assert_resumes_to,
     generate_command,
     paused,
-    reference_dataset,
     shards_on_disk,
-    small_config,
     stop,
     wait_until,
 )
 
 from grip_env.shutdown import Interrupted, exit_code
-
-
-@pytest.fixture
-def config() -> Path:
-    return small_config()
-
-
-@pytest.fixture
-def reference(config: Path) -> pd.DataFrame:
-    """The dataset of an uninterrupted run (shared by the tests of both modules)."""
-    return reference_dataset(config)
-
 
 CASES = [
     # signal, where the run is stopped, extra generate options
