@@ -176,3 +176,54 @@ def test_report_package_never_imports_the_study_that_drives_it():
         imported = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
         imported |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
         assert "classifiers.study" not in imported, path.name
+
+
+def _stored_run(out):
+    """A study folder's result files, as the stages write them (hand-picked numbers)."""
+    import json
+
+    def block(mean, low, high):
+        return {"mean": mean, "ci": [low, high], "n": 5}
+
+    (out / "classifiers").mkdir(parents=True)
+    (out / "selector").mkdir()
+    (out / "ablation").mkdir()
+    metrics = {"cv": {"folds": 5, "repeats": 3},
+               "models": {"svm": {"roc_auc": block(0.712, 0.566, 0.859),
+                                  "top1_success": block(0.6, 0.45, 0.75)},
+                          "random": {"roc_auc": block(0.5, 0.47, 0.54),
+                                     "top1_success": block(0.53, 0.4, 0.66)}}}  # fmt: skip
+    selector = {"split": {"test": ["a", "b", "c"]},
+                "policies": {"rl": {"success_rate": block(0.607, 0.39, 0.79)},
+                             "oracle": {"success_rate": block(0.79, 0.59, 0.96)}}}  # fmt: skip
+    ablation = {"model": "svm", "feature_sets": {"without_hand": {"paired_difference": {
+        "svm": {"roc_auc": block(0.004, -0.05, 0.06)}}}}}
+    (out / "classifiers" / "metrics.json").write_text(json.dumps(metrics))
+    (out / "selector" / "selector.json").write_text(json.dumps(selector))
+    (out / "ablation" / "ablation.json").write_text(json.dumps(ablation))
+    (out / "timings.json").write_text(json.dumps({"dataset": 300.0, "classifiers": 60.0}))
+    rng = np.random.default_rng(0)
+    return pd.DataFrame({"object_id": np.repeat(["a", "b", "c", "d"], 5), "trials": 4,
+                         "success_rate": rng.random(20), "success": rng.random(20) > 0.5,
+                         "Q_C": rng.random(20)})  # fmt: skip
+
+
+def test_readme_results_block_is_the_stored_runs_numbers(tmp_path):
+    from classifiers.report.readme import BEGIN, END, readme_block, results_block, update_readme
+
+    table = _stored_run(tmp_path / "run")
+    block = results_block(tmp_path / "run", table, "abc1234", "0.1.0")
+    assert "| svm | 0.71 [0.57, 0.86] | 0.60 [0.45, 0.75] |" in block
+    assert "| rl | 0.61 [0.39, 0.79] |" in block and "first pick on 3 held-out objects" in block
+    assert "changes ROC-AUC by 0.00 [-0.05, 0.06]" in block
+    assert "commit abc1234 (grip-env 0.1.0)" in block and "6.0 min of stage time" in block
+    assert "80 simulated trials" in block and "4 objects" in block
+    assert "What it does not mean" in block
+    readme = tmp_path / "README.md"
+    readme.write_text(f"intro\n{BEGIN}\nstale\n{END}\noutro\n")
+    update_readme(readme, block)
+    once = readme.read_text()
+    update_readme(readme, block)
+    assert readme.read_text() == once  # rewriting is idempotent
+    assert once.startswith("intro\n") and once.endswith(f"{END}\noutro\n")
+    assert readme_block(readme) == block.strip()
