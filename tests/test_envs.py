@@ -551,6 +551,32 @@ def test_a_backend_can_be_passed_in_and_data_is_its_shortcut(data):
         GripSelectEnv(backend=object())
 
 
+class _AlwaysHolds:
+    """A user's own outcome source: the dataset's candidates, every grip holds."""
+
+    def __init__(self, data):
+        from grip_env.envs import ReplayBackend
+
+        self._replay = ReplayBackend(data)
+        self.object_ids, self.feature_cap = self._replay.object_ids, self._replay.feature_cap
+        self.candidates, self.contour = self._replay.candidates, self._replay.contour
+
+    def execute(self, candidates, slot, rng):
+        return True
+
+    def close(self):
+        self._replay.close()
+
+
+def test_a_users_own_backend_decides_the_outcomes(data):
+    env = gymnasium.make("GripSelect-v0", backend=_AlwaysHolds(data), max_candidates=8,
+                         max_attempts=3)
+    for seed in range(3):
+        env.reset(seed=seed)
+        _, reward, terminated, _, info = env.step(0)
+        assert reward == 1.0 and terminated and info["is_success"]
+
+
 def test_constructors_have_explicit_keyword_signatures():
     import inspect
 

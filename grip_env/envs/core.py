@@ -30,6 +30,7 @@ from grip_env.envs.rendering import RENDER_STYLES, HumanWindow, SceneCamera, dra
 from grip_env.envs.split import objects_in_split
 
 CANDIDATE_ORDERS: tuple[str, ...] = ("q_c", "shuffled")
+_BACKEND_MEMBERS = ("object_ids", "feature_cap", "candidates", "contour", "execute", "close")
 
 
 class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
@@ -116,8 +117,7 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         if data is not None or objects is not None:
             raise ValueError("pass either backend= or data=/objects= (data= is a shortcut for "
                              "backend=ReplayBackend(data, objects)), not both")  # fmt: skip
-        missing = [name for name in ("object_ids", "candidates", "execute", "close")
-                   if not hasattr(backend, name)]  # fmt: skip
+        missing = [name for name in _BACKEND_MEMBERS if not hasattr(backend, name)]
         if missing:
             raise ValueError(f"backend {type(backend).__name__} lacks {missing} of OutcomeBackend")
         return backend
