@@ -270,12 +270,28 @@ def _check(name: str, measured: Any, ci: Any, target: str, passed: bool | None,
             "passed": passed, **extra}  # fmt: skip
 
 
-def design_check(trials: pd.DataFrame, reference_g: float) -> dict[str, Any]:
-    """Each box's best grip at the design friction: robustness and whether it holds."""
+def friction_ceiling_g(obj: PlanarObject, config: Config) -> float:
+    """The in-plane load (g) three pads can hold by friction at the design value ``grasp.mu``:
+    mu * 3 * finger_force_n / (m g), the most any grip can resist sliding in its plane (the
+    worm gear can raise the normal forces under load, so a measured level may sit a little
+    above it)."""
+    from grip_env.sim.uncertainty import object_mass_kg
+
+    weight_n = object_mass_kg(obj, config) * 9.81
+    return float(config.grasp.mu * 3 * config.sim.finger_force_n / weight_n)
+
+
+def design_check(trials: pd.DataFrame, reference_g: float,
+                 config: Config | None = None) -> dict[str, Any]:
+    """Each box's best grip at the design friction: robustness, whether it holds, and the
+    friction ceiling of that box (``friction_ceiling_g``) against which to read it."""
     rows = trials[trials["part"] == "design"]
     per_box = rows.groupby("object_id").agg(grip=("grip", "first"), Q_C=("Q_C", "first"),
                                             robustness=("robustness", "mean"),
                                             held=("success", "mean"))  # fmt: skip
+    ceilings = {box.name: friction_ceiling_g(box, config or Config()) for box in box_objects()}
+    per_box["friction_ceiling_g"] = [round(ceilings.get(name, np.nan), 2)
+                                     for name in per_box.index]
     passed = bool(len(per_box) == len(BOXES_MM) and (per_box["held"] == 1.0).all())
     return _check("design_hold", per_box["robustness"].round(3).to_dict(), None,
                   f"every box's best-Q_C grip holds {reference_g:g} g", passed,
@@ -413,7 +429,7 @@ def calibrate(
     settings = settings or CalibrationSettings()
     trials = run_calibration_trials(config, settings, log)
     reference = float(config.sim.reference_level_g)
-    checks = [design_check(trials, reference), cone_check(trials),
+    checks = [design_check(trials, reference, config), cone_check(trials),
               retest_check(trials, settings), icc_check(trials)]  # fmt: skip
     if dataset is not None:
         checks += dataset_checks(dataset, settings)

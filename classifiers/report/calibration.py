@@ -87,7 +87,17 @@ def _design(report: Report, check: dict[str, Any], reference: float, fig_dir: Pa
         return
     report.table(rows.set_index("object_id"), caption="No pose error, friction = mu, nominal "
                  "mass; robustness is the highest level held (g), held the share of trials "
-                 "holding the reference level.")
+                 "holding the reference level; friction_ceiling_g = mu x 3 x finger force / "
+                 "(m g), the most three pads can hold in the plane at that friction.")
+    if "friction_ceiling_g" in rows and (rows["friction_ceiling_g"] < reference).all():
+        report.text(
+            f"Physical reason when this check fails: at the design friction mu every box's "
+            f"friction ceiling ({rows['friction_ceiling_g'].min():.1f}–"
+            f"{rows['friction_ceiling_g'].max():.1f} g) is below the {reference:g} g reference "
+            "level, so no grip of this hand can hold the reference there; the reference is "
+            "set for the drawn friction (the 30–70 % success target), not for the design "
+            "friction, and the physics is not tuned to pass."
+        )
     fig = Figure(figsize=(5.5, 3.4))
     ax = fig.subplots()
     ax.bar(rows["object_id"], rows["robustness"], color="tab:blue")
