@@ -217,5 +217,16 @@ def _reap(pids: list[int]) -> None:
 
 
 def _say(line: str) -> None:
+    """``line`` on a line of its own, even after an open progress bar's unfinished one."""
     with suppress(OSError, ValueError):  # the terminal may be gone (SIGHUP)
-        print(line, file=sys.stderr, flush=True)
+        start = ""
+        if _progress_bar_open():
+            start = "\r\033[K" if sys.stderr.isatty() else "\n"
+        print(start + line, file=sys.stderr, flush=True)
+
+
+def _progress_bar_open() -> bool:
+    """Whether a tqdm bar is on screen (tqdm is looked at only if something imported it)."""
+    module = sys.modules.get("tqdm")
+    bars = getattr(getattr(module, "tqdm", None), "_instances", ()) if module else ()
+    return any(not getattr(bar, "disable", True) for bar in list(bars))

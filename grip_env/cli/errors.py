@@ -44,7 +44,7 @@ def user_errors() -> Iterator[None]:
     """Report bad input as ``error: ...`` (exit 2) and anything else as an internal error (1)."""
     try:
         yield
-    except (click.exceptions.Exit, click.ClickException, click.Abort):
+    except (click.exceptions.Exit, typer.Exit, click.ClickException, click.Abort):
         raise
     except Exception as exc:
         if is_input_error(exc):

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from grip_env.objects import PlanarObject
 from grip_env.objects.decomposition import MAX_PIECES
 from grip_env.objects.simulated import DEFAULT_TOLERANCE_MM
+from grip_env.shutdown import deferred_signals
 
 
 @contextlib.contextmanager
@@ -69,7 +70,9 @@ class World:
     """A headless PyBullet world owning its own client; use as a context manager or ``close()``."""
 
     def __init__(self, timestep: float = 1.0 / 240.0, solver_iterations: int = 50) -> None:
-        with _quiet_native_stdout():
+        # A stop signal during the connection would leave a half-built client whose finaliser
+        # fails noisily at exit: the connection is made whole first, then the signal acts.
+        with deferred_signals(), _quiet_native_stdout():
             self.client = BulletClient(connection_mode=pybullet.DIRECT)
         self.timestep = timestep
         self.solver_iterations = solver_iterations
