@@ -1,6 +1,7 @@
 """Measurements behind BENCHMARKS.md's "Simulator" section (run by hand, they take minutes).
 
     python -m tests.benchmarks.sim_fidelity convergence
+    python -m tests.benchmarks.sim_fidelity cost
     python -m tests.benchmarks.sim_fidelity paired --b sim.solver_iterations=300 --trials 1200
     python -m tests.benchmarks.sim_fidelity chaos
     python -m tests.benchmarks.sim_fidelity paired --variant first-piece-friction
@@ -8,6 +9,7 @@
 * ``convergence``: a symmetric grip closes on a pinned 90 x 55 mm box; for each solver
   iteration count, each finger's joint-2 motor torque against its command and its fingertip
   normal force against ``sim.finger_force_n``.
+* ``cost``: time per physics step and per trial of the same grips at 50, 100 and 200 iterations.
 * ``paired``: the same (grip, trial) pairs under config A (the default) and config B (dotted
   overrides); the paired difference in success and in robustness with 95 % intervals, and the
   share of trials whose success flips.
@@ -65,6 +67,32 @@ def convergence(iterations: tuple[int, ...] = (50, 100, 150, 200, 300)) -> list[
         rows.append({"iterations": n, "torque_ratio": (torques / commands).round(3).tolist(),
                      "normal_force_n": normals.round(2).tolist()})
     return rows
+
+
+def cost(iterations: tuple[int, ...] = (50, 100, 200), repeats: int = 3) -> list[dict]:
+    """Time per step and per trial of the same 8 pentagon grips at each solver setting.
+
+    The settings alternate within each repeat, so machine load hits them alike; the fastest
+    repeat is kept.
+    """
+    obj = make_shape("pentagon")
+    plans = grip_plans(candidates(obj).iloc[::20].head(8))
+    scenes = {n: TrialScene(obj, Config().override(sim={"solver_iterations": n}))
+              for n in iterations}
+    best: dict[int, tuple[float, int]] = {}
+    for rep in range(repeats):
+        for n, scene in scenes.items():
+            started, steps = time.perf_counter(), 0
+            for k, plan in enumerate(plans):
+                steps += scene.run(plan, sample_noise(trial_rng(0, k, rep), scene.config)).steps
+            took = time.perf_counter() - started
+            if n not in best or took < best[n][0]:
+                best[n] = (took, steps)
+    for scene in scenes.values():
+        scene.close()
+    return [{"iterations": n, "us_per_step": round(1e6 * took / steps, 1),
+             "ms_per_trial": round(1e3 * took / len(plans), 1),
+             "steps_per_trial": round(steps / len(plans))} for n, (took, steps) in best.items()]
 
 
 def _finger_normal_forces(scene: TrialScene) -> np.ndarray:
@@ -165,7 +193,7 @@ def _overrides(items: list[str]) -> Config:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", choices=("convergence", "paired", "chaos"))
+    parser.add_argument("what", choices=("convergence", "cost", "paired", "chaos"))
     parser.add_argument("--a", nargs="*", default=[], help="overrides of config A")
     parser.add_argument("--b", nargs="*", default=[], help="overrides of config B")
     parser.add_argument("--per-object", type=int, default=20)
@@ -177,6 +205,8 @@ def main() -> None:
     started = time.perf_counter()
     if args.what == "convergence":
         result: object = convergence()
+    elif args.what == "cost":
+        result = cost()
     else:
         a = outcomes(_overrides(args.a), args.per_object, args.trials, workers=args.workers)
         b = outcomes(_overrides(args.b if args.what == "paired" else args.a), args.per_object,
