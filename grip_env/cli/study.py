@@ -61,9 +61,11 @@ def _update_readme(out: Path, readme: Path) -> None:
     from classifiers.report.readme import results_block, update_readme
     from classifiers.report.study_report import source_commit
     from classifiers.study import package_version
-    from grip_env.dataset import load
+    from grip_env.dataset import dataset_manifest, load
 
-    block = results_block(out, load(out / "dataset"), source_commit(), package_version())
+    # The commit that generated the stored run's dataset, not the checkout rewriting the README.
+    commit = (dataset_manifest(out / "dataset").get("git_commit") or source_commit())[:7]
+    block = results_block(out, load(out / "dataset"), commit, package_version())
     update_readme(readme, block)
     typer.echo(f"updated the results block of {readme}")
 
