@@ -39,11 +39,12 @@ def run_trial_outcomes(
     obj: PlanarObject,
     grips: pd.DataFrame,
     config: Config | None = None,
-    trials: int = 4,
+    trials: int | None = None,
     seed: int = 0,
     trial_offset: int = 0,
 ) -> pd.DataFrame:
-    """Execute every grip ``trials`` times in PyBullet; one row per (grip, trial).
+    """Execute every grip ``trials`` times (``dataset.trials`` when None) in PyBullet; one row
+    per (grip, trial).
 
     Trial k of a grip draws its noise from ``SeedSequence([seed, key, trial_offset + k])``,
     ``key`` from the grip's ``grip_id`` (or its index label). Every trial starts from the same
@@ -64,10 +65,10 @@ def run_trial_outcomes(
         raise ValueError(f"obj must be a PlanarObject, got {type(obj).__name__}")
     if not isinstance(grips, pd.DataFrame):
         raise ValueError(f"grips must be a pandas DataFrame, got {type(grips).__name__}")
-    trials = _count("trials", trials, 1)
+    config = config if config is not None else Config()
+    trials = _count("trials", config.dataset.trials if trials is None else trials, 1)
     seed = _count("seed", seed, 0)
     trial_offset = _count("trial_offset", trial_offset, 0)
-    config = config if config is not None else Config()
     plans = grip_plans(grips)
     rows: list[tuple] = []
     if plans:
@@ -86,16 +87,19 @@ def run_trials(
     obj: PlanarObject,
     grips: pd.DataFrame,
     config: Config | None = None,
-    trials: int = 4,
+    trials: int | None = None,
     seed: int = 0,
 ) -> pd.DataFrame:
-    """Per-grip labels from ``run_trial_outcomes``: outcomes depend on (seed, grip, trial) only.
+    """Per-grip labels from ``run_trial_outcomes`` (``dataset.trials`` trials when None):
+    outcomes depend on (seed, grip, trial) only.
 
     Returns:
         DataFrame indexed like ``grips`` with ``trials``, ``successes`` (trials that held the
         reference level), ``robustness_mean`` and ``robustness_std`` (g, over the trials;
         the std is the population std, 0 for one trial).
     """
+    config = config if config is not None else Config()
+    trials = config.dataset.trials if trials is None else trials
     outcomes = run_trial_outcomes(obj, grips, config, trials, seed)
     n = len(grips)
     trials = int(trials)
