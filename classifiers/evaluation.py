@@ -15,7 +15,7 @@ interval is the corrected resampled t-interval of Nadeau & Bengio (2003):
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -157,13 +157,23 @@ def cross_validate_models(
     check_dataset(table, features, config.folds)
     table = table.reset_index(drop=True)
     labels = table[LABEL_COLUMN].to_numpy().astype(bool)
+    return grouped_cv(table, labels, lambda seed: _fresh_models(models, seed, features),
+                      fold_metrics, config)
+
+
+def grouped_cv(
+    table: pd.DataFrame, target: np.ndarray, fresh: Callable[[int], Mapping[str, BaseEstimator]],
+    score: Callable[[BaseEstimator, pd.DataFrame], Mapping[str, float]], config: LearningConfig,
+) -> pd.DataFrame:
+    """The repeated grouped folds: ``fresh(seed)`` estimators fitted on each training fold,
+    ``score(model, test)`` on its test fold; one row per (model, repeat, fold)."""
     records = []
     for repeat in range(config.repeats):
         seed = config.seed + repeat
         for fold, (train, test) in enumerate(grouped_folds(table, config.folds, seed)):
-            for name, model in _fresh_models(models, seed, features).items():
-                model.fit(table.iloc[train], labels[train])
-                metrics = fold_metrics(model, table.iloc[test])
+            for name, model in fresh(seed).items():
+                model.fit(table.iloc[train], target[train])
+                metrics = score(model, table.iloc[test])
                 records.append({"model": name, "repeat": repeat, "fold": fold, **metrics})
     return pd.DataFrame.from_records(records)
 

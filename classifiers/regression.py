@@ -26,7 +26,7 @@ from scipy.stats import spearmanr
 from sklearn.base import BaseEstimator, clone
 from sklearn.metrics import mean_absolute_error, r2_score
 
-from classifiers.evaluation import GROUP_COLUMN, check_dataset, grouped_folds, interval
+from classifiers.evaluation import GROUP_COLUMN, check_dataset, grouped_cv, interval
 from classifiers.models import make_regressor
 from grip_env.columns import FEATURES
 from grip_env.config import LearningConfig
@@ -92,15 +92,8 @@ def cross_validate_regressors(
     check_target(table)
     table = table.reset_index(drop=True)
     target = table[TARGET_COLUMN].to_numpy(float)
-    records = []
-    for repeat in range(config.repeats):
-        seed = config.seed + repeat
-        for fold, (train, test) in enumerate(grouped_folds(table, config.folds, seed)):
-            for name, model in _fresh(models, seed, features).items():
-                model.fit(table.iloc[train], target[train])
-                metrics = regression_fold_metrics(model, table.iloc[test])
-                records.append({"model": name, "repeat": repeat, "fold": fold, **metrics})
-    return pd.DataFrame.from_records(records)
+    return grouped_cv(table, target, lambda seed: _fresh(models, seed, features),
+                      regression_fold_metrics, config)
 
 
 def summarise_regression(per_fold: pd.DataFrame, folds: int) -> dict[str, dict[str, Any]]:
