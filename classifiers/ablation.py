@@ -18,7 +18,7 @@ one regressor (default ``"svr"``) of ``robustness_mean`` per feature set, scored
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -49,6 +49,7 @@ from classifiers.regression import (
 from grip_env.columns import FEATURES
 from grip_env.config import Config, LearningConfig
 from grip_env.epsilon import EPSILON_COLUMN, add_epsilon
+from grip_env.progress import progress_bar
 
 REFERENCE = "all_twelve"
 SHARED = ("S1", "S2", "S3", "S4")
@@ -92,10 +93,8 @@ def ablation_study(
     check_dataset(table, FEATURES, learning.folds)
     if EPSILON_COLUMN not in table.columns:
         table = add_epsilon(table, config.grasp)
-    per_fold = {
-        name: cross_validate_models(table, [model], features, learning)
-        for name, features in sets.items()
-    }
+    per_fold = _per_set(sets, "ablation", lambda features: cross_validate_models(
+        table, [model], features, learning))
     reference = per_fold[REFERENCE]
     results = {
         name: {
@@ -126,15 +125,24 @@ def _held_out_models(
             for name, features in sets.items() if name not in _LEAVE_ONE_OUT}  # fmt: skip
 
 
+def _per_set(sets: dict[str, Sequence[str]], description: str,
+             run: Callable[[Sequence[str]], pd.DataFrame]) -> dict[str, pd.DataFrame]:
+    """``run(features)`` for every feature set, with one progress bar over the sets."""
+    per_fold = {}
+    with progress_bar(len(sets), description) as bar:
+        for name, features in sets.items():
+            per_fold[name] = run(features)
+            bar.advance(info=name)
+    return per_fold
+
+
 def regression_ablation(
     table: pd.DataFrame, learning: LearningConfig, regressor: str,
     sets: dict[str, Sequence[str]],
 ) -> dict[str, Any]:
     """The regression task on every feature set, paired against the reference set."""
-    per_fold = {
-        name: cross_validate_regressors(table, [regressor], features, learning)
-        for name, features in sets.items()
-    }
+    per_fold = _per_set(sets, "ablation (regression)", lambda features: cross_validate_regressors(
+        table, [regressor], features, learning))
     reference = per_fold[REFERENCE]
     return {
         "model": regressor,

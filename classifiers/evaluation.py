@@ -35,6 +35,7 @@ from classifiers.models import check_features, make_model
 from grip_env.columns import FEATURES
 from grip_env.config import LearningConfig
 from grip_env.dataset.split import held_out_objects, split_table
+from grip_env.progress import progress_bar
 
 METRICS = ("accuracy", "balanced_accuracy", "roc_auc", "f1", "brier", "top1_success", "top1_rate")
 GROUP_COLUMN = "object_id"
@@ -168,13 +169,15 @@ def grouped_cv(
     """The repeated grouped folds: ``fresh(seed)`` estimators fitted on each training fold,
     ``score(model, test)`` on its test fold; one row per (model, repeat, fold)."""
     records = []
-    for repeat in range(config.repeats):
-        seed = config.seed + repeat
-        for fold, (train, test) in enumerate(grouped_folds(table, config.folds, seed)):
-            for name, model in fresh(seed).items():
-                model.fit(table.iloc[train], target[train])
-                metrics = score(model, table.iloc[test])
-                records.append({"model": name, "repeat": repeat, "fold": fold, **metrics})
+    with progress_bar(config.repeats * config.folds, "cross-validation") as bar:
+        for repeat in range(config.repeats):
+            seed = config.seed + repeat
+            for fold, (train, test) in enumerate(grouped_folds(table, config.folds, seed)):
+                for name, model in fresh(seed).items():
+                    model.fit(table.iloc[train], target[train])
+                    metrics = score(model, table.iloc[test])
+                    records.append({"model": name, "repeat": repeat, "fold": fold, **metrics})
+                bar.advance()
     return pd.DataFrame.from_records(records)
 
 

@@ -35,6 +35,7 @@ from scipy import stats
 from grip_env.config import Config
 from grip_env.objects import PlanarObject, load_object_set, procedural_objects
 from grip_env.objects.shapes import rectangle
+from grip_env.progress import progress_bar
 
 BOXES_MM: tuple[tuple[float, float], ...] = ((90.0, 55.0), (70.0, 70.0), (120.0, 40.0))
 RETEST_TARGET = 0.8
@@ -203,9 +204,12 @@ def run_calibration_trials(
              for i, name in enumerate(plan)]  # fmt: skip
     job = functools.partial(object_job, parts=plan, settings=settings)
     frames = []
-    for task, rows in run_jobs(job, tasks, min(settings.workers, max(len(tasks), 1))):
-        log(f"[calibrate] {task.object_id}: {len(rows)} trials ({', '.join(plan[task.object_id])})")
-        frames.append(rows)
+    with progress_bar(len(tasks), "calibrate") as bar:
+        for task, rows in run_jobs(job, tasks, min(settings.workers, max(len(tasks), 1))):
+            log(f"[calibrate] {task.object_id}: {len(rows)} trials "
+                f"({', '.join(plan[task.object_id])})")
+            frames.append(rows)
+            bar.advance(info=task.object_id)
     return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=TRIAL_COLUMNS)
 
 

@@ -9,6 +9,7 @@ import typer
 from grip_env.cli.errors import user_errors
 from grip_env.cli.options import MODEL_NAMES_HELP, ConfigFile, DatasetDir, OutputDir
 from grip_env.cli.paths import output_dir
+from grip_env.progress import shown
 from grip_env.shutdown import stop_on_signals
 
 
@@ -21,7 +22,7 @@ def ablate(
     ] = "svm",
 ) -> None:
     """Write OUT/ablation.json (metrics, paired differences, importances) and OUT/ablation.png."""
-    with stop_on_signals(f"rerun the same command to redo {out}"), user_errors():
+    with stop_on_signals(f"rerun the same command to redo {out}"), user_errors(), shown():
         from grip_env.cli.train import check_model_names
         from grip_env.config import load_config
 

@@ -10,6 +10,8 @@ import typer
 from grip_env.cli.errors import user_errors
 from grip_env.cli.options import ConfigFile
 from grip_env.cli.paths import output_dir
+from grip_env.progress import shown
+from grip_env.shutdown import stop_on_signals
 
 
 def calibrate(
@@ -30,7 +32,7 @@ def calibrate(
     grip outside the friction cone holds less than the best grip; test-retest Spearman and
     ICC(1) of robustness; with `--data`, Spearman of Q_C (and Q_G) decile with mean robustness.
     """
-    with user_errors():
+    with stop_on_signals(f"rerun the same command to redo {out}"), user_errors(), shown():
         output_dir(out)
         from classifiers.report.calibration import write_calibration
         from grip_env.calibration import CalibrationSettings

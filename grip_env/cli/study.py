@@ -10,6 +10,7 @@ import typer
 from grip_env.cli.errors import user_errors
 from grip_env.cli.options import ConfigFile
 from grip_env.cli.paths import output_dir
+from grip_env.progress import shown
 from grip_env.shutdown import stop_on_signals
 
 
@@ -37,7 +38,7 @@ def study(
     (config fields, dataset, grip-env version) are unchanged and recomputes the others.
     Exit codes: 0 done, 1 internal error, 2 bad input, 130/143/129 stopped by a signal.
     """
-    with stop_on_signals(f"rerun the same command to finish {out}"), user_errors():
+    with stop_on_signals(f"rerun the same command to finish {out}"), user_errors(), shown():
         output_dir(out)
         if update_readme and not readme.is_file():
             raise ValueError(f"--readme {readme} is not a file")

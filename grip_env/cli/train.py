@@ -9,6 +9,7 @@ import typer
 from grip_env.cli.errors import user_errors
 from grip_env.cli.options import MODEL_NAMES_HELP, ConfigFile, DatasetDir, OutputDir
 from grip_env.cli.paths import output_dir
+from grip_env.progress import shown
 from grip_env.shutdown import stop_on_signals
 
 
@@ -23,7 +24,7 @@ def train(
     ] = None,
 ) -> None:
     """Write OUT/metrics.json (grouped CV), roc.png, calibration.png and OUT/models/."""
-    with stop_on_signals(f"rerun the same command to redo {out}"), user_errors():
+    with stop_on_signals(f"rerun the same command to redo {out}"), user_errors(), shown():
         from grip_env.config import load_config
 
         settings = load_config(config)

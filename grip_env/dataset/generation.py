@@ -12,8 +12,6 @@ import shutil
 import time
 from pathlib import Path
 
-from tqdm.auto import tqdm
-
 from grip_env.config import Config
 from grip_env.dataset.backends import check_backend, run_jobs
 from grip_env.dataset.catalog import (
@@ -40,6 +38,7 @@ from grip_env.dataset.manifest import (
     write_manifest,
 )
 from grip_env.dataset.shards import GRIPS_DIR, shard_path, write_shard
+from grip_env.progress import progress_bar
 from grip_env.shutdown import deferred_signals
 
 _MANIFEST_FLUSH_SECONDS = 1.0
@@ -183,8 +182,7 @@ def _run(
 ) -> None:
     started, rows, last_flush = time.perf_counter(), 0, 0.0
     feature_cap = manifest["feature_cap"]
-    with tqdm(total=total, initial=total - len(pending), unit="obj", desc="generate",
-              disable=not progress, dynamic_ncols=True) as bar:
+    with progress_bar(total, "generate", done=total - len(pending), enabled=progress) as bar:
         try:
             for task, grips in run_jobs(job, pending, workers, backend, address):
                 path = shard_path(directory, task.index, task.object_id)
@@ -198,9 +196,7 @@ def _run(
                         write_manifest(directory, manifest)
                         last_flush = time.perf_counter()
                 rows += record.rows
-                bar.set_postfix(grips=rows, grips_per_s=f"{rows / _elapsed(started):.1f}",
-                                refresh=False)
-                bar.update(1)
+                bar.advance(1, info=f"{rows} grips, {rows / _elapsed(started):.1f} grips/s")
         finally:
             manifest["complete"] = len(manifest["shards"]) == total
             write_manifest(directory, manifest)
