@@ -110,7 +110,8 @@ class SimConfig(_Section):
     finger_force_n: float = Field(15.0, gt=0.0, le=200.0, description="fingertip force")
     finger_friction: float = Field(1.0, gt=0.0, le=3.0, description="finger pad lateral friction")
     pad_torsion_mm: float = Field(
-        3.0, ge=0.0, le=50.0, description="pad torsional friction (torque per normal force)"
+        3.0, ge=0.0, le=50.0,
+        description="pad torsional arm: a contact resists mu * N * this of twist",
     )
     lift_height_mm: float = Field(60.0, gt=0.0, le=1000.0, description="lift distance")
     lift_time_s: float = Field(0.25, gt=0.0, le=10.0, description="lift duration")

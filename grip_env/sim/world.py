@@ -164,11 +164,15 @@ class World:
         return body
 
     def set_dynamics(self, body: Body, mass_kg: float, friction: float,
-                     spinning_friction: float = 1.0) -> None:
+                     spinning_friction: float = 0.0) -> None:
         """Mass (with the whole body's inertia) and friction on every link of ``body``.
 
-        PyBullet multiplies the friction coefficients of two touching bodies, so ``friction``
-        here is the object's side of the product; every convex piece gets the same value.
+        Bullet combines two touching bodies' lateral frictions as the product mu0 * mu1, so
+        ``friction`` is the object's side of the product (the pads' is 1); it combines their
+        spinning (torsional) frictions as s0 * mu1 + s1 * mu0 (btManifoldResult). With the
+        object's ``spinning_friction`` 0, a pad of torsional arm s gives the pair mu * s: the
+        torque a contact resists is mu * N * s, as for a real pad (``sim.pad_torsion_mm``).
+        Every convex piece gets the same values.
         """
         c = self.client
         inertia = [i * mass_kg for i in body.inertia_per_kg]
