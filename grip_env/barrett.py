@@ -64,6 +64,7 @@ from grip_env.hand_geometry import (
     PROXIMAL_LINK_MM,
     SPREAD_AXIS_OFFSET_MM,
     THUMB_KNUCKLE_MM,
+    fingertip_in_plane,
 )
 from grip_env.params import DEFAULT_PARAMS, GraspParams
 
@@ -71,17 +72,12 @@ if TYPE_CHECKING:
     from grip_env.grasps import Grasps
     from grip_env.objects import PlanarObject
 
-def fingertip_reach(joint2: NDArray, knuckle_mm: float = KNUCKLE_RADIAL_MM) -> NDArray:
-    """Reach (mm) of the fingertip pad corner from the finger's line origin, coupled closing.
 
-    In the finger's closing plane the distal link points at a = q2 + bend + q3 (q3 = q2 / 3) and the
-    pad corner sits ``DISTAL_PAD_MM`` off its tip on the closing side:
-    r = knuckle + proximal cos q2 + distal cos a - pad sin a.
-    """
+def fingertip_reach(joint2: NDArray, knuckle_mm: float = KNUCKLE_RADIAL_MM) -> NDArray:
+    """Reach (mm) of the fingertip pad corner from the finger's line origin, coupled closing
+    (joint 3 = joint 2 / 3; :func:`grip_env.hand_geometry.fingertip_in_plane`)."""
     q2 = np.asarray(joint2, dtype=float)
-    a = q2 + DISTAL_BEND_RAD + JOINT_COUPLING * q2
-    return (knuckle_mm + PROXIMAL_LINK_MM * np.cos(q2) + DISTAL_LINK_MM * np.cos(a)
-            - DISTAL_PAD_MM * np.sin(a))
+    return fingertip_in_plane(q2, JOINT_COUPLING * q2, knuckle_mm)[0]
 
 
 #: Joint 2 over which the coupled closing touches with its pad: PAD_ANGLE_RANGE_RAD at

@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 
 from grip_env import barrett
 from grip_env import hand_geometry as hg
+from grip_env.hand_geometry import fingertip_in_plane
 
 KNUCKLE_RADIUS_MM = hg.KNUCKLE_RADIAL_MM  # knuckle from the finger's line origin (S_i or O)
 KNUCKLE_HEIGHT_MM = hg.KNUCKLE_HEIGHT_MM
@@ -36,48 +37,11 @@ _MAX_OPENING_RAD = 1.5  # the pre-shape opens joint 2 by at most this
 _OPENING_BISECTIONS = 17
 
 
-def fingertip_in_plane(q2: NDArray, q3: NDArray) -> tuple[NDArray, NDArray]:
-    """Fingertip pad corner in a finger's closing plane: (reach r, height h) in mm.
-
-    ``r`` is measured outwards from the finger's line origin (its spread axis; O for the thumb),
-    ``h`` along the palm normal from the palm base.
-    """
-    q2, q3 = np.asarray(q2, float), np.asarray(q3, float)
-    a = q2 + DISTAL_BEND_RAD + q3
-    r = (KNUCKLE_RADIUS_MM + PROXIMAL_MM * np.cos(q2) + DISTAL_MM * np.cos(a)
-         - DISTAL_PAD_MM * np.sin(a))
-    h = (KNUCKLE_HEIGHT_MM + PROXIMAL_MM * np.sin(q2) + DISTAL_MM * np.sin(a)
-         + DISTAL_PAD_MM * np.cos(a))
-    return r, h
-
-
 def fingertip_depth(q2: NDArray, q3: NDArray) -> NDArray:
     """How far the distal link reaches along the palm normal (mm): its deeper tip corner."""
     a = np.asarray(q2, float) + DISTAL_BEND_RAD + np.asarray(q3, float)
     _, pad_h = fingertip_in_plane(q2, q3)
     return pad_h + np.maximum(0.0, -2 * DISTAL_PAD_MM * np.cos(a))
-
-
-_Q2_GRID = np.linspace(0.0, 1.5, 601)
-_R_GRID, _H_GRID = fingertip_in_plane(_Q2_GRID, COUPLING * _Q2_GRID)
-
-
-def closing_posture(reach_mm: NDArray) -> tuple[NDArray, NDArray]:
-    """Joint-2 angle (coupled closing) at which the fingertip reaches ``reach_mm``, and its height.
-
-    ``reach`` decreases monotonically with q2 on the grid used.
-
-    Raises:
-        ValueError: a reach outside what the coupled closing covers (never clipped).
-    """
-    reach = np.asarray(reach_mm, float)
-    low, high = _R_GRID.min(), _R_GRID.max()
-    bad = ~((reach >= low) & (reach <= high))
-    if bad.any():
-        raise ValueError(f"finger reach {reach[bad].ravel()[0]:.3f} mm is outside the finger's "
-                         f"coupled closing [{low:.2f}, {high:.2f}] mm")
-    q2 = np.interp(-reach, -_R_GRID, _Q2_GRID)
-    return q2, np.interp(q2, _Q2_GRID, _H_GRID)
 
 
 @dataclass(frozen=True)
@@ -137,7 +101,10 @@ def contact_postures(
     closing clears the table, the one closest to the Barrett's natural coupling q3 = q2 / 3 is
     chosen. Rows without any such height are NaN and False in the mask.
     """
-    reach = np.asarray(reach_mm, float).reshape(-1, 3)
+    reach = np.asarray(reach_mm, float)
+    if reach.ndim not in (1, 2) or reach.shape[-1] != 3:
+        raise ValueError(f"reaches must have shape (3,) or (n, 3), got {reach.shape}")
+    reach = reach.reshape(-1, 3)
     planes = np.sort(np.atleast_1d(np.asarray(contact_z_mm, float)))
     heights = np.arange(_HEIGHT_RANGE[0], _HEIGHT_RANGE[1], _HEIGHT_STEP_MM)
     heights = heights[heights + planes.max() - PALM_DEPTH_MM >= palm_floor_mm]
@@ -161,24 +128,6 @@ def contact_postures(
     chosen3 = np.where(found[:, None], np.take_along_axis(q3, pick, 2)[..., 0], np.nan)
     height = np.where(found, heights[best] if heights.size else np.nan, np.nan)
     return ContactPosture(chosen2, chosen3, height, plane), found
-
-
-def contact_posture(
-    reach_mm: NDArray, contact_z_mm: float, clearance_mm: float, palm_floor_mm: float,
-    gap_mm: float,
-) -> ContactPosture:
-    """``contact_postures`` for one grip's (3,) reaches (one plane height).
-
-    Raises:
-        ValueError: no palm height gives all three fingers a posture (the plan is unreachable).
-    """
-    postures, found = contact_postures(reach_mm, contact_z_mm, clearance_mm, palm_floor_mm,
-                                       gap_mm)
-    if not found[0]:
-        reach = np.round(np.asarray(reach_mm, float).ravel(), 2).tolist()
-        raise ValueError(f"no palm height lets every finger reach {reach} mm with its pad on the "
-                         f"contact plane {contact_z_mm:.1f} mm: out of the hand's reach")
-    return ContactPosture(postures.q2[0], postures.q3[0], postures.height_mm[0])
 
 
 def opening_posture(q2: NDArray, q3: NDArray, gap_mm: float) -> tuple[NDArray, NDArray]:

@@ -1,4 +1,5 @@
-"""The Barrett BH8-280's figures, once: what the planner, the finger kinematics and the URDF share.
+"""The Barrett BH8-280's figures, once, and its fingertip's forward kinematics: what the planner,
+the finger kinematics and the URDF share.
 
 Sources: docs/barrett-bh8-280.md (the manufacturer's kinematics, ROS ``barrett_hand_description``
 and published kinematics modules); where they differ the pick is the one the URDF's header names.
@@ -8,6 +9,9 @@ Millimetres and radians. This module imports nothing else from grip_env, so ever
 from __future__ import annotations
 
 import math
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
 
 SPREAD_AXIS_OFFSET_MM = 25.0  #: spread axes of fingers 1 and 2 at (+-25, 0) in the palm
 KNUCKLE_RADIAL_MM = 50.0  #: joint 2 from its spread axis, radially
@@ -28,3 +32,22 @@ JOINT_COUPLING = 1.0 / 3.0  #: joint 3 follows joint 2 / 3 until breakaway (the 
 #: pad corner is what touches an object's side: 5 degrees past vertical (the link leans inwards
 #: below the corner), up to pointing straight back at the finger's axis.
 PAD_ANGLE_RANGE_RAD = (math.radians(95.0), math.pi)
+
+
+def fingertip_in_plane(
+    q2: ArrayLike, q3: ArrayLike, knuckle_mm: float = KNUCKLE_RADIAL_MM
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Fingertip pad corner in a finger's closing plane: (reach r, height h) in mm.
+
+    ``r`` is measured outwards from the finger's line origin (its spread axis; O for the thumb,
+    whose knuckle is ``THUMB_KNUCKLE_MM`` out), ``h`` along the palm normal from the palm base.
+    The distal link points at a = q2 + bend + q3 and the pad corner sits ``DISTAL_PAD_MM`` off
+    its tip on the closing side.
+    """
+    q2, q3 = np.asarray(q2, float), np.asarray(q3, float)
+    a = q2 + DISTAL_BEND_RAD + q3
+    r = (knuckle_mm + PROXIMAL_LINK_MM * np.cos(q2) + DISTAL_LINK_MM * np.cos(a)
+         - DISTAL_PAD_MM * np.sin(a))
+    h = (KNUCKLE_HEIGHT_MM + PROXIMAL_LINK_MM * np.sin(q2) + DISTAL_LINK_MM * np.sin(a)
+         + DISTAL_PAD_MM * np.cos(a))
+    return r, h

@@ -174,3 +174,13 @@ def test_calibrate_quick_writes_a_report_from_real_trials(tmp_path: Path):
     a_file.write_text("x")
     refused = CliRunner().invoke(app, ["calibrate", "--quick", "--out", str(a_file)])
     assert refused.exit_code == 2 and "existing file" in refused.output  # before any trial
+
+
+def test_friction_ceiling_is_mu_times_three_pad_forces_over_the_weight():
+    from grip_env.calibration import box_objects, friction_ceiling_g
+    from grip_env.config import Config
+
+    config = Config()
+    box = next(b for b in box_objects() if b.name == "box_90x55")
+    weight_n = 0.090 * 0.055 * 0.030 * 500.0 * 9.81  # 500 kg/m³, W = 1
+    assert friction_ceiling_g(box, config) == pytest.approx(0.4 * 3 * 15.0 / weight_n)

@@ -7,8 +7,8 @@ import pybullet
 import pytest
 
 from grip_env import barrett
+from grip_env.finger import DISTAL_PAD_MM, fingertip_in_plane
 from grip_env.sim import HAND_URDF, World
-from grip_env.sim.hand import DISTAL_PAD_MM, fingertip_in_plane
 
 # URDF link indices: (spread link or None, proximal, distal) of URDF fingers 1, 2, 3 (thumb).
 PROXIMAL, DISTAL = (1, 4, 6), (2, 5, 7)

@@ -35,21 +35,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from grip_env.config import SimConfig
-from grip_env.finger import (  # noqa: F401  (re-exported: the hand's kinematics)
+from grip_env.finger import (
     COUPLING,
-    DISTAL_PAD_MM,
-    JOINT2_MAX,
     JOINT3_MAX,
     KNUCKLE_HEIGHT_MM,
     PROXIMAL_MM,
-    ContactPosture,
-    closing_posture,
-    contact_posture,
-    contact_postures,
-    fingertip_depth,
     fingertip_in_plane,
-    opening_posture,
-    sweep_depth,
 )
 from grip_env.sim.world import MM, World
 

@@ -23,15 +23,10 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from grip_env.config import Config
-from grip_env.finger import finger_reaches, planar_contacts
+from grip_env.finger import ContactPosture, finger_reaches, opening_posture, planar_contacts
 from grip_env.objects import PlanarObject
 from grip_env.sim.disturbance import RampProbe, robustness
-from grip_env.sim.hand import (
-    ContactPosture,
-    Hand,
-    opening_posture,
-    palm_to_world,
-)
+from grip_env.sim.hand import Hand, palm_to_world
 from grip_env.sim.uncertainty import TrialNoise, object_mass_kg
 from grip_env.sim.world import World
 
