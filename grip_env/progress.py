@@ -7,26 +7,43 @@ Library calls show nothing unless asked; the CLI's long commands turn bars on wi
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
+from typing import Any
 
 _SHOWN: ContextVar[bool] = ContextVar("grip_env_progress_shown", default=False)
 _OPEN: ContextVar[bool] = ContextVar("grip_env_progress_open", default=False)
 
 
-class Bar:
-    """A handle on an open bar: ``advance`` it as work completes (a no-op when not shown)."""
+#: Seconds between the plain progress lines written when stderr is not a terminal (a log file).
+LOG_SECONDS = 30.0
 
-    def __init__(self, progress: object | None = None, task: int | None = None) -> None:
+
+class Bar:
+    """A handle on an open bar: ``advance`` it as work completes (a no-op when not shown).
+
+    On a terminal the bar redraws in place; into a file or pipe, where rich draws only the
+    final state, a plain line is written at most every ``LOG_SECONDS``.
+    """
+
+    def __init__(self, progress: Any = None, task: Any = None) -> None:
         self._progress, self._task = progress, task
+        self._logged = time.monotonic()
 
     def advance(self, steps: int = 1, info: str | None = None) -> None:
         """Count ``steps`` more done; ``info`` replaces the text after the bar (e.g. a rate)."""
         if self._progress is None:
             return
         fields = {} if info is None else {"info": info}
-        self._progress.update(self._task, advance=steps, **fields)  # type: ignore[attr-defined]
+        self._progress.update(self._task, advance=steps, **fields)
+        console = self._progress.console
+        if not console.is_terminal and time.monotonic() - self._logged >= LOG_SECONDS:
+            self._logged = time.monotonic()
+            task = self._progress.tasks[0]
+            console.print(f"{task.description}: {task.completed:g}/{task.total:g} "
+                          f"{task.fields.get('info', '')}".rstrip(), highlight=False)
 
 
 @contextmanager

@@ -34,3 +34,13 @@ def test_train_shows_the_cross_validation_bar(generated_dataset_dir, tmp_path):
                        "--models", "logreg")
     assert code == 0, output
     assert "cross-validation" in output
+
+
+def test_into_a_file_a_plain_line_is_written_now_and_then(capsys, monkeypatch):
+    from grip_env import progress
+
+    monkeypatch.setattr(progress, "LOG_SECONDS", 0.0)
+    with shown(), progress_bar(2, "logged") as bar:
+        bar.advance(info="first")
+    err = capsys.readouterr().err
+    assert "logged: 1/2 first" in err
