@@ -52,7 +52,8 @@ def _root(
 
 
 _COMMAND_MODULES = (
-    "show", "study", "generate", "validate", "train", "ablate", "select", "calibrate", "predict"
+    "show", "study", "generate", "validate", "train", "ablate", "select", "calibrate", "predict",
+    "benchmark",
 )
 
 

@@ -1,0 +1,132 @@
+"""Grip selection scored the way a robot uses it: one pick per object, against the oracle.
+
+>>> from classifiers.benchmark import benchmark_method
+>>> board = benchmark_method(table, ["mine.zip"], "mine", config)   # leaderboard dict
+
+Modules: ``split`` (the fixed, versioned standard split), ``methods`` (baselines and loaders of
+SB3 zips, skops files and ``module:function`` entry points, as score tables), ``selection``
+(exact per-object metrics), ``aggregate`` (rliable's IQM, stratified bootstrap, probability of
+improvement, performance profiles), ``leaderboard`` (tables, verdicts, files), ``plots``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from grip_env.config import Config
+
+METHOD_KINDS = ("sb3 zip", "skops file", "module:function")
+
+__all__ = ["benchmark_method", "method_kind", "study_benchmark"]
+
+
+def method_kind(spec: str) -> str:
+    """Which kind of method ``spec`` names: an existing ``.zip``, ``.skops`` or an entry point."""
+    path = Path(spec)
+    if path.suffix.lower() in (".zip", ".skops"):
+        if not path.is_file():
+            raise ValueError(f"method file not found: {spec}")
+        return METHOD_KINDS[0] if path.suffix.lower() == ".zip" else METHOD_KINDS[1]
+    if ":" in spec and not path.exists():
+        return METHOD_KINDS[2]
+    raise ValueError(f"a method is an SB3 .zip, a .skops file or 'module:function', got {spec!r}")
+
+
+def benchmark_method(
+    table: pd.DataFrame, specs: Sequence[str], name: str, config: Config, reps: int = 2000,
+) -> dict[str, Any]:
+    """The leaderboard of one user method (``specs``: its runs, e.g. one zip per seed) against
+    the baselines, on the standard split. Raises ValueError on any bad input, before any file
+    is written."""
+    from classifiers.benchmark.methods import (
+        baseline_scores,
+        entry_point_scores,
+        sb3_scores,
+        skops_scores,
+    )
+    from classifiers.benchmark.split import (
+        STANDARD_SPLIT,
+        candidate_sets,
+        candidate_table,
+        check_standard_objects,
+    )
+    from classifiers.persistence import dataset_checksum
+
+    if not specs:
+        raise ValueError("give at least one method")
+    if name in ("best_qc", "best_qg", "epsilon", "random", "oracle"):
+        raise ValueError(f"method name {name!r} is a baseline's; choose another with --name")
+    kinds = {method_kind(s) for s in specs}
+    if len(kinds) > 1:
+        raise ValueError(f"the runs of one method must be of one kind, got {sorted(kinds)}")
+    check_standard_objects(table)
+    sets = candidate_sets(table, config, STANDARD_SPLIT)
+    candidates = candidate_table(sets)
+    kind = kinds.pop()
+    frames = []
+    for run, spec in enumerate(specs):
+        if kind == METHOD_KINDS[0]:
+            frames.append(sb3_scores(Path(spec), sets, run, name))
+        elif kind == METHOD_KINDS[1]:
+            frames.append(skops_scores(Path(spec), sets, name).assign(seed=run))
+        else:
+            offset = len(STANDARD_SPLIT.seeds) * run
+            frames.append(entry_point_scores(spec, sets, STANDARD_SPLIT.seeds, name).assign(
+                seed=lambda f, o=offset: f["seed"] + o))  # fmt: skip
+    scores = pd.concat([baseline_scores(candidates, config.grasp), *frames], ignore_index=True)
+    split = {**STANDARD_SPLIT.describe(), "dataset_sha256": dataset_checksum(table),
+             "method_files": list(specs)}  # fmt: skip
+    return _board(candidates, scores, split, reps, config.learning.seed)
+
+
+def study_benchmark(
+    table: pd.DataFrame, out: str | Path, config: Config, reps: int = 2000
+) -> dict[str, Any]:
+    """The study's leaderboard: the learners' per-seed scores (``classifiers/scores.parquet``,
+    ``selector/scores.parquet``), or, without them, each learner fitted with ``learning.seed``
+    and the selector's ``model.zip``; plus the baselines. Writes ``out/benchmark/``."""
+    from classifiers.benchmark.leaderboard import write_leaderboard
+    from classifiers.benchmark.methods import (
+        baseline_scores,
+        fitted_scores,
+        sb3_scores,
+        study_scores,
+    )
+    from classifiers.benchmark.split import candidate_sets, candidate_table, study_split
+    from classifiers.persistence import dataset_checksum
+
+    out = Path(out)
+    learned = study_scores(out)
+    seeds = sorted(learned["seed"].unique()) if learned is not None else [config.learning.seed]
+    split = study_split(table, config, seeds)
+    sets = candidate_sets(table, config, split)
+    candidates = candidate_table(sets)
+    frames = [baseline_scores(candidates, config.grasp)]
+    if learned is not None:
+        frames.append(learned[learned["object_id"].isin(set(candidates["object_id"]))])
+    else:
+        frames.append(fitted_scores(table, candidates, config, seeds))
+        model = out / "selector" / "model.zip"
+        if model.exists():
+            frames.append(sb3_scores(model, sets, config.selector.seed, "rl"))
+    scores = pd.concat(frames, ignore_index=True)
+    info = {**split.describe(), "dataset_sha256": dataset_checksum(table),
+            "scores": "per-seed score files" if learned is not None else "one seed fitted here"}
+    board = _board(candidates, scores, info, reps, config.learning.seed)
+    write_leaderboard(board, out / "benchmark")
+    return board
+
+
+def _board(candidates: pd.DataFrame, scores: pd.DataFrame, split: dict[str, Any], reps: int,
+           seed: int) -> dict[str, Any]:  # fmt: skip
+    from classifiers.benchmark.leaderboard import build_leaderboard
+    from classifiers.benchmark.selection import selection_metrics
+
+    metrics = selection_metrics(candidates, scores)
+    board = build_leaderboard(metrics, split, reps=reps, seed=seed)
+    board["per_object"] = metrics.round(6).to_dict(orient="records")
+    return board

@@ -1,0 +1,294 @@
+"""Methods as score tables: the analytic baselines, and loaders for a user's method.
+
+A method gives, for each held-out object and run (``seed``), a score per candidate (higher =
+pick first) or one chosen index (scored 1 for the choice, 0 for the rest). Every loader returns a
+long table ``method, seed, object_id, candidate, score`` (:data:`SCORE_COLUMNS`), the input of
+:func:`classifiers.benchmark.selection.selection_metrics`.
+
+- baselines (:func:`baseline_scores`): ``best_qc`` (lowest Q_C first), ``best_qg`` (lowest Q_G),
+  ``epsilon`` (highest Ferrari-Canny epsilon), ``random`` (all candidates tied: the exact
+  expectation of a uniform pick) and ``oracle`` (highest recorded success rate, ties by
+  robustness);
+- an SB3 zip (:func:`sb3_scores`): MaskablePPO or PPO trained on ``GripSelect-v0``; the score is
+  the policy's probability of each valid slot on the object's first observation, so the top-1 is
+  the deterministic action (masked, for PPO as for MaskablePPO);
+- a skops file (:func:`skops_scores`): a scikit-learn model taking the candidate table; scores
+  are ``decision_function``, else ``P(success)``, else ``predict`` (a regressor);
+- a Python entry point ``module:function`` (:func:`entry_point_scores`): called with one
+  object's candidate table (outcome columns removed, rows in slot order) and, when it takes a
+  ``seed`` argument, once per training seed of the split.
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import sys
+import zipfile
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from grip_env.columns import OUTCOMES, ROBUSTNESS
+from grip_env.envs.observation import CandidateSet
+
+SCORE_COLUMNS = ("method", "seed", "object_id", "candidate", "score")
+BASELINES = ("best_qc", "best_qg", "epsilon", "random", "oracle")
+HIDDEN_COLUMNS = (*OUTCOMES, *ROBUSTNESS)
+SCORE_FILES = ("classifiers/scores.parquet", "selector/scores.parquet")
+#: Learned-model names that are the baselines again (rank_qc is best_qc with calibrated units,
+#: random a sampled stand-in for the exact random pick): left out of a study's leaderboard.
+DUPLICATES = ("_rank_qc", "_rank_qg", "_random")
+
+
+def score_frame(method: str, seed: int, candidates: pd.DataFrame, score: Any) -> pd.DataFrame:
+    """A score table of one run from one score per row of ``candidates``."""
+    return pd.DataFrame({"method": method, "seed": int(seed),
+                         "object_id": candidates["object_id"].to_numpy(),
+                         "candidate": candidates["candidate"].to_numpy(),
+                         "score": np.asarray(score, dtype=float)})  # fmt: skip
+
+
+def baseline_scores(candidates: pd.DataFrame, grasp: Any = None) -> pd.DataFrame:
+    """Score tables of the analytic baselines (one run each)."""
+    from grip_env.epsilon import epsilon_quality
+
+    oracle = candidates.assign(r=candidates.get("robustness_mean", 0.0)).sort_values(
+        ["object_id", "success_rate", "r"], kind="mergesort")  # fmt: skip
+    order = pd.Series(oracle.groupby("object_id").cumcount().to_numpy(), index=oracle.index)
+    scores = {
+        "best_qc": -candidates["Q_C"].to_numpy(float),
+        "best_qg": -candidates["Q_G"].to_numpy(float),
+        "epsilon": epsilon_quality(candidates, grasp),
+        "random": np.zeros(len(candidates)),
+        "oracle": order.loc[candidates.index].to_numpy(float),
+    }
+    return pd.concat([score_frame(n, 0, candidates, s) for n, s in scores.items()],
+                     ignore_index=True)  # fmt: skip
+
+
+def choice_scores(choice: Any, count: int, where: str) -> np.ndarray:
+    """A method's output for one object as scores: an index becomes a one-hot score."""
+    if np.ndim(choice) == 0:
+        if isinstance(choice, bool | np.bool_) or not float(choice).is_integer():
+            raise ValueError(f"{where}: a choice must be an integer index, got {choice!r}")
+        index = int(choice)
+        if not 0 <= index < count:
+            raise ValueError(f"{where}: invalid index {index} for {count} candidates")
+        scores = np.zeros(count)
+        scores[index] = 1.0
+        return scores
+    try:
+        scores = np.asarray(choice, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        raise ValueError(f"{where}: scores must be numbers, got {type(choice).__name__}") from None
+    if np.ndim(choice) != 1 or scores.size != count:
+        raise ValueError(f"{where}: {scores.size} scores (shape {np.shape(choice)}) for "
+                         f"{count} candidates")  # fmt: skip
+    if not np.all(np.isfinite(scores)):
+        raise ValueError(f"{where}: scores hold NaN or infinite values")
+    return scores
+
+
+def public_rows(found: CandidateSet) -> pd.DataFrame:
+    """The candidate table a method sees: slot order, outcome columns removed."""
+    rows = found.rows.drop(columns=[c for c in HIDDEN_COLUMNS if c in found.rows.columns])
+    return rows.reset_index(drop=True)
+
+
+# ------------------------------------------------------------------ entry points
+def load_entry_point(spec: str) -> Callable[..., Any]:
+    """The function named by ``module:function`` (the current directory is importable)."""
+    module_name, sep, attribute = spec.partition(":")
+    if not sep or not module_name or not attribute:
+        raise ValueError(f"an entry point is 'module:function', got {spec!r}")
+    if "" not in sys.path and str(Path.cwd()) not in sys.path:
+        sys.path.insert(0, str(Path.cwd()))
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as exc:
+        raise ValueError(f"cannot import {module_name!r} for {spec!r}: {exc}") from None
+    function = getattr(module, attribute, None)
+    if not callable(function):
+        raise ValueError(f"{spec!r}: {module_name} has no function {attribute!r}")
+    return function
+
+
+def entry_point_scores(spec: str, sets: Sequence[CandidateSet], seeds: Sequence[int],
+                       name: str) -> pd.DataFrame:  # fmt: skip
+    """Score tables of a ``module:function`` method (one run, or one per seed)."""
+    function = load_entry_point(spec)
+    seeded = "seed" in inspect.signature(function).parameters
+    frames = []
+    for seed in (seeds if seeded else (0,)):
+        for found in sets:
+            rows = public_rows(found)
+            where = f"{spec} on object {found.object_id!r}"
+            try:
+                output = function(rows, seed=int(seed)) if seeded else function(rows)
+            except Exception as exc:  # the user's code: its failure is bad input, in one line
+                raise ValueError(f"{where} failed: {type(exc).__name__}: {exc}") from None
+            scores = choice_scores(output, found.count, where)
+            frames.append(score_frame(name, seed, _slots(found), scores))
+    return pd.concat(frames, ignore_index=True)
+
+
+# ------------------------------------------------------------------ skops models
+def skops_scores(path: Path, sets: Sequence[CandidateSet], name: str) -> pd.DataFrame:
+    """Score table of a scikit-learn model saved with skops (one run)."""
+    model = load_skops(path)
+    frames = []
+    for found in sets:
+        rows = public_rows(found)
+        features = getattr(model, "feature_names_in_", None)
+        shown = rows if features is None else _columns(rows, list(features), path)
+        scores = choice_scores(_model_scores(model, shown), found.count,
+                               f"{path.name} on object {found.object_id!r}")  # fmt: skip
+        frames.append(score_frame(name, 0, _slots(found), scores))
+    return pd.concat(frames, ignore_index=True)
+
+
+def load_skops(path: Path) -> Any:
+    """A skops model, trusting only scikit-learn's and this package's types."""
+    import skops.io as sio
+
+    from classifiers.persistence import TRUSTED_PREFIXES, TRUSTED_TYPES
+
+    try:
+        untrusted = sio.get_untrusted_types(file=path)
+    except (zipfile.BadZipFile, KeyError, OSError) as exc:
+        raise ValueError(f"{path} is not a skops model file ({exc})") from None
+    unexpected = sorted(t for t in untrusted
+                        if t not in TRUSTED_TYPES and not t.startswith(TRUSTED_PREFIXES))
+    if unexpected:
+        raise ValueError(f"{path} holds types outside the trusted list: {unexpected}")
+    model = sio.load(path, trusted=untrusted)
+    if not any(hasattr(model, m) for m in ("decision_function", "predict_proba", "predict")):
+        raise ValueError(f"{path} holds a {type(model).__name__}, not a fitted model")
+    return model
+
+
+def _model_scores(model: Any, rows: pd.DataFrame) -> np.ndarray:
+    from classifiers.evaluation import ranking_score
+
+    if hasattr(model, "classes_"):
+        return ranking_score(model, rows)
+    return np.asarray(model.predict(rows), dtype=float)
+
+
+def _columns(rows: pd.DataFrame, names: list[str], path: Path) -> pd.DataFrame:
+    missing = [n for n in names if n not in rows.columns]
+    if missing:
+        raise ValueError(f"{path} needs columns the candidate table lacks: {missing}")
+    return rows[names]
+
+
+# ------------------------------------------------------------------ SB3 policies
+def load_sb3(path: Path) -> Any:
+    """A MaskablePPO or PPO model from an SB3 zip (the algorithm read from its policy class)."""
+    from sb3_contrib import MaskablePPO
+    from sb3_contrib.common.maskable.policies import MaskableActorCriticPolicy
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.save_util import load_from_zip_file
+
+    import classifiers.selector.policy  # noqa: F401  (the selector's policy class, for unpickling)
+
+    try:
+        data, _, _ = load_from_zip_file(path, load_data=True, device="cpu")
+    except (zipfile.BadZipFile, ValueError, KeyError, OSError) as exc:
+        raise ValueError(f"{path} is not a Stable-Baselines3 zip ({exc})") from None
+    policy_class = (data or {}).get("policy_class")
+    if not isinstance(policy_class, type):
+        raise ValueError(f"{path}: no policy class recorded (not an SB3 PPO/MaskablePPO zip)")
+    algorithm = MaskablePPO if issubclass(policy_class, MaskableActorCriticPolicy) else PPO
+    return algorithm.load(path, device="cpu")
+
+
+def check_sb3_spaces(model: Any, sets: Sequence[CandidateSet], path: Path) -> None:
+    """ValueError unless the model's spaces are ``GripSelect-v0``'s on this split."""
+    from gymnasium import spaces
+
+    k, width = sets[0].features.shape
+    observation, action = model.observation_space, model.action_space
+    expected = f"Dict(features=({k}, {width}), mask=({k},)) and Discrete({k})"
+    ok = (isinstance(observation, spaces.Dict)
+          and set(observation.spaces) == {"features", "mask"}
+          and tuple(observation["features"].shape) == (k, width)
+          and tuple(observation["mask"].shape) == (k,)
+          and isinstance(action, spaces.Discrete) and int(action.n) == k)  # fmt: skip
+    if not ok:
+        raise ValueError(f"{path}: observation {observation} / action {action} do not match the "
+                         f"split's GripSelect-v0 spaces {expected}")  # fmt: skip
+
+
+def sb3_scores(path: Path, sets: Sequence[CandidateSet], seed: int, name: str) -> pd.DataFrame:
+    """Score table of an SB3 policy: its action probabilities on each object's observation."""
+    import torch as th
+
+    model = load_sb3(path)
+    check_sb3_spaces(model, sets, path)
+    from sb3_contrib.common.maskable.policies import MaskableActorCriticPolicy
+
+    masked = isinstance(model.policy, MaskableActorCriticPolicy)
+    frames = []
+    with th.no_grad():
+        for found in sets:
+            observation = {"features": found.features[None], "mask": found.mask[None]}
+            tensor, _ = model.policy.obs_to_tensor(observation)
+            mask = {"action_masks": found.mask[None].copy()} if masked else {}
+            distribution = model.policy.get_distribution(tensor, **mask)
+            probability = distribution.distribution.probs.cpu().numpy()[0, : found.count]
+            frames.append(score_frame(name, seed, _slots(found), probability))
+    return pd.concat(frames, ignore_index=True)
+
+
+# ------------------------------------------------------------------ a study's score files
+def study_scores(out: Path) -> pd.DataFrame | None:
+    """The learners' per-seed score tables of a study folder (classifiers, rankers, RL)."""
+    frames = [pd.read_parquet(out / f) for f in SCORE_FILES if (out / f).exists()]
+    if not frames:
+        return None
+    table = pd.concat(frames, ignore_index=True)
+    missing = [c for c in SCORE_COLUMNS if c not in table.columns]
+    if missing:
+        raise ValueError(f"score files of {out} lack the columns {missing}")
+    table["object_id"] = table["object_id"].astype(str)
+    return drop_duplicates(table[list(SCORE_COLUMNS)])
+
+
+def drop_duplicates(scores: pd.DataFrame) -> pd.DataFrame:
+    """Scores without the learned copies of the baselines (:data:`DUPLICATES`)."""
+    names = scores["method"].astype(str)
+    return scores[~names.str.endswith(DUPLICATES).to_numpy()]
+
+
+def fitted_scores(table: pd.DataFrame, candidates: pd.DataFrame, config: Any,
+                  seeds: Sequence[int]) -> pd.DataFrame:  # fmt: skip
+    """Each of ``learning.models`` and ``learning.regressors`` fitted on the training objects
+    (everything but the held-out objects) with each seed, scoring the held-out candidates."""
+    from classifiers.evaluation import LABEL_COLUMN
+    from classifiers.models import make_model, make_regressor
+    from classifiers.regression import TARGET_COLUMN, has_target
+    from grip_env.columns import FEATURES
+
+    train = table[~table["object_id"].astype(str).isin(set(candidates["object_id"]))]
+    learning, frames = config.learning, []
+    shown = candidates.drop(columns=[c for c in HIDDEN_COLUMNS if c in candidates.columns])
+    for seed in seeds:
+        for name in learning.models:
+            model = make_model(name, seed, FEATURES).fit(train, train[LABEL_COLUMN].astype(bool))
+            frames.append(score_frame(f"classifier_{name}", seed, candidates,
+                                      _model_scores(model, shown)))  # fmt: skip
+        if has_target(train):
+            for name in learning.regressors:
+                model = make_regressor(name, seed, FEATURES).fit(train, train[TARGET_COLUMN])
+                frames.append(score_frame(f"regressor_{name}", seed, candidates,
+                                          model.predict(shown)))  # fmt: skip
+    return drop_duplicates(pd.concat(frames, ignore_index=True))
+
+
+def _slots(found: CandidateSet) -> pd.DataFrame:
+    return pd.DataFrame({"object_id": found.object_id, "candidate": np.arange(found.count)})

@@ -1,0 +1,62 @@
+"""Leaderboard figures: performance profiles (rliable) and success against attempts allowed."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from classifiers.benchmark.selection import MAX_ATTEMPTS
+
+
+def _pyplot() -> Any:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def plot_profiles(board: Mapping[str, Any], path: str | Path) -> Path:
+    """Fraction of (object, run) pairs whose normalised score exceeds tau, per method."""
+    plt = _pyplot()
+    taus = np.asarray(board["taus"], dtype=float)
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for name, row in board["methods"].items():
+        style = "--" if name in ("random", "oracle", board["reference"]) else "-"
+        ax.step(taus, np.asarray(row["profile"], dtype=float), where="post", ls=style, label=name)
+    ax.set_xlabel("normalised score tau  (0 = random pick, 1 = oracle)")
+    ax.set_ylabel("fraction of objects x runs with score > tau")
+    ax.set_xlim(taus.min(), taus.max())
+    ax.set_ylim(0, 1.02)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, ncol=2, loc="lower left")
+    ax.set_title("Performance profiles on the held-out objects")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return Path(path)
+
+
+def plot_attempts(board: Mapping[str, Any], path: str | Path) -> Path:
+    """Chance that one of the top-k picks holds, k = 1..5, per method."""
+    plt = _pyplot()
+    ks = np.arange(1, MAX_ATTEMPTS + 1)
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for name, row in board["methods"].items():
+        values = [row[f"success_at_{k}"] for k in ks]
+        ax.plot(ks, values, marker="o", ls="--" if name in ("random", "oracle") else "-",
+                label=name)  # fmt: skip
+    ax.set_xticks(ks)
+    ax.set_xlabel("attempts allowed")
+    ax.set_ylabel("P(one of the top-k picks holds)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, ncol=2, loc="lower right")
+    ax.set_title("Success against attempts allowed (independent trials)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return Path(path)

@@ -1,0 +1,151 @@
+"""``grip-env benchmark``: an entry point's round trip, a skops model and an SB3 zip scored on
+the standard split; bad input refused with one line, exit 2 and nothing written."""
+
+from __future__ import annotations
+
+import json
+import textwrap
+from pathlib import Path
+
+import pandas as pd
+import pytest
+import skops.io as sio
+from cli_runs import assert_refused, cli
+
+from classifiers.benchmark.split import STANDARD_TEST_OBJECTS
+from classifiers.models import make_model
+from classifiers.synthetic import synthetic_grips
+
+METHODS = textwrap.dedent("""
+    import numpy as np
+
+    def by_qc(table):
+        return -table["Q_C"].to_numpy()
+
+    def first(table):
+        return 0
+
+    def seeded(table, seed):
+        return np.random.default_rng(seed).random(len(table))
+
+    def peeks(table):
+        return table["success_rate"].to_numpy()
+
+    def out_of_range(table):
+        return len(table)
+
+    def nan(table):
+        return np.full(len(table), np.nan)
+
+    def short(table):
+        return np.zeros(len(table) - 1)
+""")
+
+
+@pytest.fixture(scope="module")
+def data(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Synthetic grips whose first 13 objects carry the standard split's ids, as a parquet."""
+    table = synthetic_grips(n_objects=20, grips=(6, 12), seed=4)
+    ids = {i: name for i, name in enumerate(STANDARD_TEST_OBJECTS)}
+    table["object_id"] = [ids.get(int(i), f"train_{i}") for i in table["object_id"]]
+    table["grip_id"] = table["grip_id"].astype(str)
+    path = tmp_path_factory.mktemp("bench") / "grips.parquet"
+    table.to_parquet(path)
+    return path
+
+
+@pytest.fixture()
+def methods(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    (tmp_path / "my_methods.py").write_text(METHODS)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    return tmp_path
+
+
+def board(out: Path) -> dict:
+    return json.loads((out / "leaderboard.json").read_text())
+
+
+def test_entry_point_round_trip(data: Path, methods: Path) -> None:
+    out = methods / "scored"
+    code, output = cli("benchmark", "my_methods:by_qc", "--data", data, "--out", out,
+                       "--reps", 200)  # fmt: skip
+    assert code == 0, output
+    found = board(out)
+    mine, ref = found["methods"]["by_qc"], found["methods"]["best_qc"]
+    for key in ("success", "robustness", "regret", "ndcg5", "success_at_3"):
+        assert mine[key] == ref[key]  # scoring by -Q_C is the best-Q_C pick
+    assert mine["verdict"] == "not distinguishable from best_qc"
+    assert found["split"]["name"] == "grip-select-standard" and found["split"]["version"] == 1
+    assert sorted(found["objects"] + found["degenerate_objects"]) == sorted(STANDARD_TEST_OBJECTS)
+    assert "| by_qc |" in (out / "leaderboard.md").read_text()
+    assert (out / "performance_profile.png").stat().st_size > 0
+    code, output = cli("benchmark", "my_methods:seeded", "--data", data, "--out", out / "s",
+                       "--reps", 200)  # fmt: skip
+    assert code == 0, output
+    assert board(out / "s")["methods"]["seeded"]["runs"] == 5
+    code, output = cli("benchmark", "my_methods:first", "--data", data, "--out", out / "f",
+                       "--reps", 200)  # fmt: skip
+    assert code == 0, output
+    assert board(out / "f")["methods"]["first"]["success"] == board(out)["methods"]["best_qc"][
+        "success"]  # slot 0 is the lowest Q_C  # fmt: skip
+
+
+@pytest.mark.parametrize(("method", "fragment"), [
+    ("my_methods:out_of_range", "invalid index"),
+    ("my_methods:nan", "NaN"),
+    ("my_methods:short", "scores"),
+    ("my_methods:peeks", "success_rate"),
+    ("my_methods:missing", "no function"),
+    ("nope.zip", "not found"),
+])  # fmt: skip
+def test_bad_functions_are_refused_and_nothing_written(
+    data: Path, methods: Path, method: str, fragment: str
+) -> None:
+    out = methods / "never"
+    assert_refused(*cli("benchmark", method, "--data", data, "--out", out), fragment)
+    assert not out.exists()
+
+
+def test_dataset_without_the_standard_objects_is_refused(methods: Path) -> None:
+    path = methods / "other.parquet"
+    synthetic_grips(n_objects=8, grips=(4, 6), seed=1).to_parquet(path)
+    out = methods / "never"
+    assert_refused(*cli("benchmark", "my_methods:by_qc", "--data", path, "--out", out),
+                   "standard split")  # fmt: skip
+    assert not out.exists()
+
+
+def test_skops_model_and_sb3_zips(data: Path, tmp_path: Path) -> None:
+    table = pd.read_parquet(data)
+    train = table[~table["object_id"].isin(STANDARD_TEST_OBJECTS)]
+    model = make_model("logreg", 0).fit(train, train["success"].astype(bool))
+    sio.dump(model, tmp_path / "logreg.skops")
+    code, output = cli("benchmark", tmp_path / "logreg.skops", "--data", data, "--out",
+                       tmp_path / "sk", "--reps", 200)  # fmt: skip
+    assert code == 0, output
+    assert 0 <= board(tmp_path / "sk")["methods"]["logreg"]["success"] <= 1
+
+    good, bad = _sb3_zip(tmp_path, 64), _sb3_zip(tmp_path, 16)
+    code, output = cli("benchmark", good, good, "--data", data, "--out", tmp_path / "rl",
+                       "--name", "agent", "--reps", 200)  # fmt: skip
+    assert code == 0, output
+    assert board(tmp_path / "rl")["methods"]["agent"]["runs"] == 2
+    out = tmp_path / "never"
+    assert_refused(*cli("benchmark", bad, "--data", data, "--out", out), "do not match")
+    assert not out.exists()
+
+
+def _sb3_zip(folder: Path, candidates: int) -> Path:
+    """An untrained MaskablePPO with the selector's policy on GripSelect-v0 (K candidates)."""
+    from classifiers.selector.training import make_selector_env, make_selector_model
+    from grip_env.config import Config
+
+    config = Config().override(selector={"max_candidates": candidates})
+    env = make_selector_env(synthetic_grips(n_objects=6, grips=(4, 6), seed=2), config,
+                            split="all", n_envs=1)  # fmt: skip
+    model = make_selector_model(env, "set", seed=0, timesteps=16)
+    path = folder / f"agent_{candidates}.zip"
+    model.save(path)
+    env.close()
+    return path

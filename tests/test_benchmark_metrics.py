@@ -1,0 +1,163 @@
+"""Selection metrics and their rliable-style aggregates against values computed by hand."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from classifiers.benchmark.aggregate import (
+    iqm,
+    performance_profile,
+    probability_of_improvement,
+    stratified_bootstrap,
+)
+from classifiers.benchmark.aggregate import mean as mean_score
+from classifiers.benchmark.leaderboard import build_leaderboard, leaderboard_markdown
+from classifiers.benchmark.methods import baseline_scores, choice_scores
+from classifiers.benchmark.selection import selection_metrics
+from classifiers.selector.evaluation import attempt_metrics, random_metrics
+
+LOG3 = np.log2(3.0)
+
+
+def tiny() -> pd.DataFrame:
+    """Object A: success 0, .5, 1 (robustness 10, 20, 30); object B: all 0.25 (degenerate)."""
+    return pd.DataFrame({
+        "object_id": ["A"] * 3 + ["B"] * 2, "candidate": [0, 1, 2, 0, 1],
+        "success_rate": [0.0, 0.5, 1.0, 0.25, 0.25],
+        "robustness_mean": [10.0, 20.0, 30.0, 5.0, 7.0],
+    })  # fmt: skip
+
+
+def scores(method: str, a: list[float], b: list[float], seed: int = 0) -> pd.DataFrame:
+    return pd.DataFrame({"method": method, "seed": seed, "object_id": ["A"] * 3 + ["B"] * 2,
+                         "candidate": [0, 1, 2, 0, 1], "score": [*a, *b]})  # fmt: skip
+
+
+def metrics_of(*frames: pd.DataFrame) -> pd.DataFrame:
+    return selection_metrics(tiny(), pd.concat(frames)).set_index(["method", "object_id"])
+
+
+def test_worst_first_ranking_by_hand() -> None:
+    row = metrics_of(scores("m", [3, 2, 1], [1, 0])).loc[("m", "A")]
+    assert row["success"] == 0.0 and row["robustness"] == 10.0
+    assert row["regret"] == 1.0 and row["robustness_regret"] == 20.0
+    assert row["normalised"] == pytest.approx((0.0 - 0.5) / (1.0 - 0.5))  # -1
+    dcg, ideal = 0.5 / LOG3 + 1.0 / 2.0, 1.0 + 0.5 / LOG3
+    assert row["ndcg5"] == pytest.approx(dcg / ideal)
+    assert row["success_at_2"] == pytest.approx(0.5)
+    assert row["success_at_3"] == pytest.approx(1.0)
+    assert row["attempts"] == pytest.approx(1 + 1 + 0.5)  # budget 5, only 3 grips
+
+
+def test_ties_are_averaged_exactly_and_random_is_the_exact_expectation() -> None:
+    found = metrics_of(scores("tie", [1, 1, 0], [0, 0]), scores("random", [0, 0, 0], [0, 0]))
+    tie = found.loc[("tie", "A")]
+    assert tie["success"] == pytest.approx(0.25)
+    assert tie["success_at_2"] == pytest.approx(0.5)
+    mean_discount = (1.0 + 1.0 / LOG3) / 2
+    assert tie["ndcg5"] == pytest.approx((0.5 * mean_discount + 0.5) / (1.0 + 0.5 / LOG3))
+    rand = found.loc[("random", "A")]
+    assert rand["success"] == pytest.approx(0.5) and rand["normalised"] == pytest.approx(0.0)
+    assert rand["robustness"] == pytest.approx(20.0)
+    # pairs {0,1}: fails with 0.5; {0,2}, {1,2}: never -> 1 - 0.5 / 3
+    assert rand["success_at_2"] == pytest.approx(1 - 0.5 / 3)
+    assert rand["ndcg5"] == pytest.approx(0.5 * (1 + 1 / LOG3 + 0.5) / (1 + 0.5 / LOG3))
+
+
+def test_degenerate_object_has_no_normalised_score_and_all_failing_no_ndcg() -> None:
+    table = tiny()
+    table.loc[table["object_id"] == "B", "success_rate"] = 0.0
+    found = selection_metrics(table, scores("m", [3, 2, 1], [1, 0])).set_index("object_id")
+    assert np.isnan(found.loc["B", "normalised"]) and np.isnan(found.loc["B", "ndcg5"])
+    assert found.loc["B", "regret"] == 0.0
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_attempt_curve_matches_the_selector_formulas(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n = 20
+    p = rng.integers(0, 5, size=n) / 4  # many ties, as 4 trials give
+    table = pd.DataFrame({"object_id": "X", "candidate": np.arange(n), "success_rate": p})
+    ranked = pd.DataFrame({"method": "ranked", "seed": 0, "object_id": "X",
+                           "candidate": np.arange(n), "score": -np.arange(n, dtype=float)})
+    flat = ranked.assign(method="random", score=0.0)
+    found = selection_metrics(table, pd.concat([ranked, flat])).set_index("method")
+    for k in range(1, 6):
+        assert found.loc["ranked", f"success_at_{k}"] == pytest.approx(attempt_metrics(p, k)[1])
+        assert found.loc["random", f"success_at_{k}"] == pytest.approx(random_metrics(p, k)[1])
+    assert found.loc["random", "attempts"] == pytest.approx(random_metrics(p, 5)[2])
+
+
+def test_oracle_baseline_is_the_oracle_and_choice_is_one_hot() -> None:
+    table = tiny().assign(Q_C=[1.0, 2.0, 3.0, 1.0, 2.0], Q_G=[3.0, 2.0, 1.0, 1.0, 2.0])
+    table = pd.concat([table] * 1, ignore_index=True)
+    base = baseline_scores(table.assign(**_geometry(len(table))))
+    found = selection_metrics(table, base).set_index(["method", "object_id"])
+    assert found.loc[("oracle", "A"), "success"] == 1.0
+    assert found.loc[("oracle", "A"), "normalised"] == 1.0
+    assert found.loc[("best_qc", "A"), "success"] == 0.0  # lowest Q_C first
+    assert found.loc[("best_qg", "A"), "success"] == 1.0
+    assert choice_scores(np.int64(2), 3, "x").tolist() == [0.0, 0.0, 1.0]
+    for bad, message in ((3, "invalid index"), (1.5, "integer"), ([0.1, np.nan, 0], "NaN"),
+                         ([1.0, 2.0], "2 scores")):  # fmt: skip
+        with pytest.raises(ValueError, match=message):
+            choice_scores(bad, 3, "x")
+
+
+def _geometry(n: int) -> dict[str, np.ndarray]:
+    """Contacts on a unit circle and inward normals: a valid epsilon input."""
+    angles = np.array([0.0, 2.1, 4.2])
+    out = {}
+    for i, a in enumerate(angles, start=1):
+        out[f"p{i}_x"], out[f"p{i}_y"] = np.full(n, 50 * np.cos(a)), np.full(n, 50 * np.sin(a))
+        out[f"n{i}_x"], out[f"n{i}_y"] = np.full(n, -np.cos(a)), np.full(n, -np.sin(a))
+    out.update(centroid_x=np.zeros(n), centroid_y=np.zeros(n), semi_major=np.full(n, 50.0),
+               semi_minor=np.full(n, 50.0))  # fmt: skip
+    return out
+
+
+def test_iqm_poi_and_profile_by_hand() -> None:
+    matrix = np.array([[1.0, 2, 3, 4], [5, 6, 7, 8]])
+    assert float(iqm(matrix)) == pytest.approx(4.5)  # mean of 3, 4, 5, 6
+    assert float(iqm(np.arange(10.0)[None])) == pytest.approx(np.mean([2, 3, 4, 5, 6, 7]))
+    assert float(probability_of_improvement(np.array([[1.0, 0.0]]),
+                                            np.array([[0.0, 0.0]]))) == 0.75  # fmt: skip
+    assert float(probability_of_improvement(np.array([[1.0], [0.0]]), np.array([[0.0]]))) == 0.75
+    profile = performance_profile(np.array([[0.0, 0.5, 1.0]]), np.array([-0.1, 0.25, 0.75, 1]))
+    assert profile.tolist() == pytest.approx([1, 2 / 3, 1 / 3, 0])
+
+
+def test_stratified_bootstrap_on_known_inputs() -> None:
+    two = stratified_bootstrap(np.array([[0.0, 1.0]]), mean_score, reps=4000, seed=3)
+    assert two["estimate"] == 0.5 and two["ci"] == [0.0, 1.0]  # means 0, .5, 1 w.p. 1/4 1/2 1/4
+    runs = np.array([[0.0, 0.0], [1.0, 1.0]])
+    seeds_only = stratified_bootstrap(runs, mean_score, reps=4000, seed=3, task_bootstrap=False)
+    # each object draws 2 runs of {0, 1}: resampled mean is k/4, k ~ Binomial(4, 1/2)
+    assert seeds_only["estimate"] == 0.5 and seeds_only["ci"] == [0.0, 1.0]
+    fixed = stratified_bootstrap(np.array([[0.2, 0.4]] * 3), mean_score, task_bootstrap=False)
+    assert fixed["ci"] == pytest.approx([0.3, 0.3])
+
+
+def test_leaderboard_verdicts() -> None:
+    rng = np.random.default_rng(0)
+    rows = []
+    for obj in range(12):
+        for method, value in (("best_qc", 0.2), ("good", 0.8), ("same", 0.2)):
+            for seed in range(3 if method == "good" else 1):
+                rows.append({"method": method, "seed": seed, "object_id": f"o{obj}",
+                             "normalised": value + 0.01 * rng.random(), **_plain()})
+    board = build_leaderboard(pd.DataFrame(rows), {"name": "t", "version": 0}, reps=500)
+    assert board["methods"]["good"]["verdict"] == "beats best_qc"
+    assert board["methods"]["same"]["verdict"] == "not distinguishable from best_qc"
+    assert board["methods"]["good"]["runs"] == 3
+    assert board["methods"]["good"]["probability_of_improvement"]["estimate"] == 1.0
+    text = leaderboard_markdown(board)
+    assert "Beat the best-Q_C pick" in text and "`good`" in text
+
+
+def _plain() -> dict[str, float]:
+    keys = ("success", "robustness", "regret", "robustness_regret", "ndcg5", "attempts",
+            *(f"success_at_{k}" for k in range(1, 6)))
+    return dict.fromkeys(keys, 0.5)
