@@ -89,7 +89,7 @@ def test_objects_cover_the_boxes_and_enough_retest_grips():
     assert boxes[0].area == pytest.approx(90 * 55)
     plan = choose_objects(Config(), CalibrationSettings())
     assert sum("retest" in parts for parts in plan.values()) == 6  # 6 x 16 = 96 grips >= 90
-    assert sum("cone" in parts for parts in plan.values()) >= 3
+    assert sum("cone" in parts for parts in plan.values()) == CalibrationSettings().cone_objects
 
 
 def _trials(part: str, grips: dict[str, float], n: int, rng: np.random.Generator,
@@ -153,13 +153,18 @@ def test_calibrate_quick_writes_a_report_from_real_trials(tmp_path: Path):
     """A tiny real run: planning, PyBullet trials through the public sim API, the report."""
     _register_commands()
     out = tmp_path / "cal"
-    result = CliRunner().invoke(app, ["calibrate", "--quick", "--out", str(out), "--workers", "1"])
+    result = CliRunner().invoke(app, ["calibrate", "--quick", "--out", str(out), "--workers", "1",
+                                      "--cone-objects", "2", "--cone-trials", "1"])
     assert result.exit_code == 0, result.output
+    assert "design_hold  FAIL" in result.output and "ill-posed" in result.output
     saved = json.loads((out / "calibration.json").read_text())
     assert set(saved["checks"]) == {"design_hold", "cone", "retest", "icc"}
     trials = pd.read_parquet(out / "calibration_trials.parquet")
     assert set(trials["part"]) == {"design", "cone", "retest"}
     assert trials["robustness"].ge(0).all()
+    cone = trials[trials["part"] == "cone"]
+    assert cone["object_id"].nunique() == 2 and cone["trial"].eq(0).all()  # the flags' sizes
+    assert saved["settings"]["cone_objects"] == 2 and saved["settings"]["cone_trials"] == 1
     retest = trials[trials["part"] == "retest"]
     assert retest.groupby("grip")["trial"].nunique().eq(4).all()  # two disjoint sets of 2
     text = (out / "calibration.md").read_text()
@@ -176,11 +181,78 @@ def test_calibrate_quick_writes_a_report_from_real_trials(tmp_path: Path):
     assert refused.exit_code == 2 and "existing file" in refused.output  # before any trial
 
 
-def test_friction_ceiling_is_mu_times_three_pad_forces_over_the_weight():
-    from grip_env.calibration import box_objects, friction_ceiling_g
+def test_friction_ceiling_holds_the_weight_and_the_push_with_mu_times_the_pad_forces():
+    from grip_env.calibration import box_objects, friction_ceiling_g, friction_for_level
     from grip_env.config import Config
 
     config = Config()
     box = next(b for b in box_objects() if b.name == "box_90x55")
     weight_n = 0.090 * 0.055 * 0.030 * 500.0 * 9.81  # 500 kg/m³, W = 1
-    assert friction_ceiling_g(box, config) == pytest.approx(0.4 * 3 * 15.0 / weight_n)
+    # friction must carry m g (down) and m a g (along the faces): (1 + a²) (m g)² <= (mu 45 N)²
+    ceiling = friction_ceiling_g(box, config)
+    assert (1 + ceiling**2) * weight_n**2 == pytest.approx((0.4 * 3 * 15.0) ** 2)
+    assert 24.0 < ceiling < 25.0  # about 25 g: the 45 g reference is out of reach at mu = 0.4
+    assert friction_for_level(box, config, ceiling) == pytest.approx(0.4)
+    assert friction_for_level(box, config, 45.0) == pytest.approx(np.hypot(45, 1) * weight_n / 45)
+    heavy = config.override(objects={"density_kg_m3": 20_000.0})  # 3 kg: 18 N cannot lift it
+    assert friction_ceiling_g(box, heavy) == 0.0
+
+
+def _design_trials(levels: dict[str, float]) -> pd.DataFrame:
+    return pd.DataFrame([{"object_id": name, "grip": f"{name}/g", "part": "design", "end": "best",
+                          "Q_C": 1.0, "Q_G": 1.0, "trial": k, "robustness": level,
+                          "success": level >= 45.0, "friction": 0.4, "mass_kg": 0.07}
+                         for name, level in levels.items() for k in range(2)])  # fmt: skip
+
+
+def test_design_check_says_when_no_faithful_grip_can_pass_and_why():
+    from classifiers.report.calibration import design_verdict_text, summary_table
+    from grip_env.calibration import design_check
+
+    names = [b.name for b in box_objects()]
+    trials = _design_trials(dict.fromkeys(names, 26.9))
+    check = design_check(trials, 45.0, Config())
+    assert check["passed"] is False and check["well_posed"] is False
+    rows = {r["object_id"]: r for r in check["per_object"]}
+    assert all(24 < r["friction_ceiling_g"] < 26 and 0.6 < r["mu_for_reference"] < 0.8
+               for r in rows.values())  # fmt: skip
+    reason = check["reason"]
+    assert "ill-posed at mu = 0.4" in reason and "below the 45 g reference" in reason
+    text = design_verdict_text(check, 45.0)
+    assert "box_90x55 26.9 g (ceiling 24.7 g)" in text and "not tuned" in text
+    assert summary_table({"design_hold": check}).loc["design_hold", "verdict"] == "FAIL (ill-posed)"
+    # a reference inside the ceiling is a fair check: no reason given, the figure decides
+    fair = design_check(_design_trials(dict.fromkeys(names, 26.9)), 20.0, Config())
+    assert fair["well_posed"] is True and fair["reason"] is None
+    assert "ill-posed" not in design_verdict_text(fair, 20.0)
+    short = design_check(_design_trials({names[0]: 26.9}), 20.0, Config())
+    assert short["passed"] is False  # a box without a feasible grip fails the check
+
+
+def test_cone_objects_continue_the_procedural_sequence_when_the_config_has_few():
+    config = Config().override(objects={"procedural_count": 0})
+    settings = CalibrationSettings(retest_objects=0, cone_objects=30)
+    plan = choose_objects(config, settings)
+    cone = [name for name, parts in plan.items() if "cone" in parts]
+    assert len(cone) == 30 and any(name.startswith("proc_0_") for name in cone)
+    # the study's procedural objects come first, in the same order (object i depends on i only)
+    from grip_env.calibration import candidate_objects
+
+    few = [o.name for o in candidate_objects(Config().override(objects={"procedural_count": 3}))]
+    many = [o.name for o in candidate_objects(Config(), settings)]
+    assert few[:len(BOXES_MM) + 18 + 3] == many[:len(BOXES_MM) + 18 + 3]
+
+
+def test_calibration_runs_on_the_configured_backend(monkeypatch):
+    seen = {}
+
+    def fake_run_jobs(job, tasks, workers, backend="process", address=None):
+        seen.update(backend=backend, workers=workers, tasks=len(list(tasks)))
+        return iter(())
+
+    monkeypatch.setattr("grip_env.dataset.backends.run_jobs", fake_run_jobs)
+    from grip_env.calibration import run_calibration_trials
+
+    config = Config().override(dataset={"backend": "ray"})
+    run_calibration_trials(config, CalibrationSettings.quick(workers=2))
+    assert seen["backend"] == "ray" and seen["workers"] == 2 and seen["tasks"] >= len(BOXES_MM)

@@ -72,7 +72,8 @@ def summary_table(checks: dict[str, dict[str, Any]]) -> pd.DataFrame:
             else ", ".join(f"{k} {_number(v)}" for k, v in measured.items()),
             "95% interval": _ci(check.get("ci")),
             "target": check["target"],
-            "verdict": _verdict(check["passed"]),
+            "verdict": _verdict(check["passed"])
+            + (" (ill-posed)" if check.get("well_posed") is False else ""),
         }
     return pd.DataFrame(rows).T.rename_axis("check")
 
@@ -87,17 +88,11 @@ def _design(report: Report, check: dict[str, Any], reference: float, fig_dir: Pa
         return
     report.table(rows.set_index("object_id"), caption="No pose error, friction = mu, nominal "
                  "mass; robustness is the highest level held (g), held the share of trials "
-                 "holding the reference level; friction_ceiling_g = mu x 3 x finger force / "
-                 "(m g), the most three pads can hold in the plane at that friction.")
-    if "friction_ceiling_g" in rows and (rows["friction_ceiling_g"] < reference).all():
-        report.text(
-            f"Physical reason when this check fails: at the design friction mu every box's "
-            f"friction ceiling ({rows['friction_ceiling_g'].min():.1f}–"
-            f"{rows['friction_ceiling_g'].max():.1f} g) is below the {reference:g} g reference "
-            "level, so no grip of this hand can hold the reference there; the reference is "
-            "set for the drawn friction (the 30–70 % success target), not for the design "
-            "friction, and the physics is not tuned to pass."
-        )
+                 "holding the reference level; friction_ceiling_g = sqrt((mu x 3 x finger force "
+                 "/ (m g))² - 1), the most three pads hold by friction against the weight and an "
+                 "in-plane push along their faces; mu_for_reference, the friction at which that "
+                 "ceiling reaches the reference.")
+    report.text(design_verdict_text(check, reference))
     fig = Figure(figsize=(5.5, 3.4))
     ax = fig.subplots()
     ax.bar(rows["object_id"], rows["robustness"], color="tab:blue")
@@ -108,6 +103,23 @@ def _design(report: Report, check: dict[str, Any], reference: float, fig_dir: Pa
     fig.tight_layout()
     _figure(report, save_figure(fig, fig_dir / "calibration_design.png"), root,
             "Robustness of each box's best grip by Q_C against the reference level.")
+
+
+def design_verdict_text(check: dict[str, Any], reference: float) -> str:
+    """The design check in words: the measured levels, the friction ceiling and, when no faithful
+    grip can pass, the physical reason."""
+    rows = pd.DataFrame(check.get("per_object", []))
+    held = ", ".join(f"{r.object_id} {r.robustness:.1f} g (ceiling {r.friction_ceiling_g:.1f} g)"
+                     for r in rows.itertuples())
+    text = (f"Measured at the design friction: {held}, against the {reference:g} g reference "
+            f"({_verdict(check['passed'])}).")
+    if check.get("well_posed") is False:
+        text += (f" The check is {check['reason']}. No grip of a faithful hand can meet it, so "
+                 "its failure measures the reference level, not the labels: the reference is "
+                 "set for the drawn friction (the 30–70 % success target), and the physics is "
+                 "not tuned to pass. What the check can show is that the best grip reaches its "
+                 "box's ceiling.")
+    return text
 
 
 def _cone(report: Report, check: dict[str, Any], fig_dir: Path, root: Path, level: int) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated
 
@@ -25,6 +26,15 @@ def calibrate(
     ] = None,
     workers: Annotated[int, typer.Option(min=1, help="worker processes (one object each)")] = 2,
     quick: Annotated[bool, typer.Option("--quick", help="a few dozen trials, for tests")] = False,
+    cone_objects: Annotated[
+        int | None,
+        typer.Option(min=2, help="objects paired in the cone check (default: the size "
+                                 "chosen by measurement, in calibration.json's settings)"),
+    ] = None,
+    cone_trials: Annotated[
+        int | None,
+        typer.Option(min=1, help="trials per grip in the cone check (default: as chosen)"),
+    ] = None,
 ) -> None:
     """Write OUT/calibration.md (and .html, .json, figures): each check measured, pass or fail.
 
@@ -46,11 +56,15 @@ def calibrate(
             dataset = load(data)
         settings = (CalibrationSettings.quick(workers) if quick
                     else CalibrationSettings(workers=workers))  # fmt: skip
+        sizes = {k: v for k, v in (("cone_objects", cone_objects), ("cone_trials", cone_trials))
+                 if v is not None}  # fmt: skip
+        settings = replace(settings, **sizes)
         result, trials = run(load_config(config), settings, dataset, log=typer.echo)
         md = write_calibration(out, result, trials)
         for name, check in result["checks"].items():
             verdict = {True: "pass", False: "FAIL", None: "-"}[check["passed"]]
-            typer.echo(f"{name:12s} {verdict:5s} {check['target']}")
+            typer.echo(f"{name:12s} {verdict:5s} {check['target']}"
+                       + (f" ({check['reason']})" if check.get("reason") else ""))
         typer.echo(f"wrote {md}")
 
 

@@ -8,6 +8,7 @@ early (an interrupt, an error) stops its processes before the exception goes on.
 from __future__ import annotations
 
 import multiprocessing
+import os
 import signal
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
@@ -26,10 +27,12 @@ _PRELOAD = (
 #: Ray re-runs a task whose worker process died this many times before giving up.
 RAY_TASK_RETRIES = 2
 _RAY_POLL_SECONDS = 0.5
+#: The environment variable naming the Ray cluster to join (Ray's own convention).
+RAY_ADDRESS_VARIABLE = "RAY_ADDRESS"
 
 Results = Iterator[tuple[ObjectTask, pd.DataFrame]]
 
-__all__ = ["BACKENDS", "WorkerLost", "check_backend", "run_jobs"]
+__all__ = ["BACKENDS", "WorkerLost", "check_backend", "ray_address", "run_jobs"]
 
 
 def check_backend(backend: str, workers: int) -> None:
@@ -49,7 +52,8 @@ def run_jobs(
     ``backend="process"`` with one worker runs in this process; with more it uses a
     :class:`~grip_env.dataset.pool.WorkerPool` of 'forkserver' (or 'spawn') processes, each
     with its own PyBullet client. ``backend="ray"`` submits Ray tasks to the cluster at
-    ``address`` (a local Ray instance with ``workers`` CPUs when None); Ray re-runs a task
+    ``address`` (else ``$RAY_ADDRESS``; a local Ray instance with ``workers`` CPUs when neither
+    is set) and keeps ``2 x max(workers, the cluster's CPUs)`` in flight; Ray re-runs a task
     whose worker died up to :data:`RAY_TASK_RETRIES` times.
 
     Raises:
@@ -135,8 +139,16 @@ def _import_ray():  # type: ignore[no-untyped-def]
     return ray
 
 
+def ray_address(address: str | None) -> str | None:
+    """The cluster to join: ``address``, else the ``RAY_ADDRESS`` environment variable, else
+    None (a new local instance). ``grip-env study`` and ``calibrate`` reach a cluster this way."""
+    return address or os.environ.get(RAY_ADDRESS_VARIABLE) or None
+
+
 def _start_ray(ray, workers: int, address: str | None) -> None:  # type: ignore[no-untyped-def]
     options = {"include_dashboard": False, "log_to_driver": False, "configure_logging": False}
+    # ray.init(num_cpus=...) refuses to join the cluster RAY_ADDRESS names: join it explicitly
+    address = ray_address(address)
     try:
         with _signal_handlers_kept():
             if address is None:
