@@ -134,8 +134,15 @@ def stage_record(
 ) -> dict[str, Any]:
     """What stage ``name`` reads (its config fields, the dataset, the version) and its key."""
     inputs = stage_inputs(name, config)
-    if name == "calibration":
-        inputs["quick"] = quick  # the calibration has its own quick settings
+    if name == "calibration":  # its sizes are its own (quick or not), not the config's
+        from dataclasses import asdict
+
+        from grip_env.calibration import CalibrationSettings
+
+        inputs["quick"] = quick
+        inputs["settings"] = asdict(CalibrationSettings.quick(1) if quick
+                                    else CalibrationSettings(workers=1))  # fmt: skip
+        inputs["settings"].pop("workers")  # the outcome does not depend on it
     return {"stage": name, "key": _hash(inputs, dataset_sha256, package_version()),
             "package_version": package_version(), "dataset_sha256": dataset_sha256,
             "inputs": inputs}  # fmt: skip

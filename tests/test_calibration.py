@@ -256,3 +256,16 @@ def test_calibration_runs_on_the_configured_backend(monkeypatch):
     config = Config().override(dataset={"backend": "ray"})
     run_calibration_trials(config, CalibrationSettings.quick(workers=2))
     assert seen["backend"] == "ray" and seen["workers"] == 2 and seen["tasks"] >= len(BOXES_MM)
+
+
+def test_the_study_recomputes_its_calibration_when_the_calibration_sizes_change(monkeypatch):
+    import functools
+
+    from classifiers.study import stage_key
+
+    before = stage_key("calibration", Config(), "0" * 64)
+    assert stage_key("calibration", Config(), "0" * 64) == before
+    assert stage_key("calibration", Config(), "0" * 64, quick=True) != before
+    monkeypatch.setattr("grip_env.calibration.CalibrationSettings",
+                        functools.partial(CalibrationSettings, cone_objects=50))
+    assert stage_key("calibration", Config(), "0" * 64) != before
