@@ -225,10 +225,20 @@ def interval(
     mean = float(values.mean())
     if n == 1:
         return {"mean": mean, "ci": [mean, mean], "n": 1}
-    spread = np.sqrt((1.0 / n + 1.0 / (folds - 1)) * values.var(ddof=1))
-    half = float(stats.t.ppf(0.975, n - 1) * spread)
+    half = half_width(values, folds)
     low, high = max(mean - half, bounds[0]), min(mean + half, bounds[1])
     return {"mean": mean, "ci": [float(low), float(high)], "n": int(n)}
+
+
+def half_width(values: np.ndarray, folds: int) -> float:
+    """Half-width of the Nadeau–Bengio corrected 95% interval of :func:`interval`, unclipped
+    (NaNs dropped; NaN with fewer than two values)."""
+    values = values[np.isfinite(values)]
+    n = values.size
+    if n < 2:
+        return float("nan")
+    spread = np.sqrt((1.0 / n + 1.0 / (folds - 1)) * values.var(ddof=1))
+    return float(stats.t.ppf(0.975, n - 1) * spread)
 
 
 def cv_description(

@@ -15,6 +15,7 @@ import yaml
 
 from classifiers.report import analysis, figures
 from classifiers.report.document import Report, frame_of_intervals
+from classifiers.report.power import power_section
 from grip_env.config import Config
 from grip_env.objects import PlanarObject, load_object_set, procedural_objects
 
@@ -42,6 +43,7 @@ def write_report(out: Path, config: Config, table: pd.DataFrame) -> Path:
     _regression_section(report, out)
     _ablation_section(report, out)
     _selector_section(report, out)
+    power_section(report, out)
     _provenance_section(report, out, config)
     md, _ = report.write(out)
     return md

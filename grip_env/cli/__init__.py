@@ -53,7 +53,7 @@ def _root(
 
 _COMMAND_MODULES = (
     "show", "study", "generate", "validate", "train", "ablate", "select", "calibrate", "predict",
-    "benchmark",
+    "benchmark", "power",
 )
 
 

@@ -1,0 +1,365 @@
+"""Statistical power of the study: how its three intervals narrow with objects and with trials.
+
+A larger dataset is subsampled (:func:`subsample`): whole objects drawn without replacement, at
+most ``grips`` grips kept per object, and ``trials`` of each grip's recorded trials kept. The
+dataset stores per grip only the number of trials and of successes, and the kept trials are a
+uniformly random subset of them, so the kept successes are drawn exactly from the hypergeometric
+law; ``success_rate`` and ``success`` are recomputed from them. The graded outcome
+(``robustness_mean``/``std``) cannot be recomputed from the counts and is dropped when trials are
+subsampled.
+
+On each subsample three half-widths are measured (:data:`QUANTITIES`), each exactly as the study
+computes its interval:
+
+- ``roc_auc``: the model's (default ``svm``) ROC-AUC, corrected resampled t over folds x repeats
+  (:func:`classifiers.evaluation.half_width`);
+- ``hand_difference``: the ablation's paired ROC-AUC difference ``without_hand − all_twelve``,
+  same folds and seeds, same interval;
+- ``rl_minus_best_qc``: first-pick success of the RL selector minus the best-Q_C pick on the
+  held-out objects, per object, 95% percentile bootstrap over those objects (the selector's own
+  resampling). The policy is retrained per subsample (about half a minute each), so it is measured
+  at a few sizes only.
+
+The fitted law (:func:`fit_law`) is ``h^2 = (a + b / t) / n`` for ``n`` objects and ``t`` trials
+per grip: between-object spread ``a`` plus label noise ``b / t``, both shrinking as ``1/sqrt(n)``.
+At fixed trials it is the ``1/sqrt(n)`` law; :func:`objects_needed` inverts it for a target.
+Every subsample is drawn from ``numpy.random.default_rng([seed, objects, trials, grips,
+replicate])``, so a curve is reproducible point by point.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import nnls
+
+from grip_env.columns import FEATURES, ROBUSTNESS
+from grip_env.config import Config
+from grip_env.dataset.jobs import SUCCESS_THRESHOLD
+
+#: The three questions' half-width targets (issue 13).
+TARGETS: dict[str, float] = {"roc_auc": 0.05, "hand_difference": 0.02, "rl_minus_best_qc": 0.08}
+QUANTITIES: tuple[str, ...] = tuple(TARGETS)
+CLASSIFIER_QUANTITIES: tuple[str, ...] = ("roc_auc", "hand_difference")
+WITHOUT_HAND: tuple[str, ...] = ("S1", "S2", "S3", "S4", "G1", "G2")
+GROUP = "object_id"
+
+
+# ------------------------------------------------------------------------------- subsampling
+def subsample(
+    table: pd.DataFrame, objects: int | None = None, trials: int | None = None,
+    grips: int | None = None, seed: int = 0, replicate: int = 0,
+) -> pd.DataFrame:
+    """A seeded subsample of a grip table: ``objects`` whole objects, at most ``grips`` grips per
+    object, ``trials`` trials per grip (None keeps all). Row order and index follow ``table``.
+
+    Raises:
+        ValueError: a size below 1, more objects than the table holds, more trials than its
+            grips recorded, or a table without the outcome columns.
+    """
+    for name, value in (("objects", objects), ("trials", trials), ("grips", grips)):
+        if value is not None and (int(value) != value or value < 1):
+            raise ValueError(f"{name} must be a positive integer or None, got {value!r}")
+    missing = [c for c in (GROUP, "trials", "successes") if c not in table.columns]
+    if missing:
+        raise ValueError(f"the table lacks the columns {missing} (a generated dataset has them)")
+    rng = np.random.default_rng([seed, objects or 0, trials or 0, grips or 0, replicate])
+    ids = np.sort(table[GROUP].astype(str).unique())
+    if objects is not None and objects > ids.size:
+        raise ValueError(f"objects={objects} but the table holds {ids.size} objects")
+    kept = ids if objects is None else np.sort(rng.choice(ids, size=objects, replace=False))
+    rows = table[table[GROUP].astype(str).isin(kept).to_numpy()]
+    if grips is not None:
+        rows = _keep_grips(rows, grips, rng)
+    if trials is not None:
+        rows = _keep_trials(rows, trials, rng)
+    return rows
+
+
+def _keep_grips(rows: pd.DataFrame, grips: int, rng: np.random.Generator) -> pd.DataFrame:
+    """At most ``grips`` uniformly drawn rows of each object (vectorised: rank of a random key)."""
+    key = pd.Series(rng.random(len(rows)), index=rows.index)
+    rank = key.groupby(rows[GROUP].to_numpy()).rank(method="first")
+    return rows[(rank <= grips).to_numpy()]
+
+
+def _keep_trials(rows: pd.DataFrame, trials: int, rng: np.random.Generator) -> pd.DataFrame:
+    """``trials`` of each grip's trials: successes drawn from the hypergeometric law."""
+    recorded = rows["trials"].to_numpy(int)
+    if trials > recorded.min(initial=trials):
+        raise ValueError(f"trials={trials} but some grips recorded only {recorded.min()} trials")
+    good = rows["successes"].to_numpy(int)
+    kept = rng.hypergeometric(good, recorded - good, np.full(len(rows), trials))
+    out = rows.drop(columns=[c for c in ROBUSTNESS if c in rows.columns])
+    out = out.assign(trials=trials, successes=kept, success_rate=kept / trials)
+    return out.assign(success=out["success_rate"].to_numpy() >= SUCCESS_THRESHOLD)
+
+
+# ------------------------------------------------------------------------------- measurement
+def classifier_half_widths(
+    table: pd.DataFrame, config: Config, model: str = "svm"
+) -> dict[str, tuple[float, float]]:
+    """``{quantity: (estimate, half-width)}`` of ``roc_auc`` and ``hand_difference``."""
+    from classifiers.evaluation import cross_validate_models, half_width
+
+    learning = config.learning
+    full = cross_validate_models(table, [model], FEATURES, learning)
+    without = cross_validate_models(table, [model], WITHOUT_HAND, learning)
+    paired = without.merge(full, on=["repeat", "fold"], suffixes=("", "_ref"), validate="1:1")
+    difference = (paired["roc_auc"] - paired["roc_auc_ref"]).to_numpy(float)
+    auc = full["roc_auc"].to_numpy(float)
+    return {
+        "roc_auc": (float(np.nanmean(auc)), half_width(auc, learning.folds)),
+        "hand_difference": (float(np.nanmean(difference)), half_width(difference, learning.folds)),
+    }
+
+
+def selector_half_width(table: pd.DataFrame, config: Config) -> tuple[float, float]:
+    """(mean, half-width) of RL minus best-Q_C first-pick success on the held-out objects, the
+    policy trained afresh on ``table``'s training objects (files go to a temporary folder)."""
+    from classifiers.selector.evaluation import evaluate_selectors
+    from classifiers.selector.training import train_selector
+
+    with tempfile.TemporaryDirectory(prefix="grip-power-") as folder:
+        trained = train_selector(table, config, folder, progress=False)
+        report = evaluate_selectors(trained.model, table, config, classifiers=())
+    policies = report["policies"]
+    return paired_bootstrap(np.asarray(policies["rl"]["per_object"]),
+                            np.asarray(policies["best_qc"]["per_object"]), config.learning.seed)
+
+
+def paired_bootstrap(
+    a: np.ndarray, b: np.ndarray, seed: int, n_boot: int = 2000
+) -> tuple[float, float]:
+    """(mean, half-width) of the 95% percentile bootstrap of ``mean(a - b)`` over objects, with
+    the resamples :func:`classifiers.selector.evaluation.evaluate_selectors` draws."""
+    difference = np.asarray(a, float) - np.asarray(b, float)
+    if difference.size == 0:
+        raise ValueError("paired_bootstrap needs at least one object")
+    resamples = np.random.default_rng(seed).integers(difference.size,
+                                                     size=(n_boot, difference.size))
+    low, high = np.percentile(difference[resamples].mean(axis=1), [2.5, 97.5])
+    return float(difference.mean()), float((high - low) / 2.0)
+
+
+Measure = Callable[[pd.DataFrame], dict[str, tuple[float, float]]]
+
+
+def power_curve(
+    table: pd.DataFrame, config: Config, objects: Sequence[int], trials: Sequence[int],
+    replicates: int = 2, seed: int = 0, model: str = "svm", selector_objects: Sequence[int] = (),
+    selector_trials: Sequence[int] = (), log: Callable[[str], None] = lambda _: None,
+) -> pd.DataFrame:
+    """Half-widths along two axes of the table: ``objects`` (all trials) and ``trials`` (all
+    objects). The classifier quantities are measured on ``replicates`` subsamples per point
+    (one where nothing is drawn: all objects and all trials); the selector, costlier, on one per
+    size in ``selector_objects`` / ``selector_trials``.
+
+    Returns one row per measurement: ``quantity, axis, objects, trials, replicate, estimate,
+    half_width``.
+    """
+    n_objects = int(table[GROUP].nunique())
+    full_trials = int(table["trials"].min())
+    points = [("objects", n, None) for n in objects] + [("trials", None, t) for t in trials]
+    classify: Measure = lambda part: classifier_half_widths(part, config, model)  # noqa: E731
+    select: Measure = lambda part: {"rl_minus_best_qc": selector_half_width(part, config)}  # noqa: E731
+    rows = _measure(table, points, replicates, seed, classify, n_objects, full_trials, log)
+    chosen = [("objects", n, None) for n in selector_objects]
+    chosen += [("trials", None, t) for t in selector_trials]
+    rows += _measure(table, chosen, 1, seed, select, n_objects, full_trials, log)
+    return pd.DataFrame.from_records(rows, columns=[
+        "quantity", "axis", "objects", "trials", "replicate", "estimate", "half_width"])
+
+
+def _measure(
+    table: pd.DataFrame, points: list[tuple[str, int | None, int | None]], replicates: int,
+    seed: int, measure: Measure, n_objects: int, full_trials: int, log: Callable[[str], None],
+) -> list[dict[str, Any]]:
+    rows = []
+    for axis, n, t in points:
+        n_use = None if n is None or n >= n_objects else n
+        t_use = None if t is None or t >= full_trials else t
+        drawn = n_use is not None or t_use is not None
+        for replicate in range(replicates if drawn else 1):
+            part = subsample(table, n_use, t_use, seed=seed, replicate=replicate)
+            for quantity, (estimate, half) in measure(part).items():
+                rows.append({"quantity": quantity, "axis": axis,
+                             "objects": int(part[GROUP].nunique()),
+                             "trials": int(part["trials"].min()), "replicate": replicate,
+                             "estimate": estimate, "half_width": half})  # fmt: skip
+            log(f"[power] {axis}: {int(part[GROUP].nunique())} objects, "
+                f"{int(part['trials'].min())} trials, replicate {replicate}")
+    return rows
+
+
+# ------------------------------------------------------------------------------------- law
+@dataclass(frozen=True)
+class Law:
+    """``h^2 = (a + b / t) / n``: half-width ``h`` at ``n`` objects and ``t`` trials per grip."""
+
+    a: float
+    b: float
+    points: int
+
+    def half_width(self, objects: float, trials: float = math.inf) -> float:
+        """The law's half-width at ``objects`` objects and ``trials`` trials per grip."""
+        return math.sqrt((self.a + self.b / trials) / objects)
+
+    def as_dict(self) -> dict[str, float]:
+        return asdict(self)
+
+
+def fit_law(objects: Sequence[float], trials: Sequence[float], half: Sequence[float]) -> Law:
+    """Least-squares fit of :class:`Law` on relative error (``h^2`` residuals divided by
+    ``h^2``), with ``a, b >= 0``. With a single trials value ``b`` is not identified and is 0
+    (the ``1/sqrt(n)`` law, ``a`` carrying the label noise at that trial count).
+
+    Raises:
+        ValueError: no finite positive half-width, or inputs of unequal length or non-positive.
+    """
+    n, t, h = (np.asarray(v, dtype=float) for v in (objects, trials, half))
+    if not n.shape == t.shape == h.shape:
+        raise ValueError(f"objects, trials, half have lengths {n.size}, {t.size}, {h.size}")
+    keep = np.isfinite(h) & (h > 0)
+    n, t, h = n[keep], t[keep], h[keep]
+    if h.size == 0:
+        raise ValueError("fit_law needs at least one finite positive half-width")
+    if (n <= 0).any() or (t <= 0).any():
+        raise ValueError("objects and trials must be positive")
+    design = np.column_stack([1.0 / n, 1.0 / (n * t)]) / (h**2)[:, None]
+    if np.unique(t).size == 1:
+        (a,), _ = nnls(design[:, :1], np.ones(h.size))
+        return Law(a=float(a), b=0.0, points=int(h.size))
+    (a, b), _ = nnls(design, np.ones(h.size))
+    return Law(a=float(a), b=float(b), points=int(h.size))
+
+
+def exponent(objects: Sequence[float], half: Sequence[float]) -> float:
+    """Fitted slope of ``log h`` against ``log n`` (the ``1/sqrt(n)`` law predicts −0.5)."""
+    n, h = np.asarray(objects, float), np.asarray(half, float)
+    keep = np.isfinite(h) & (h > 0)
+    if np.unique(n[keep]).size < 2:
+        return float("nan")
+    return float(np.polyfit(np.log(n[keep]), np.log(h[keep]), 1)[0])
+
+
+def objects_needed(law: Law, target: float, trials: float = math.inf) -> int:
+    """Fewest objects whose half-width :class:`Law` puts at or below ``target``."""
+    if not target > 0:
+        raise ValueError(f"target must be positive, got {target!r}")
+    return max(1, math.ceil((law.a + law.b / trials) / target**2 - 1e-9))
+
+
+def fit_curve(curve: pd.DataFrame) -> dict[str, Law]:
+    """One :class:`Law` per quantity from :func:`power_curve`'s rows (mean over replicates)."""
+    means = curve.groupby(["quantity", "objects", "trials"], as_index=False)["half_width"].mean()
+    return {str(q): fit_law(g["objects"], g["trials"], g["half_width"])
+            for q, g in means.groupby("quantity", sort=False)}  # fmt: skip
+
+
+def pool(tables: Sequence[pd.DataFrame], trials: int | None = None, seed: int = 0) -> pd.DataFrame:
+    """Several datasets of the same simulator as one table: every grip cut to ``trials`` trials
+    (default: the fewest any grip recorded) by :func:`subsample`, and an object (by
+    ``object_id``, e.g. a named shape in two runs) kept only from the first table holding it.
+
+    Raises:
+        ValueError: no table, or ``trials`` above what a table recorded.
+    """
+    if not tables:
+        raise ValueError("pool needs at least one table")
+    common = trials or min(int(t["trials"].min()) for t in tables)
+    parts, seen = [], set()
+    for index, table in enumerate(tables):
+        ids = table[GROUP].astype(str)
+        fresh = table[~ids.isin(seen).to_numpy()]
+        seen.update(ids)
+        cut = None if int(fresh["trials"].min()) == common else common
+        parts.append(subsample(fresh, trials=cut, seed=seed, replicate=index))
+    if len(parts) > 1:  # robustness may be over other trials in each table: not comparable
+        parts = [p.drop(columns=[c for c in ROBUSTNESS if c in p.columns]) for p in parts]
+    return pd.concat(parts, ignore_index=True)
+
+
+#: Trials per grip the projections are given at (``inf``: noiseless labels).
+PROJECTED_TRIALS: tuple[float, ...] = (1, 2, 4, 8, math.inf)
+
+
+def summarise_curve(
+    curve: pd.DataFrame, targets: dict[str, float] | None = None,
+) -> dict[str, Any]:
+    """``power.json``'s content: the rows, each quantity's law, its fitted exponent along the
+    objects axis, and the objects needed for its target at :data:`PROJECTED_TRIALS`."""
+    targets = dict(targets or TARGETS)
+    laws = fit_curve(curve)
+    summary: dict[str, Any] = {"targets": targets, "laws": {}, "projection": {},
+                               "curve": curve.to_dict(orient="records")}  # fmt: skip
+    for quantity, law in laws.items():
+        along = curve[(curve["quantity"] == quantity) & (curve["axis"] == "objects")]
+        means = along.groupby("objects")["half_width"].mean()
+        summary["laws"][quantity] = {**law.as_dict(), "exponent": exponent(means.index, means)}
+        if quantity in targets:
+            summary["projection"][quantity] = {
+                _trials_key(t): objects_needed(law, targets[quantity], t) for t in PROJECTED_TRIALS
+            }
+    return summary
+
+
+def _trials_key(trials: float) -> str:
+    return "inf" if math.isinf(trials) else str(int(trials))
+
+
+def default_objects(n_objects: int) -> tuple[int, ...]:
+    """Sizes of the objects axis: a quarter, half, three quarters and all of ``n_objects``
+    (at least the 5 objects of 5 folds)."""
+    return tuple(sorted({max(5, round(f * n_objects)) for f in (0.25, 0.5, 0.75, 1.0)}))
+
+
+def default_trials(max_trials: int) -> tuple[int, ...]:
+    """Sizes of the trials axis: 1, 2, 4, ... up to and including ``max_trials``."""
+    sizes = [t for t in (2**k for k in range(8)) if t < max_trials]
+    return (*sizes, max_trials)
+
+
+def run_power(
+    table: pd.DataFrame, out_dir: Any, config: Config, objects: Sequence[int] | None = None,
+    trials: Sequence[int] | None = None, replicates: int = 2, seed: int = 0, model: str = "svm",
+    selector_objects: Sequence[int] = (), selector_trials: Sequence[int] = (),
+    source: dict[str, Any] | None = None, log: Callable[[str], None] = lambda _: None,
+) -> dict[str, Any]:
+    """Measure the curve (grids default to :func:`default_objects` / :func:`default_trials`),
+    fit it, write ``power.json`` and ``power.png`` to ``out_dir``; returns the summary."""
+    import json
+    from pathlib import Path
+
+    from classifiers.report.power import FIGURE_FILE, POWER_FILE, plot_power
+
+    n, t = int(table[GROUP].nunique()), int(table["trials"].min())
+    for name, sizes, most in (("objects", objects, n), ("trials", trials, t),
+                              ("selector objects", selector_objects, n),
+                              ("selector trials", selector_trials, t)):  # fmt: skip
+        bad = [s for s in sizes or () if int(s) != s or not 1 <= s <= most]
+        if bad:
+            raise ValueError(f"{name} size {bad[0]!r} is outside 1..{most} (the dataset's)")
+    if int(replicates) != replicates or replicates < 1:
+        raise ValueError(f"replicates must be a positive integer, got {replicates!r}")
+    curve = power_curve(table, config, objects or default_objects(n), trials or default_trials(t),
+                        replicates, seed, model, selector_objects, selector_trials, log)
+    summary = summarise_curve(curve)
+    summary["source"] = {"objects": n, "trials per grip": t, "grips": len(table), "model": model,
+                         "replicates": replicates, "seed": seed, **(source or {})}  # fmt: skip
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / POWER_FILE).write_text(json.dumps(summary, indent=2, default=_plain))
+    plot_power(summary, out / FIGURE_FILE)
+    return summary
+
+
+def _plain(value: Any) -> Any:
+    """JSON for numpy scalars."""
+    return value.item() if hasattr(value, "item") else str(value)

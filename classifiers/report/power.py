@@ -1,0 +1,180 @@
+"""The study report's power section: how wide the three intervals are, and how many objects
+(and trials per grip) it takes to narrow each one to its target.
+
+Two sources: the study's own intervals (always; one size, projected by the ``1/sqrt(n)`` law)
+and, when ``grip-env power`` wrote ``<study>/power/power.json``, a measured power curve (its
+figure, the half-widths per size and the fitted laws' projections).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+import numpy as np
+import pandas as pd
+
+from classifiers.report.document import Report
+
+LABELS = {"roc_auc": "best model's ROC-AUC", "hand_difference": "hand features (paired ΔAUC)",
+          "rl_minus_best_qc": "RL − best Q_C (held out)"}  # fmt: skip
+POWER_FILE = "power.json"
+FIGURE_FILE = "power.png"
+
+
+def study_half_widths(out: Path) -> dict[str, dict[str, float]]:
+    """The three half-widths of a study folder's results: ``{quantity: {"objects", "trials",
+    "estimate", "half_width"}}`` (a quantity is missing when its stage did not run)."""
+    from classifiers.power import paired_bootstrap
+
+    found: dict[str, dict[str, float]] = {}
+    metrics, ablation = _json(out / "classifiers" / "metrics.json"), _json(
+        out / "ablation" / "ablation.json")
+    selector = _json(out / "selector" / "selector.json")
+    if metrics:
+        scores = {k: v["roc_auc"] for k, v in metrics["models"].items() if "roc_auc" in v}
+        best = max(scores, key=lambda k: scores[k]["mean"] or -1.0)
+        found["roc_auc"] = _from_interval(scores[best], metrics["cv"]["n_objects"])
+    if ablation:
+        block = ablation["feature_sets"].get("without_hand", {}).get("paired_difference", {})
+        value = block.get(ablation["model"], {}).get("roc_auc")
+        if value and value["mean"] is not None:
+            found["hand_difference"] = _from_interval(value, ablation["cv"]["n_objects"])
+    if selector and {"rl", "best_qc"} <= set(selector["policies"]):
+        policies = selector["policies"]
+        mean, half = paired_bootstrap(np.asarray(policies["rl"]["per_object"]),
+                                      np.asarray(policies["best_qc"]["per_object"]),
+                                      selector["split"]["seed"])  # fmt: skip
+        n = len(selector["split"]["train"]) + len(selector["split"]["test"])
+        found["rl_minus_best_qc"] = {"objects": n, "estimate": mean, "half_width": half}
+    return found
+
+
+def _from_interval(value: dict[str, Any], objects: int) -> dict[str, float]:
+    """Half of an interval's width (intervals of the study are symmetric unless clipped)."""
+    low, high = value["ci"]
+    return {"objects": objects, "estimate": value["mean"], "half_width": (high - low) / 2.0}
+
+
+def plot_power(summary: dict[str, Any], path: Path) -> Path:
+    """Half-width against objects (left, log-log) and against trials per grip (right), with the
+    fitted laws (lines) and the targets (dotted)."""
+    from classifiers.power import Law
+
+    curve = pd.DataFrame(summary["curve"])
+    figure, (left, right) = plt.subplots(1, 2, figsize=(10, 4.2))
+    for k, quantity in enumerate(q for q in LABELS if q in set(curve["quantity"])):
+        color = f"C{k}"
+        rows = curve[curve["quantity"] == quantity]
+        law = Law(**{f: summary["laws"][quantity][f] for f in ("a", "b", "points")})
+        target = summary["targets"].get(quantity)
+        _axis(left, rows[rows["axis"] == "objects"], "objects", color, LABELS[quantity], law)
+        _axis(right, rows[rows["axis"] == "trials"], "trials", color, LABELS[quantity], law)
+        if target:
+            for axes in (left, right):
+                axes.axhline(target, color=color, linestyle=":", linewidth=1)
+    left.set(xscale="log", yscale="log", xlabel="objects", ylabel="95% interval half-width")
+    right.set(yscale="log", xlabel="trials per grip", ylabel="95% interval half-width")
+    left.set_title("vs objects (all trials); line: fitted law", fontsize=9)
+    right.set_title("vs trials per grip (all objects); dotted: targets", fontsize=9)
+    left.legend(fontsize=7)
+    figure.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    figure.savefig(path, dpi=110)
+    plt.close(figure)
+    return path
+
+
+def _axis(axes: Any, rows: pd.DataFrame, axis: str, color: str, label: str, law: Any) -> None:
+    if rows.empty:
+        return
+    other = "trials" if axis == "objects" else "objects"
+    axes.scatter(rows[axis], rows["half_width"], color=color, s=12, alpha=0.6)
+    means = rows.groupby(axis)["half_width"].mean()
+    axes.plot(means.index, means.to_numpy(), "o", color=color, markersize=5, label=label)
+    at = float(rows[other].median())
+    grid = np.geomspace(rows[axis].min(), rows[axis].max() * (3 if axis == "objects" else 1), 50)
+    fitted = [law.half_width(x, at) if axis == "objects" else law.half_width(at, x) for x in grid]
+    axes.plot(grid, fitted, color=color, linewidth=1)
+
+
+def power_section(report: Report, out: Path) -> None:
+    """The study report's "Statistical power" section (see the module docstring)."""
+    from classifiers.power import TARGETS
+
+    report.heading("Statistical power: how many objects and trials")
+    measured = study_half_widths(out)
+    trials = _study_trials(out)
+    rows = {}
+    for quantity, value in measured.items():
+        target, half, n = TARGETS[quantity], value["half_width"], value["objects"]
+        rows[LABELS[quantity]] = {
+            "estimate": value["estimate"], "half-width": half, "objects": n, "target": target,
+            "met": "yes" if half <= target else "no",
+            "objects needed (1/sqrt(n))": math.ceil(n * (half / target) ** 2),
+        }
+    if rows:
+        report.table(pd.DataFrame(rows).T.rename_axis("question"), float_format="{:.3f}",
+                     caption=f"This study's 95% interval half-widths at {trials} trials per grip "
+                     "against the targets; the objects needed scale this study's size by "
+                     "(half-width / target)^2, the 1/sqrt(n) law from a single size.")
+    summary = _json(out / "power" / POWER_FILE)
+    if summary is None:
+        report.text("No measured power curve: `grip-env power --data DIR --out "
+                    f"{out}/power` subsamples a dataset by objects and trials, and the next "
+                    "`grip-env study` into this folder (every stage reused) shows it here.")
+        return
+    _curve_tables(report, summary)
+    if (out / "power" / FIGURE_FILE).exists():
+        report.figure(f"power/{FIGURE_FILE}", "Interval half-width of each question against "
+                      "the number of objects (left) and of trials per grip (right): dots are "
+                      "seeded subsamples, lines the fitted law h² = (a + b/t)/n, dotted the "
+                      "targets.")
+
+
+def _curve_tables(report: Report, summary: dict[str, Any]) -> None:
+    curve = pd.DataFrame(summary["curve"])
+    for axis in ("objects", "trials"):
+        rows = curve[curve["axis"] == axis]
+        if rows.empty:
+            continue
+        table = rows.groupby(["quantity", axis])["half_width"].mean().unstack(axis)
+        table.index = [LABELS.get(q, q) for q in table.index]
+        report.table(table.rename_axis("half-width"), float_format="{:.3f}",
+                     caption=f"Measured half-width against {axis} (mean over seeded subsamples; "
+                     f"{_held(rows, axis)}).")
+    projection = {
+        LABELS.get(q, q): {f"t = {t}": n for t, n in found.items()}
+        | {"target": summary["targets"][q],
+           "exponent": summary["laws"][q]["exponent"]}
+        for q, found in summary["projection"].items()
+    }
+    report.table(pd.DataFrame(projection).T.rename_axis("objects needed"), float_format="{:.2f}",
+                 caption="Objects needed for each target at t trials per grip, from the fitted "
+                 "law (t = inf: noiseless labels, the floor set by the objects alone); exponent: "
+                 "fitted slope of log half-width against log objects (1/sqrt(n): -0.5).")
+    source = summary.get("source", {})
+    if source:
+        report.text("Power curve measured on " + "; ".join(f"{k}: {v}" for k, v in source.items())
+                    + ".")
+
+
+def _held(rows: pd.DataFrame, axis: str) -> str:
+    other = "trials" if axis == "objects" else "objects"
+    values = sorted(set(rows[other].astype(int)))
+    return f"{other} {values[0]}" if len(values) == 1 else f"{other} {values[0]}–{values[-1]}"
+
+
+def _study_trials(out: Path) -> str:
+    manifest = _json(out / "dataset" / "manifest.json") or {}
+    return str(manifest.get("trials", "?"))
+
+
+def _json(path: Path) -> dict[str, Any] | None:
+    return json.loads(path.read_text()) if path.exists() else None
