@@ -65,10 +65,22 @@ class ObjectsConfig(_Section):
     density_kg_m3: float = Field(
         500.0, ge=10.0, le=20_000.0, description="density for W = 1 (household object)"
     )
+    mesh_count: int = Field(
+        0, ge=0, le=10_000,
+        description="extra mesh objects: pybullet_data household models, then random_urdfs",
+    )
+    mesh_size_mm: tuple[ObjectSize, ObjectSize] = Field(
+        (60.0, 130.0), description="range of a mesh's longest bounding-box side (mm)"
+    )
+    execute_on: Literal["extrusion", "mesh"] = Field(
+        "extrusion", description="body a mesh object's trials run on: its extruded silhouette "
+        "or the mesh itself",
+    )
 
     @model_validator(mode="after")
     def _sizes_ordered(self) -> ObjectsConfig:
         _ordered("procedural_size_mm", self.procedural_size_mm)
+        _ordered("mesh_size_mm", self.mesh_size_mm)
         return self
 
 

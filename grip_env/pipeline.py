@@ -22,6 +22,7 @@ from grip_env.features import OUTPUT_NAMES, features_from_arrays
 from grip_env.finger import executable
 from grip_env.grasps import synthesize_grasps
 from grip_env.objects import PlanarObject
+from grip_env.objects.meshes import execution_height_mm
 from grip_env.params import GraspParams
 from grip_env.perception.regions import Regions
 
@@ -33,6 +34,7 @@ def candidates(
     params: GraspParams | None = None,
     config: Config | None = None,
     regions: Regions | None = None,
+    height_mm: float | None = None,
 ) -> pd.DataFrame:
     """Every feasible Barrett grip of ``obj`` with its descriptors and twelve features.
 
@@ -44,6 +46,8 @@ def candidates(
             equal ``params`` when both are given.
         regions: grasping regions to plan on; found from ``obj`` with ``config.perception`` when
             None.
+        height_mm: height of the body the grips are executed on (the reach test); when None,
+            ``obj``'s (``grip_env.objects.meshes.execution_height_mm``).
 
     Returns:
         A DataFrame with exactly ``CANDIDATE_COLUMNS``, one row per configuration, sorted by Q_C
@@ -59,7 +63,10 @@ def candidates(
 
         regions = find_regions(obj, config.perception, params)
     grasps = synthesize_grasps(regions, obj, params, config.synthesis)
-    confs = configurations(grasps, obj, params, config.synthesis, _executable_test(config))
+    if height_mm is None:
+        height_mm = execution_height_mm(obj, config.objects)
+    confs = configurations(grasps, obj, params, config.synthesis,
+                           _executable_test(config, height_mm))
     columns = descriptor_columns(obj, confs)
     if len(columns["hand_x"]):
         features = features_from_arrays(columns, params)
@@ -70,18 +77,20 @@ def candidates(
     return pd.DataFrame({name: columns[name][order] for name in CANDIDATE_COLUMNS})
 
 
-def _executable_test(config: Config) -> ReachTest:
+def _executable_test(config: Config, height_mm: float | None = None) -> ReachTest:
     """Whether the hand can put the three pads of (n, 3) finger reaches in one plane of the object.
 
     The executor plans every contact in that one plane (``grip_env.finger.planar_contacts``);
     a configuration it cannot reach there is not a candidate, so what is planned is executed.
     The thumb search runs this test (``barrett.configurations``), so a grasp whose best direction
-    the hand cannot execute keeps its best one that it can.
+    the hand cannot execute keeps its best one that it can. ``height_mm`` is the executed
+    body's height (``objects.thickness_mm`` when None).
     """
     sim = config.sim
+    height = config.objects.thickness_mm if height_mm is None else height_mm
 
     def test(reaches: np.ndarray) -> np.ndarray:
-        return executable(reaches, config.objects.thickness_mm, sim.contact_plane_rise_mm,
+        return executable(reaches, height, sim.contact_plane_rise_mm,
                           sim.fingertip_clearance_mm, sim.palm_clearance_mm, sim.preshape_gap_mm)
 
     return test

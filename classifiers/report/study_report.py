@@ -17,7 +17,7 @@ from classifiers.report import analysis, figures
 from classifiers.report.document import Report, frame_of_intervals
 from classifiers.report.power import power_section
 from grip_env.config import Config
-from grip_env.objects import PlanarObject, load_object_set, procedural_objects
+from grip_env.objects import PlanarObject, procedural_objects
 
 _PACKAGES = ("numpy", "pandas", "scikit-learn", "torch", "pybullet", "gymnasium",
              "stable-baselines3", "sb3-contrib")
@@ -355,7 +355,9 @@ def source_commit() -> str:
 
 
 def _study_objects(config: Config) -> list[PlanarObject]:
-    objects = load_object_set(config.objects.set)
+    from grip_env.mesh_sets import named_set
+
+    objects = named_set(config.objects.set, config.dataset.seed, config.objects).objects
     if config.objects.procedural_count:
         objects += procedural_objects(
             config.objects.procedural_count, config.dataset.seed, config.objects.procedural_size_mm

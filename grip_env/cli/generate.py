@@ -20,15 +20,17 @@ def generate(
     config: ConfigFile = None,
     objects: Annotated[
         str | None,
-        typer.Option(help="object set name (e.g. default), a number of procedural objects, or "
-                          "your own: a folder or glob of images (with --mm-per-px) or vertex "
+        typer.Option(help="object set name (e.g. default; meshes: household, random_urdfs, "
+                          "mesh), a number of procedural objects, or your own: a folder or glob "
+                          "of images (scale: --mm-per-px or the folder's scale.yaml) or vertex "
                           "files (.csv x,y or .json [[x, y], ...], in mm) "
                           "(default: config objects.set + objects.procedural_count)"),
     ] = None,
     mm_per_px: Annotated[
         float | None,
         typer.Option("--mm-per-px", help="scale of the images given by --objects (required "
-                                         "for images)"),
+                                         "for images unless their folder's scale.yaml "
+                                         "gives it)"),
     ] = None,
     trials: Annotated[
         int | None, typer.Option(help="simulated trials per grip (default: config dataset.trials)")
@@ -103,11 +105,12 @@ def _check_flags(
 
 def _objects(spec: str | None, mm_per_px: float | None) -> str | list[PlanarObject] | None:
     """What ``--objects`` names: a set or a count (as given), or the objects of its files."""
+    from grip_env.mesh_sets import MESH_SET_NAMES
     from grip_env.objects import OBJECT_SETS, SHAPE_NAMES
     from grip_env.objects.sources import is_path_spec, objects_from_path
 
     named = spec is None or spec.strip().lstrip("-").isdigit() or spec in OBJECT_SETS or (
-        spec in SHAPE_NAMES)
+        spec in SHAPE_NAMES) or spec in MESH_SET_NAMES
     if named:
         if mm_per_px is not None:
             raise ValueError(f"--mm-per-px {mm_per_px:g} is for image files given by --objects")
@@ -115,7 +118,7 @@ def _objects(spec: str | None, mm_per_px: float | None) -> str | list[PlanarObje
     if not is_path_spec(spec):
         raise ValueError(
             f"--objects: unknown object set {spec!r}, and no such file, folder or glob "
-            f"(sets: {', '.join(OBJECT_SETS)}, a shape name, or a number)"
+            f"(sets: {', '.join((*OBJECT_SETS, *MESH_SET_NAMES))}, a shape name, or a number)"
         )
     return objects_from_path(spec, mm_per_px)
 

@@ -18,14 +18,18 @@ if TYPE_CHECKING:
 
 def show(
     obj: Annotated[str, typer.Argument(
-        help="shape name (listed below), image file, or vertex file (.json/.csv)"
+        help="shape name (listed below), mesh (household name, urdf_NNN or an .obj file), "
+             "image file, vertex file (.json/.csv), or a folder or glob of such files (drawn "
+             "side by side)"
     )],
     out: Annotated[
         Path, typer.Option("--out", "-o", help="PNG file to write (its name ends in .png)")
     ] = Path("show.png"),
     grips: Annotated[int, typer.Option(help="draw the best N grips by Q_C (0: regions only)")] = 0,
     config: ConfigFile = None,
-    mm_per_px: Annotated[float, typer.Option(help="scale of an image object")] = 1.0,
+    mm_per_px: Annotated[float | None, typer.Option(
+        help="scale of an image object (default: the scale.yaml of its folder, else 1)"
+    )] = None,
     sim: Annotated[bool, typer.Option("--sim", help="simulate the best grip")] = False,
     seed: Annotated[int, typer.Option(min=0, help="seed of the simulated trial")] = 0,
 ) -> None:
@@ -37,25 +41,75 @@ def show(
 
         output_file(out, ".png")
         cfg = load_config(config)
-        planar = _load_object(obj, mm_per_px, cfg)
-        path = _render_trial(planar, cfg, seed, out) if sim else _draw(planar, cfg, grips, out)
+        several = _several_objects(obj, mm_per_px, cfg)
+        if several is not None:
+            if sim:
+                raise ValueError(f"--sim simulates one object, and {obj} names {len(several)}")
+            path = _draw_sheet(several, cfg, out)
+        else:
+            planar = _load_object(obj, mm_per_px, cfg)
+            path = (_render_trial(planar, cfg, seed, out) if sim
+                    else _draw(planar, cfg, grips, out))
     typer.echo(f"wrote {path}")
 
 
-def _load_object(spec: str, mm_per_px: float, cfg: Config) -> PlanarObject:
-    """The object of ``spec``, refused when too large or too detailed to process."""
-    from grip_env.config import check_contour_budget
-    from grip_env.objects import object_from_spec
-    from grip_env.objects.sources import IMAGE_SUFFIXES, check_image_size
+def _several_objects(spec: str, mm_per_px: float | None, cfg: Config) -> list[PlanarObject] | None:
+    """The objects of a folder or glob (each checked as one object is), None for one object."""
+    from grip_env.objects.sources import is_path_spec, objects_from_path
 
+    if Path(spec).is_file() or not is_path_spec(spec):
+        return None
+    found = objects_from_path(spec, mm_per_px)
+    for planar in found:
+        _check_budget(planar, cfg)
+    return found
+
+
+def _load_object(spec: str, mm_per_px: float | None, cfg: Config) -> PlanarObject:
+    """The object of ``spec``, refused when too large or too detailed to process."""
+    from grip_env.mesh_sets import mesh_from_spec
+    from grip_env.objects import object_from_spec
+    from grip_env.objects.sources import IMAGE_SUFFIXES, check_image_size, image_scale
+
+    mesh = mesh_from_spec(spec, cfg.dataset.seed, cfg.objects)
+    if mesh is not None:
+        _check_budget(mesh, cfg)
+        return mesh
+    scale = 1.0 if mm_per_px is None else mm_per_px
     if Path(spec).suffix.lower() in IMAGE_SUFFIXES and Path(spec).is_file():
         check_image_size(Path(spec))
-    planar = object_from_spec(spec, mm_per_px)
+        scale = image_scale(Path(spec), mm_per_px, default=1.0)
+    planar = object_from_spec(spec, scale)
+    _check_budget(planar, cfg)
+    return planar
+
+
+def _check_budget(planar: PlanarObject, cfg: Config) -> None:
+    from grip_env.config import check_contour_budget
+
     low, high = planar.contour.min(axis=0), planar.contour.max(axis=0)
     perimeter = float(planar.polygon.length)
     extent = float((high - low).max())
     check_contour_budget(planar.name, len(planar.contour), perimeter, extent, cfg.perception)
-    return planar
+
+
+def _draw_sheet(objects: list[PlanarObject], cfg: Config, out: Path) -> Path:
+    """Every object with its regions, side by side (up to 6 a row), in one PNG."""
+    import matplotlib.pyplot as plt
+
+    from grip_env.drawing import draw_object, save_figure
+    from grip_env.perception.regions import find_regions
+
+    columns = min(6, len(objects))
+    rows = -(-len(objects) // columns)
+    fig, axes = plt.subplots(rows, columns, figsize=(2.6 * columns, 2.6 * rows), squeeze=False)
+    for ax in axes.flat[len(objects):]:
+        ax.set_axis_off()
+    for ax, planar in zip(axes.flat, objects, strict=False):
+        regions = find_regions(planar, cfg.perception, cfg.grasp)
+        draw_object(ax, planar, regions)
+        ax.set_title(f"{planar.name}: {len(regions)} regions", fontsize=8)
+    return save_figure(fig, out)
 
 
 def _draw(planar: PlanarObject, cfg: Config, grips: int, out: Path) -> Path:

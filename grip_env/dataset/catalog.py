@@ -15,7 +15,10 @@ import pyarrow.parquet as pq
 
 from grip_env.config import Config, check_contour_budget
 from grip_env.dataset.files import write_atomically
-from grip_env.objects import PlanarObject, load_object_set, procedural_objects
+from grip_env.mesh_sets import configured_meshes, named_set
+from grip_env.objects import PlanarObject, procedural_objects
+from grip_env.objects.family import object_family
+from grip_env.objects.meshes import MESH_COLUMNS, MeshPose
 from grip_env.objects.simulated import DEFAULT_TOLERANCE_MM
 
 OBJECTS_FILE = "objects.parquet"
@@ -74,7 +77,7 @@ def _shapes(config: Config, objects: ObjectsSpec, seed: int) -> list[PlanarObjec
             raise ValueError(f"number of objects must be >= 1, got {objects}")
         return procedural_objects(objects, seed, size)
     if isinstance(objects, str):
-        return load_object_set(objects)
+        return named_set(objects, seed, config.objects).objects
     if objects is not None:
         shapes = list(objects)
         wrong = [type(s).__name__ for s in shapes if not isinstance(s, PlanarObject)]
@@ -82,8 +85,22 @@ def _shapes(config: Config, objects: ObjectsSpec, seed: int) -> list[PlanarObjec
             raise ValueError(f"objects must be PlanarObject instances, got a {wrong[0]}")
         return shapes
     named = config.objects.set
-    shapes = [] if named == "procedural" else load_object_set(named)
-    return shapes + procedural_objects(config.objects.procedural_count, seed, size)
+    shapes = [] if named == "procedural" else named_set(named, seed, config.objects).objects
+    shapes += procedural_objects(config.objects.procedural_count, seed, size)
+    return shapes + configured_meshes(config.objects, seed).objects
+
+
+def skipped_objects(config: Config, objects: ObjectsSpec, seed: int) -> list[dict[str, str]]:
+    """The meshes a run's sets skipped, with the reason (recorded in the manifest)."""
+    skipped = []
+    if isinstance(objects, str) and not objects.strip().lstrip("-").isdigit():
+        skipped = named_set(objects, seed, config.objects).skipped
+    elif objects is None:
+        named = config.objects.set
+        if named != "procedural":
+            skipped = named_set(named, seed, config.objects).skipped
+        skipped = skipped + configured_meshes(config.objects, seed).skipped
+    return [{"mesh": mesh, "reason": reason} for mesh, reason in skipped]
 
 
 def _check_budget(obj: PlanarObject, config: Config) -> None:
@@ -124,7 +141,9 @@ def objects_table(
 ) -> pa.Table:
     """One row per object: id, name, source, contour (list of [x, y] mm) and descriptors, then
     its simulated shape within ``tolerance_mm``: ``sim_*`` columns (vertex and piece counts,
-    tolerance, deviation bound, area, whether approximate) and ``sim_contour``."""
+    tolerance, deviation bound, area, whether approximate) and ``sim_contour``; its ``family``
+    (``grip_env.objects.family``) and, for a mesh object, the mesh and its resting pose
+    (``mesh_*`` columns, empty otherwise)."""
     rows = [{
         "object_index": entry.index,
         "object_id": entry.object_id,
@@ -135,8 +154,16 @@ def objects_table(
         **entry.obj.descriptors(),
         **entry.obj.simulated_shape(tolerance_mm).record(),
         "sim_contour": entry.obj.simulated_shape(tolerance_mm).contour.tolist(),
+        "family": object_family(entry.obj),
+        **_mesh_record(entry.obj),
     } for entry in entries]
     return pa.Table.from_pylist(rows)
+
+
+def _mesh_record(obj: PlanarObject) -> dict[str, object]:
+    if obj.mesh is None:
+        return dict.fromkeys(MESH_COLUMNS)
+    return obj.mesh.record()
 
 
 def write_objects(
@@ -162,7 +189,7 @@ def load_objects(directory: str | Path) -> list[PlanarObject]:
     """The dataset's objects as ``PlanarObject`` (name = object_id), in run order."""
     table = read_objects(Path(directory)).sort_values("object_index")
     return [
-        PlanarObject(np.array([list(p) for p in contour]), name=object_id, source=source)
-        for object_id, source, contour in zip(
-            table["object_id"], table["source"], table["contour"], strict=True)
+        PlanarObject(np.array([list(p) for p in row["contour"]]), name=row["object_id"],
+                     source=row["source"], mesh=MeshPose.from_record(row))
+        for row in table.to_dict("records")
     ]

@@ -20,6 +20,7 @@ from grip_env.dataset.catalog import (
     ObjectsSpec,
     own_objects,
     resolve_objects,
+    skipped_objects,
     write_objects,
 )
 from grip_env.dataset.files import check_writable, sha256_of
@@ -99,6 +100,10 @@ def generate(
     check_writable(directory)
     with dataset_lock(directory):
         manifest = _open_run(directory, config, entries, overwrite, own_objects(objects))
+        skipped = skipped_objects(config, objects, config.dataset.seed)
+        if skipped and manifest.get("skipped_objects") != skipped:
+            manifest["skipped_objects"] = skipped  # meshes a set refused, with the reason
+            write_manifest(directory, manifest)
         seeds = [record["seed"] for record in manifest["objects"]]
         pending = [
             ObjectTask(e.index, e.object_id, e.obj, config, seeds[e.index])

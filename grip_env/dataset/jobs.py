@@ -56,6 +56,7 @@ def simulate_object(task: ObjectTask) -> pd.DataFrame:
     """The real job: candidates on the (perceived) contour, the ones ``dataset.sampling`` keeps,
     trials on the true contour."""
     from grip_env.dataset.sampling import keep_grips
+    from grip_env.objects.meshes import execution_height_mm
     from grip_env.pipeline import candidates
     from grip_env.sim import run_trials
 
@@ -68,7 +69,8 @@ def simulate_object(task: ObjectTask) -> pd.DataFrame:
         planned_on = perceive(
             task.obj, config.perception, config.objects.thickness_mm, seed=perception_seed
         )
-    table = candidates(planned_on, config.grasp, config)
+    height = execution_height_mm(task.obj, config.objects)  # of the true body
+    table = candidates(planned_on, config.grasp, config, height_mm=height)
     kept = keep_grips(table, config.dataset, task.sampling_seed())
     outcome = run_trials(task.obj, kept, config, config.dataset.trials, trials_seed)
     return with_outcomes(kept, outcome, task.object_id)

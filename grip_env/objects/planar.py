@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import shapely
@@ -14,6 +15,9 @@ from shapely.geometry import Polygon
 from grip_env.objects.decomposition import ccw, exact_pieces
 from grip_env.objects.simulated import DEFAULT_TOLERANCE_MM, SimulatedShape, simulated_shape
 
+if TYPE_CHECKING:
+    from grip_env.objects.meshes import MeshPose
+
 _MIN_AREA_MM2 = 1e-6
 
 
@@ -22,12 +26,14 @@ class PlanarObject:
     """A planar object: a simple polygon in millimetres, stored counter-clockwise.
 
     Build one with :meth:`from_polygon`, :meth:`from_mask` or :meth:`from_image`; the constructor
-    validates its input the same way.
+    validates its input the same way. ``mesh`` is the resting mesh whose silhouette the contour
+    is (:mod:`grip_env.objects.meshes`), None for a planar object.
     """
 
     contour: NDArray[np.float64]
     name: str = "object"
     source: str = "polygon"
+    mesh: MeshPose | None = None
     _polygon: Polygon = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
@@ -157,13 +163,20 @@ class PlanarObject:
     def transformed(
         self, angle: float = 0.0, offset: ArrayLike = (0.0, 0.0), scale: float = 1.0
     ) -> PlanarObject:
-        """A copy rotated by ``angle`` about the origin, scaled, then moved by ``offset``."""
+        """A copy rotated by ``angle`` about the origin, scaled, then moved by ``offset``.
+
+        A moved mesh object moves its mesh; a turned or scaled one is a planar object only (its
+        contour is no longer that mesh's silhouette at rest).
+        """
         if not np.isfinite(scale) or scale <= 0:
             raise ValueError(f"scale must be a positive finite number, got {scale!r}")
         c, s = np.cos(angle), np.sin(angle)
         rotation = np.array([[c, -s], [s, c]])
-        contour = scale * self.contour @ rotation.T + np.asarray(offset, dtype=float)
-        return PlanarObject(contour, name=self.name, source=self.source)
+        shift = np.asarray(offset, dtype=float)
+        contour = scale * self.contour @ rotation.T + shift
+        moved_only = angle == 0.0 and scale == 1.0
+        mesh = self.mesh.shifted(shift) if self.mesh is not None and moved_only else None
+        return PlanarObject(contour, name=self.name, source=self.source, mesh=mesh)
 
     def centred(self) -> PlanarObject:
         """A copy with its centroid at the origin."""

@@ -4,6 +4,10 @@ files or a glob of them.
 Object files are images (segmented; scaled by ``mm_per_px``) or vertex files: CSV with ``x, y``
 columns in mm (an ``x,y`` header is optional) or JSON holding a list of ``[x, y]``. A file that
 cannot become one simple polygon raises ``ValueError`` naming the file.
+
+The scale of the images in a folder can be given once, in a sidecar file ``scale.yaml`` in that
+folder holding ``mm_per_px: <number>`` (YAML, so ``{"mm_per_px": 0.5}`` works too); it applies to
+every image of the folder, and a ``--mm-per-px`` that differs from it is refused.
 """
 
 from __future__ import annotations
@@ -28,6 +32,9 @@ MAX_VERTEX_FILE_BYTES = 64_000_000
 #: The most objects one folder or glob may name.
 MAX_OBJECT_FILES = 100_000
 _GLOB_CHARS = frozenset("*?[")
+#: The sidecar file giving the scale of a folder's images.
+SCALE_FILE = "scale.yaml"
+_MAX_SCALE_FILE_BYTES = 10_000
 
 
 def object_from_spec(spec: str, mm_per_px: float = 1.0) -> PlanarObject:
@@ -90,11 +97,62 @@ def objects_from_path(spec: str | Path, mm_per_px: float | None = None) -> list[
     """
     files = object_files(spec)
     images = [path for path in files if path.suffix.lower() in IMAGE_SUFFIXES]
-    if images and mm_per_px is None:
-        raise ValueError(f"{images[0]} is an image: give its scale with --mm-per-px")
     if not images and mm_per_px is not None:
         raise ValueError(f"--mm-per-px {mm_per_px:g} is for images, and {spec} names none")
-    return [object_from_file(path, mm_per_px or 1.0) for path in files]
+    scales = {path: image_scale(path, mm_per_px) for path in images}
+    return [object_from_file(path, scales.get(path, 1.0)) for path in files]
+
+
+def image_scale(path: Path, mm_per_px: float | None, default: float | None = None) -> float:
+    """The scale of image ``path``: its folder's ``scale.yaml``, else ``mm_per_px``, else
+    ``default``.
+
+    Raises:
+        ValueError: no scale at all, a bad sidecar, or a ``mm_per_px`` that contradicts it.
+    """
+    given = folder_scale(path.parent)
+    if given is not None:
+        if mm_per_px is not None and not math.isclose(mm_per_px, given, rel_tol=1e-9):
+            raise ValueError(f"--mm-per-px {mm_per_px:g} contradicts {path.parent / SCALE_FILE} "
+                             f"(mm_per_px: {given:g}); give one of them")
+        return given
+    if mm_per_px is not None:
+        return mm_per_px
+    if default is not None:
+        return default
+    raise ValueError(f"{path} is an image: give its scale with --mm-per-px or in "
+                     f"{path.parent / SCALE_FILE} (mm_per_px: <mm per pixel>)")
+
+
+def folder_scale(folder: Path) -> float | None:
+    """The ``mm_per_px`` of a folder's ``scale.yaml``, None when it has none.
+
+    Raises:
+        ValueError: the sidecar is unreadable, not YAML, or holds no positive ``mm_per_px``.
+    """
+    import yaml
+
+    path = folder / SCALE_FILE
+    if not path.is_file():
+        return None
+    try:
+        if path.stat().st_size > _MAX_SCALE_FILE_BYTES:
+            raise ValueError(f"is larger than {_MAX_SCALE_FILE_BYTES} bytes")
+        data = yaml.safe_load(path.read_text(encoding="utf-8-sig"))
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:
+        raise ValueError(f"scale file {path}: cannot read it ({exc})".splitlines()[0]) from None
+    except ValueError as exc:
+        raise ValueError(f"scale file {path} {exc}") from None
+    value = data.get("mm_per_px") if isinstance(data, dict) else None
+    extra = sorted(set(data) - {"mm_per_px"}) if isinstance(data, dict) else []
+    if extra:
+        raise ValueError(f"scale file {path}: unknown key {extra[0]!r} (only mm_per_px)")
+    try:
+        check_mm_per_px(value)  # type: ignore[arg-type]
+    except ValueError:
+        raise ValueError(f"scale file {path} must hold mm_per_px: <positive number>, "
+                         f"got {data!r}") from None
+    return float(value)  # type: ignore[arg-type]
 
 
 def object_from_file(path: Path, mm_per_px: float = 1.0) -> PlanarObject:

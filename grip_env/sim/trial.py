@@ -25,6 +25,7 @@ from scipy.spatial.transform import Rotation
 from grip_env.config import Config
 from grip_env.finger import ContactPosture, finger_reaches, opening_posture, planar_contacts
 from grip_env.objects import PlanarObject
+from grip_env.objects.meshes import executes_on_mesh, execution_height_mm
 from grip_env.sim.disturbance import RampProbe, robustness
 from grip_env.sim.hand import Hand, palm_to_world
 from grip_env.sim.uncertainty import TrialNoise, object_mass_kg
@@ -91,13 +92,19 @@ class TrialScene:
         self.obj = obj
         self.config = config if config is not None else Config()
         sim = self.config.sim
-        self.thickness_mm = self.config.objects.thickness_mm
+        self.thickness_mm = execution_height_mm(obj, self.config.objects)
         self.mass_kg = object_mass_kg(obj, self.config)
         self.world = World(timestep=sim.timestep, solver_iterations=sim.solver_iterations)
         self.world.add_table()
-        self.object = self.world.add_object(obj, self.thickness_mm, self.mass_kg,
-                                            self.config.grasp.mu,
-                                            tolerance_mm=self.config.objects.sim_tolerance_mm)
+        if executes_on_mesh(obj, self.config.objects):  # the mesh itself, at rest
+            mesh = obj.mesh
+            self.object = self.world.add_mesh(mesh.path(), mesh.scale, np.array(mesh.com_mm),
+                                              np.array(mesh.position_mm), mesh.orientation,
+                                              self.mass_kg, self.config.grasp.mu)
+        else:
+            self.object = self.world.add_object(obj, self.thickness_mm, self.mass_kg,
+                                                self.config.grasp.mu,
+                                                tolerance_mm=self.config.objects.sim_tolerance_mm)
         self.gyration_m = float(np.sqrt(self.object.inertia_per_kg[2]))
         self.hand = Hand(self.world, sim)
         self.hand.teleport(np.array([0.0, 0.0, 400.0]), 0.0)

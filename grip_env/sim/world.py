@@ -163,6 +163,35 @@ class World:
         self.set_dynamics(body, mass_kg, friction)
         return body
 
+    def add_mesh(
+        self, path: str | Path, scale: float, com_mm: NDArray[np.float64],
+        position_mm: NDArray[np.float64], orientation: tuple[float, float, float, float],
+        mass_kg: float, friction: float,
+        rgba: tuple[float, float, float, float] = (0.15, 0.15, 0.15, 1.0),
+    ) -> Body:
+        """A mesh file as one dynamic body: one convex hull per object (``o``/``g``) of the
+        OBJ file (PyBullet's own convex decomposition of a VHACD file), its vertices scaled by
+        ``scale`` (mm per mesh unit), its centre of mass ``com_mm`` (mesh frame, mm) placed at
+        ``position_mm`` with ``orientation`` (x, y, z, w). ``top_mm``: the top of its bounding box
+        (Bullet grows every hull by its collision margin, ``COLLISION_MARGIN_MM``).
+        """
+        if mass_kg <= 0 or scale <= 0:
+            raise ValueError(f"mesh scale and mass must be positive, got {scale}, {mass_kg}")
+        c = self.client
+        size = [scale * MM] * 3
+        shape = c.createCollisionShape(pybullet.GEOM_MESH, fileName=str(path), meshScale=size)
+        visual = c.createVisualShape(pybullet.GEOM_MESH, fileName=str(path), meshScale=size,
+                                     rgbaColor=list(rgba))
+        uid = c.createMultiBody(mass_kg, shape, visual,
+                                basePosition=(np.asarray(position_mm) * MM).tolist(),
+                                baseOrientation=list(orientation),
+                                baseInertialFramePosition=(np.asarray(com_mm) * MM).tolist())
+        inertia = tuple(float(i) / mass_kg for i in c.getDynamicsInfo(uid, -1)[2])
+        top = c.getAABB(uid)[1][2] / MM
+        body = Body(uid, float(top), (-1,), inertia)  # type: ignore[arg-type]
+        self.set_dynamics(body, mass_kg, friction)
+        return body
+
     def set_dynamics(self, body: Body, mass_kg: float, friction: float,
                      spinning_friction: float = 0.0) -> None:
         """Mass (with the whole body's inertia) and friction on every link of ``body``.
