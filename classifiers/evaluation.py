@@ -143,6 +143,44 @@ def held_out_metrics(
     return {"split": split, "models": scores}
 
 
+def object_families(table: pd.DataFrame) -> dict[str, str]:
+    """Object id -> family (``grip_env.objects.family``) from a loaded dataset's manifest;
+    empty for a table without one (or a dataset written before families were recorded)."""
+    manifest = table.attrs.get("manifest") or {}
+    return {str(entry["object_id"]): str(entry["family"])
+            for entry in manifest.get("objects", []) if entry.get("family")}
+
+
+def family_holdout_metrics(
+    table: pd.DataFrame, families: Mapping[str, str], models: Mapping[str, BaseEstimator]
+) -> dict[str, Any]:
+    """Each model (cloned) fitted on every family but one and scored on that family's objects,
+    for each family: does what is learnt on drawn shapes hold on real silhouettes, and back?
+
+    Returns ``{"families": {family: {"objects", "grips", "models": {name: metrics}}}}``, empty
+    with fewer than two families; a family whose training grips hold one class gets no models.
+    Objects of no known family are always trained on.
+    """
+    family = table[GROUP_COLUMN].astype(str).map(dict(families))
+    present = sorted(family.dropna().unique())
+    result: dict[str, Any] = {"families": {}}
+    if len(present) < 2:
+        return result
+    for name in present:
+        held = (family == name).to_numpy()
+        train, test = table[~held], table[held]
+        labels = train[LABEL_COLUMN].to_numpy().astype(bool)
+        scores = {}
+        if np.unique(labels).size == 2:
+            for model_name, model in models.items():
+                fitted = clone(model).fit(train, labels)
+                scores[model_name] = {k: (float(v) if np.isfinite(v) else None)
+                                      for k, v in fold_metrics(fitted, test).items()}
+        result["families"][name] = {"objects": int(test[GROUP_COLUMN].nunique()),
+                                    "grips": len(test), "models": scores}
+    return result
+
+
 def cross_validate_models(
     table: pd.DataFrame,
     models: Sequence[str] | Mapping[str, BaseEstimator],

@@ -7,6 +7,9 @@
 - ``metrics.json["held_out"]``: every model fitted on the training objects of the study's split
   (:func:`grip_env.dataset.split.held_out_objects`) and scored on its held-out objects, the same
   objects the RL selector and its baselines are scored on;
+- ``metrics.json["family_holdout"]``: every model fitted on all object families but one
+  (named, procedural, mesh, ...) and scored on the one held out
+  (:func:`classifiers.evaluation.family_holdout_metrics`), when the dataset has two or more;
 - ``roc.png``, ``calibration.png``: curves of the out-of-fold predictions of the CV's first
   repeat, pooled (each grip scored by a model that never saw its object);
 - ``models/<name>.{json,skops|pt}``: each model refitted on the whole table, with its metadata
@@ -28,8 +31,10 @@ import pandas as pd
 from classifiers.evaluation import (
     LABEL_COLUMN,
     evaluate_models,
+    family_holdout_metrics,
     grouped_folds,
     held_out_metrics,
+    object_families,
     positive_probability,
 )
 from classifiers.models import make_model, make_regressor
@@ -51,6 +56,7 @@ def train_and_save(
     checksum = dataset_checksum(table)
     metrics = evaluate_models(table, learning.models, FEATURES, learning)
     metrics["held_out"] = held_out_scores(table, config)
+    metrics["family_holdout"] = family_holdout_scores(table, config)
     metrics["dataset"] = {"sha256": checksum, "rows": len(table)}
     (out_dir / "metrics.json").write_text(json.dumps(metrics, indent=2))
     _held_out_plots(table, config, out_dir)
@@ -70,6 +76,14 @@ def held_out_scores(table: pd.DataFrame, config: Config) -> dict[str, Any]:
     learning = config.learning
     models = {name: make_model(name, learning.seed, FEATURES) for name in learning.models}
     return held_out_metrics(table, learning, models)
+
+
+def family_holdout_scores(table: pd.DataFrame, config: Config) -> dict[str, Any]:
+    """Each of ``learning.models`` fitted on all families but one, scored on that one
+    (:func:`classifiers.evaluation.family_holdout_metrics`)."""
+    learning = config.learning
+    models = {name: make_model(name, learning.seed, FEATURES) for name in learning.models}
+    return family_holdout_metrics(table, object_families(table), models)
 
 
 def train_regressors(

@@ -222,3 +222,31 @@ def test_show_refuses_an_image_with_no_object_and_a_split_mesh(photos, tmp_path)
 def test_show_draws_a_household_mesh(tmp_path):
     code, output = cli("show", "duck", "--out", tmp_path / "duck.png")
     assert code == 0 and "duck" in output, output
+
+
+# ------------------------------------------------------------------ a dataset with meshes
+def test_a_run_adds_mesh_objects_records_what_it_skipped_and_runs_on_the_mesh(
+    tmp_path, monkeypatch, box
+):
+    from grip_env.dataset import generate, load, read_objects
+    from grip_env.dataset.catalog import load_objects
+
+    apart = write_boxes(tmp_path / "apart.obj", [((-3, -1, -1), (-1, 1, 1)),
+                                                   ((1, -1, -1), (3, 1, 1))])
+    monkeypatch.setattr(mesh_sets, "household_meshes", lambda: [apart, box])
+    config = Config().override(
+        objects={"set": "procedural", "procedural_count": 1, "mesh_count": 1,
+                 "mesh_size_mm": (90.0, 90.0), "execute_on": "mesh"},
+        dataset={"max_grips_per_object": 2, "trials": 1})
+    out = generate(config, tmp_path / "data", workers=1, progress=False)
+    objects = read_objects(out)
+    assert objects["family"].tolist() == ["procedural", "mesh"]
+    assert objects["mesh_file"].iloc[1] == box.as_posix()
+    manifest = load(out).attrs["manifest"]
+    assert [o["family"] for o in manifest["objects"]] == ["procedural", "mesh"]
+    assert [s["mesh"] for s in manifest["skipped_objects"]] == [apart.as_posix()]
+    assert "separate parts" in manifest["skipped_objects"][0]["reason"]
+    reloaded = load_objects(out)[1]
+    assert reloaded.mesh == mesh_object(box, 90.0).mesh
+    grips = load(out)
+    assert (grips["object_id"] == "box").sum() >= 1

@@ -166,6 +166,7 @@ def _classifier_section(report: Report, out: Path) -> None:
             f"({_fmt(models[top]['top1_success'])})."
         )
     _held_out_table(report, metrics.get("held_out"))
+    _family_holdout_table(report, metrics.get("family_holdout"))
     _stage_figures(report, out, "classifiers")
 
 
@@ -182,6 +183,25 @@ def _held_out_table(report: Report, held_out: dict[str, Any] | None, rows: str =
                  f"the {len(split['test'])} held-out objects the RL selector is scored on "
                  f"(test_fraction {split['test_fraction']:g}, seed {split['seed']}): one split, "
                  "so no interval; the cross-validated table above is the estimate.")
+
+
+def _family_holdout_table(report: Report, holdout: dict[str, Any] | None) -> None:
+    """Each model trained on all object families but one, scored on the family held out."""
+    families = (holdout or {}).get("families") or {}
+    scored = {name: entry for name, entry in families.items() if entry.get("models")}
+    if not scored:
+        return
+    shown = {"roc_auc": "ROC-AUC", "top1_success": "top-1"}
+    columns = {}
+    for family, entry in scored.items():
+        for metric, label in shown.items():
+            columns[f"{family} {label}"] = {model: values.get(metric)
+                                            for model, values in entry["models"].items()}
+    frame = pd.DataFrame(columns).rename_axis("model").astype(float).round(3)
+    counts = ", ".join(f"{name} {entry['objects']} objects" for name, entry in scored.items())
+    report.table(frame, caption="Family holdout: trained on every other object family, scored "
+                 f"on the family named in the column ({counts}); one split per family, so no "
+                 "interval. Does what is learnt on drawn shapes transfer to real silhouettes?")
 
 
 def _calibration_section(report: Report, out: Path, fig_dir: Path) -> None:

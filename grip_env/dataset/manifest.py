@@ -21,6 +21,7 @@ from grip_env.dataset.catalog import OBJECTS_FILE, DatasetObject
 from grip_env.dataset.files import write_text_atomically
 from grip_env.dataset.sampling import sampling_record
 from grip_env.dataset.shards import GRIPS_DIR, SHARD_FILE, ShardRecord
+from grip_env.objects.family import object_family
 
 FORMAT = "grip-env-dataset"
 #: 2: outcome columns robustness_mean and robustness_std; kept grips chosen by dataset.sampling.
@@ -113,7 +114,7 @@ def new_manifest(
         "fingerprint": fingerprint(identity),
         "objects": [
             {"index": e.index, "object_id": e.object_id, "name": e.obj.name,
-             "source": e.obj.source, "seed": seed}
+             "source": e.obj.source, "family": object_family(e.obj), "seed": seed}
             for e, seed in zip(entries, object_seeds, strict=True)
         ],
         "objects_file": {"file": "objects.parquet", "sha256": objects_sha256},
