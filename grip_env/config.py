@@ -33,6 +33,8 @@ MAX_OBJECT_SIZE_MM = 2_000.0
 """Largest object extent: the open hand spans about 0.3 m; a 2 m part is not a grasp problem."""
 MAX_IMAGE_PIXELS = 4096 * 4096
 """Largest object image read (as ``perception.resolution_px`` at most 4096)."""
+MAX_RENDER_SIDE_PX = 8192
+"""Largest rendered image side (``perception.resolution_px * supersample``)."""
 MAX_SEED = 2**32 - 1
 """Largest seed: scikit-learn and Stable-Baselines3 take 32-bit seeds."""
 
@@ -89,6 +91,9 @@ class PerceptionConfig(_Section):
 
     source: Literal["polygon", "render"] = Field("polygon", description="contour the grips plan on")
     resolution_px: int = Field(256, ge=32, le=4096, description="rendered image side (pixels)")
+    supersample: int = Field(
+        4, ge=1, le=16, description="anti-aliasing: light samples per pixel side (1: point-sampled)"
+    )
     mm_per_px: float = Field(1.0, gt=0.0, le=20.0, description="rendered image scale")
     pixel_noise: float = Field(0.0, ge=0.0, le=1.0, description="grey-level noise std")
     contour_spacing_mm: float = Field(1.0, ge=0.1, le=20.0, description="contour resampling step")
@@ -96,6 +101,16 @@ class PerceptionConfig(_Section):
     max_turn_rad: float = Field(0.35, gt=0.0, le=3.2, description="max turn in a region")
     curvature_jump: float = Field(0.08, gt=0.0, le=10.0, description="curvature step (1/mm)")
     min_region_mm: float = Field(12.0, gt=0.0, le=500.0, description="shortest region for a finger")
+
+    @model_validator(mode="after")
+    def _render_size(self) -> PerceptionConfig:
+        side = self.resolution_px * self.supersample
+        if side > MAX_RENDER_SIDE_PX:
+            raise ValueError(
+                f"resolution_px * supersample = {side} renders more than {MAX_RENDER_SIDE_PX} px "
+                "a side: lower supersample"
+            )
+        return self
 
 
 class SynthesisConfig(_Section):
