@@ -210,9 +210,10 @@ def test_search_and_features_agree_on_the_cone_edge():
     """The thumb search lands forces exactly on the friction-cone edge (delta = arctan(mu) to
     1e-16); the C1 it minimised (from cosines) and the table's C1 (the features, from arctan2,
     as ``validate`` recomputes it) decide that edge alike. 13 ellipse and 5 pentagon rows
-    differed by a factor of 3 before the edge had a tolerance."""
+    differed by a factor of 3 before the edge had a tolerance (since the level-anchored region
+    cuts, the pentagon, rounded rectangle and right triangle hold the edge cases)."""
     config, at_edge = Config(), 0
-    for obj in (make_shape("ellipse"), make_shape("pentagon")):
+    for obj in map(make_shape, ("ellipse", "pentagon", "rounded_rectangle", "right_triangle")):
         regions = find_regions(obj, config.perception, PARAMS)
         grasps = synthesize_grasps(regions, obj, PARAMS, config.synthesis)
         confs = configurations(grasps, obj, PARAMS, config.synthesis)
