@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 import tempfile
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from typing import Any
@@ -155,46 +156,55 @@ def power_curve(
     table: pd.DataFrame, config: Config, objects: Sequence[int], trials: Sequence[int],
     replicates: int = 2, seed: int = 0, model: str = "svm", selector_objects: Sequence[int] = (),
     selector_trials: Sequence[int] = (), log: Callable[[str], None] = lambda _: None,
+    trials_table: pd.DataFrame | None = None,
 ) -> pd.DataFrame:
-    """Half-widths along two axes of the table: ``objects`` (all trials) and ``trials`` (all
-    objects). The classifier quantities are measured on ``replicates`` subsamples per point
-    (one where nothing is drawn: all objects and all trials); the selector, costlier, on one per
-    size in ``selector_objects`` / ``selector_trials``.
+    """Half-widths along two axes: ``objects`` (subsamples of ``table``, all its trials) and
+    ``trials`` (subsamples of ``trials_table``, default ``table``, all its objects). The
+    classifier quantities are measured on ``replicates`` subsamples per size (one where nothing
+    is drawn); the selector, costlier, on one per size in ``selector_objects`` /
+    ``selector_trials``.
 
     Returns one row per measurement: ``quantity, axis, objects, trials, replicate, estimate,
-    half_width``.
+    half_width, seconds`` (the wall time of the measurement the row comes from).
     """
-    n_objects = int(table[GROUP].nunique())
-    full_trials = int(table["trials"].min())
-    points = [("objects", n, None) for n in objects] + [("trials", None, t) for t in trials]
+    by_trials = table if trials_table is None else trials_table
     classify: Measure = lambda part: classifier_half_widths(part, config, model)  # noqa: E731
     select: Measure = lambda part: {"rl_minus_best_qc": selector_half_width(part, config)}  # noqa: E731
-    rows = _measure(table, points, replicates, seed, classify, n_objects, full_trials, log)
-    chosen = [("objects", n, None) for n in selector_objects]
-    chosen += [("trials", None, t) for t in selector_trials]
-    rows += _measure(table, chosen, 1, seed, select, n_objects, full_trials, log)
+    rows = []
+    for measure, n_reps, sizes, kind in ((classify, replicates, objects, "objects"),
+                                         (classify, replicates, trials, "trials"),
+                                         (select, 1, selector_objects, "objects"),
+                                         (select, 1, selector_trials, "trials")):  # fmt: skip
+        source = table if kind == "objects" else by_trials
+        rows += _measure(source, kind, sizes, n_reps, seed, measure, log)
     return pd.DataFrame.from_records(rows, columns=[
-        "quantity", "axis", "objects", "trials", "replicate", "estimate", "half_width"])
+        "quantity", "axis", "objects", "trials", "replicate", "estimate", "half_width",
+        "seconds"])
 
 
 def _measure(
-    table: pd.DataFrame, points: list[tuple[str, int | None, int | None]], replicates: int,
-    seed: int, measure: Measure, n_objects: int, full_trials: int, log: Callable[[str], None],
+    table: pd.DataFrame, axis: str, sizes: Sequence[int], replicates: int, seed: int,
+    measure: Measure, log: Callable[[str], None],
 ) -> list[dict[str, Any]]:
+    """Measurements at each size along ``axis`` ("objects" or "trials") of ``table``."""
+    most = int(table[GROUP].nunique()) if axis == "objects" else int(table["trials"].min())
     rows = []
-    for axis, n, t in points:
-        n_use = None if n is None or n >= n_objects else n
-        t_use = None if t is None or t >= full_trials else t
-        drawn = n_use is not None or t_use is not None
-        for replicate in range(replicates if drawn else 1):
+    for size in sizes:
+        drawn = None if size >= most else int(size)
+        n_use, t_use = (drawn, None) if axis == "objects" else (None, drawn)
+        for replicate in range(replicates if drawn is not None else 1):
             part = subsample(table, n_use, t_use, seed=seed, replicate=replicate)
-            for quantity, (estimate, half) in measure(part).items():
-                rows.append({"quantity": quantity, "axis": axis,
-                             "objects": int(part[GROUP].nunique()),
-                             "trials": int(part["trials"].min()), "replicate": replicate,
-                             "estimate": estimate, "half_width": half})  # fmt: skip
-            log(f"[power] {axis}: {int(part[GROUP].nunique())} objects, "
-                f"{int(part['trials'].min())} trials, replicate {replicate}")
+            start = time.perf_counter()
+            found = measure(part)
+            seconds = time.perf_counter() - start
+            n, t = int(part[GROUP].nunique()), int(part["trials"].min())
+            rows += [{"quantity": quantity, "axis": axis, "objects": n, "trials": t,
+                      "replicate": replicate, "estimate": estimate, "half_width": half,
+                      "seconds": seconds}
+                     for quantity, (estimate, half) in found.items()]  # fmt: skip
+            log(f"[power] {axis} axis: {n} objects, {t} trials, replicate {replicate}: "
+                + ", ".join(f"{q} ±{h:.3f}" for q, (_, h) in found.items())
+                + f" ({seconds:.0f} s)")
     return rows
 
 
@@ -327,19 +337,27 @@ def default_trials(max_trials: int) -> tuple[int, ...]:
 
 
 def run_power(
-    table: pd.DataFrame, out_dir: Any, config: Config, objects: Sequence[int] | None = None,
-    trials: Sequence[int] | None = None, replicates: int = 2, seed: int = 0, model: str = "svm",
-    selector_objects: Sequence[int] = (), selector_trials: Sequence[int] = (),
-    source: dict[str, Any] | None = None, log: Callable[[str], None] = lambda _: None,
+    tables: Sequence[pd.DataFrame], out_dir: Any, config: Config,
+    objects: Sequence[int] | None = None, trials: Sequence[int] | None = None,
+    replicates: int = 2, seed: int = 0, model: str = "svm", selector_objects: Sequence[int] = (),
+    selector_trials: Sequence[int] = (), source: dict[str, Any] | None = None,
+    log: Callable[[str], None] = lambda _: None,
 ) -> dict[str, Any]:
-    """Measure the curve (grids default to :func:`default_objects` / :func:`default_trials`),
-    fit it, write ``power.json`` and ``power.png`` to ``out_dir``; returns the summary."""
+    """Measure the curve, fit it, write ``power.json`` and ``power.png`` to ``out_dir``; returns
+    the summary. The objects axis runs on the tables pooled (:func:`pool`), the trials axis on
+    the first table (all its trials); grids default to :func:`default_objects` and
+    :func:`default_trials`.
+    """
     import json
     from pathlib import Path
 
     from classifiers.report.power import FIGURE_FILE, POWER_FILE, plot_power
 
-    n, t = int(table[GROUP].nunique()), int(table["trials"].min())
+    if not tables:
+        raise ValueError("run_power needs at least one dataset")
+    pooled = pool(tables, seed=seed) if len(tables) > 1 else tables[0]
+    first = tables[0]
+    n, t = int(pooled[GROUP].nunique()), int(first["trials"].min())
     for name, sizes, most in (("objects", objects, n), ("trials", trials, t),
                               ("selector objects", selector_objects, n),
                               ("selector trials", selector_trials, t)):  # fmt: skip
@@ -348,11 +366,15 @@ def run_power(
             raise ValueError(f"{name} size {bad[0]!r} is outside 1..{most} (the dataset's)")
     if int(replicates) != replicates or replicates < 1:
         raise ValueError(f"replicates must be a positive integer, got {replicates!r}")
-    curve = power_curve(table, config, objects or default_objects(n), trials or default_trials(t),
-                        replicates, seed, model, selector_objects, selector_trials, log)
+    curve = power_curve(pooled, config, objects or default_objects(n), trials or default_trials(t),
+                        replicates, seed, model, selector_objects, selector_trials, log,
+                        trials_table=first)  # fmt: skip
     summary = summarise_curve(curve)
-    summary["source"] = {"objects": n, "trials per grip": t, "grips": len(table), "model": model,
-                         "replicates": replicates, "seed": seed, **(source or {})}  # fmt: skip
+    summary["source"] = {
+        "objects axis": f"{n} objects, {len(pooled)} grips, {int(pooled['trials'].min())} trials",
+        "trials axis": f"{first[GROUP].nunique()} objects, {len(first)} grips, {t} trials",
+        "model": model, "replicates": replicates, "seed": seed, **(source or {}),
+    }  # fmt: skip
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     (out / POWER_FILE).write_text(json.dumps(summary, indent=2, default=_plain))

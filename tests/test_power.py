@@ -136,13 +136,15 @@ def test_power_curve_measures_both_axes_on_real_subsamples(grips):
     from grip_env.config import Config
 
     config = Config().override(learning={"folds": 3, "repeats": 1})
-    curve = power.power_curve(grips, config, objects=(10, 30), trials=(2,), replicates=2,
-                              model="logreg")
+    fewer = power.subsample(grips, objects=20, seed=1)
+    curve = power.power_curve(grips, config, objects=(10, 30), trials=(2, 8), replicates=2,
+                              model="logreg", trials_table=fewer)
     assert set(curve["quantity"]) == {"roc_auc", "hand_difference"}
     counts = curve.groupby(["axis", "objects", "trials"]).size().to_dict()
-    # 2 replicates where objects are drawn, 1 on the whole table; 2 quantities each
-    assert counts == {("objects", 10, 8): 4, ("objects", 30, 8): 2, ("trials", 30, 2): 4}
-    assert (curve["half_width"] > 0).all()
+    # 2 replicates where something is drawn, 1 on a whole table; 2 quantities each
+    assert counts == {("objects", 10, 8): 4, ("objects", 30, 8): 2, ("trials", 20, 2): 4,
+                      ("trials", 20, 8): 2}
+    assert (curve["half_width"] > 0).all() and (curve["seconds"] > 0).all()
 
 
 def test_report_section_renders_the_curve_and_the_projection(tmp_path):

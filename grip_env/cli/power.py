@@ -20,7 +20,8 @@ def power(
     data: Annotated[
         list[Path],
         typer.Option("--data", "-d", help="dataset directory; repeat to pool datasets of the "
-                     "same simulator (every grip cut to the fewest trials any holds)"),
+                     "same simulator for the objects axis (every grip cut to the fewest trials "
+                     "any holds); the trials axis runs on the first"),
     ],
     out: OutputDir,
     config: ConfigFile = None,
@@ -40,6 +41,9 @@ def power(
     replicates: Annotated[int, typer.Option(help="seeded subsamples per size")] = 2,
     seed: Annotated[int, typer.Option(help="subsampling seed")] = 0,
     model: Annotated[str, typer.Option(help=f"the classifier: {MODEL_NAMES_HELP}")] = "svm",
+    partial: Annotated[
+        bool, typer.Option(help="use the finished objects of an unfinished dataset")
+    ] = False,
 ) -> None:
     """Subsample the dataset by objects and by trials per grip, measure the three questions'
     95% interval half-widths on each subsample, fit h² = (a + b/t)/n and project the objects
@@ -56,12 +60,12 @@ def power(
             ("selector_trials", selector_trials, "--selector-trials"))}  # fmt: skip
         settings = load_config(config)
         output_dir(out)
-        from classifiers.power import pool, run_power
+        from classifiers.power import run_power
         from grip_env.dataset import load
 
-        table = pool([load(path) for path in data]) if len(data) > 1 else load(data[0])
+        tables = [load(path, allow_partial=partial) for path in data]
         summary = run_power(
-            table, out, settings, sizes["objects"] or None, sizes["trials"] or None, replicates,
+            tables, out, settings, sizes["objects"] or None, sizes["trials"] or None, replicates,
             seed, model, sizes["selector_objects"], sizes["selector_trials"],
             source={"datasets": ", ".join(str(p) for p in data)}, log=typer.echo,
         )
