@@ -6,14 +6,15 @@ same angle (mirrored axes in the URDF). Each finger is one finite-torque motor b
 
 * joint 2 is velocity-controlled towards closing with torque limit ``tau2``; joint 3 follows
   ``q3_0 + (q2 - q2_0) / 3`` through the gear train (the Barrett clutch before breakaway);
-* the worm gear is not backdrivable: a joint pushed back more than ``BACKLASH_RAD`` (5 mrad)
-  behind the furthest it has closed is locked there, once and for the rest of the trial, by a
-  stiff position motor of ``HOLD_FACTOR`` times its motor torque: a constraint the solver
-  solves together with the contacts, as the real hand's stalled finger is held by its gear.
-  The backlash is what separates a real backdrive from the solver's jitter: at 2 mrad every
-  finger on a pinned box locks on jitter and the squeeze decays from 16 N to 2 N. (A joint limit
-  raised to the peak would be the textbook lock, but PyBullet's joint limits yield under an
-  active joint motor: measured 47 mrad at 40 N on a thumb; see BENCHMARKS.md.)
+* the worm gear is not backdrivable: every joint's lower limit is raised, at every control
+  update, to the furthest the joint has closed (its running peak). The limit is a one-sided
+  stop of ``HOLD_FACTOR`` times the joint's motor torque that the solver solves together with
+  the contacts, while the motor keeps pushing forward with its own torque: a stalled finger
+  keeps its squeeze and cannot be pushed back (measured: 0.02 mrad under 40 N, about 3x the
+  motor), with no switching between modes. The floor sits exactly at the peak, with no
+  backlash: PyBullet's joint limit is a velocity-level stop, active only for a joint at or past
+  it when a step starts and without position correction, so a floor even 0.2 mrad below the
+  joint let a 40 N push carry the thumb 47 mrad back in one step (and hold it there).
 * once the proximal link is stopped by the object, joint 3 is released from the coupling and
   closes on its own with torque limit ``tau3`` (breakaway), locked behind by its own worm gear.
 
@@ -51,7 +52,6 @@ HAND_URDF = Path(str(files("grip_env") / "assets" / "barrett_bh8_280.urdf"))
 GEAR_FACTOR = 5.0  # joint 3's gear-train torque before breakaway, relative to tau3
 GEAR_GAIN = 0.5  # position gain of the gear train (stiff, still stable at 240 Hz)
 PALM_LEAD_STEPS = 4
-BACKLASH_RAD = 0.005  # backdrive beyond this locks the worm gear (0.6 mm at the fingertip)
 GEAR_UPDATE_RAD = 1e-3  # joint 3's geared target follows joint 2 in steps this small
 HOLD_FACTOR = 5.0  # worm-gear holding torque relative to the motor torque
 
@@ -89,11 +89,11 @@ class _Finger:
 
 @dataclass(frozen=True)
 class HandState:
-    """What the controller remembers beyond PyBullet's state: locks, gear origin, breakaway."""
+    """What the controller remembers beyond PyBullet's state: the gear's floors (running peaks),
+    the gear origin, breakaway, the palm target."""
 
     peak: NDArray[np.float64]
     origin: NDArray[np.float64]
-    held: NDArray[np.bool_]
     broken_away: tuple[bool, ...]
     palm_target: tuple[tuple[float, ...], float]
 
@@ -114,6 +114,7 @@ class Hand:
         pairs = zip(FLEX_JOINTS, FINGER_LINKS, strict=True)
         self.fingers = [_Finger(joints, links) for joints, links in pairs]
         self._flex = [j for f in self.fingers for j in f.joints]
+        self._upper = [world.joint_limits(self.uid, j)[1] for j in self._flex]
         for link in range(world.link_count(self.uid)):
             world.set_pad_friction(self.uid, link, self.config.finger_friction,
                                    self.config.pad_torsion_mm)
@@ -121,7 +122,6 @@ class Hand:
         self.spread = 0.0
         self._peak = np.zeros((3, 2))
         self._origin = np.zeros((3, 2))
-        self._held = np.zeros((3, 2), bool)
         self._target: tuple[tuple[float, ...], float] = ((0.0, 0.0, 0.0), 0.0)
 
     # ------------------------------------------------------------------ palm
@@ -180,9 +180,9 @@ class Hand:
             finger.broken_away = False
         self._origin = np.stack([q2, q3], axis=1)
         self._peak = self._origin.copy()
-        self._held = np.zeros((3, 2), bool)
         world.position_motors(self.uid, list(SPREAD_JOINTS), [self.spread] * 2, [10.0] * 2)
         self._command_motors()
+        self._raise_floors(np.ones((3, 2), bool))
 
     def set_finger_torques(self, contact_q2: NDArray, contact_q3: NDArray | None = None) -> None:
         """Motor torques giving ``finger_force_n`` at the fingertips in their contact postures.
@@ -197,6 +197,8 @@ class Hand:
         for finger, h, h3 in zip(self.fingers, tip_h, joint3_h, strict=True):
             finger.tau2 = force * max(h - KNUCKLE_HEIGHT_MM, 20.0) * MM
             finger.tau3 = force * max(h - h3, 20.0) * MM
+        self._command_motors()
+        self._raise_floors(np.ones((3, 2), bool))
 
     def joint_states(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Flexion joint positions and velocities, shape (3, 2) each, planar finger order."""
@@ -210,31 +212,41 @@ class Hand:
     def drive_fingers(self, touching: NDArray[np.bool_] | None = None) -> NDArray[np.float64]:
         """One control update of the finger motors; returns the flexion velocities (3, 2).
 
-        A joint pushed back more than ``BACKLASH_RAD`` behind the furthest it has closed is locked
-        there for the rest of the trial with ``HOLD_FACTOR`` times its motor torque (the
-        non-backdrivable worm gear: once the load exceeds the motor, the gear holds, as the real
-        hand's stalled finger does). Motors are re-commanded only when something changed.
+        A joint that closed beyond its floor raises the floor there (the non-backdrivable worm
+        gear: it can be driven forward by its motor, never back by a load). Motors are
+        re-commanded only when something changed.
         ``touching`` ((3, 2) proximal/distal contacts) triggers the breakaway of a finger whose
         proximal link is stopped by contact; joint 3 then closes on its own motor.
         """
         q, dq = self.joint_states()
         advanced = bool((q[:, 0] > self._peak[:, 0] + GEAR_UPDATE_RAD).any())
-        self._peak = np.maximum(self._peak, q)
-        backdriven = q < self._peak - BACKLASH_RAD
-        engaged = bool((backdriven & ~self._held).any())
-        self._held |= backdriven
+        closed = q > self._peak
+        if closed.any():
+            self._peak = np.maximum(self._peak, q)
+            self._raise_floors(closed)
         if touching is not None:
             for i, finger in enumerate(self.fingers):
                 if touching[i, 0] and dq[i, 0] < 0.1 * self.close_speed_rad_s:
                     finger.broken_away = True
-        if engaged or advanced or touching is not None:
+        if advanced or touching is not None:
             self._command_motors()
         return dq
 
+    def _raise_floors(self, which: NDArray[np.bool_]) -> None:
+        """Set the lower limit of the ``which`` (3, 2) joints to their peaks, holding
+        ``HOLD_FACTOR`` times their motor torques."""
+        joints, lowers, uppers, holds = [], [], [], []
+        for n, (i, k) in enumerate(np.ndindex(3, 2)):
+            if which[i, k]:
+                finger = self.fingers[i]
+                joints.append(finger.joints[k])
+                lowers.append(float(self._peak[i, k]))
+                uppers.append(self._upper[n])
+                holds.append(HOLD_FACTOR * (finger.tau2, finger.tau3)[k])
+        self.world.joint_floors(self.uid, joints, lowers, uppers, holds)
+
     def _command_motors(self) -> None:
-        """Joints close on their motors; joint 3 follows the gear train until breakaway; a
-        joint once backdriven stays locked at its peak by its worm gear."""
-        held = self._held
+        """Joints close on their motors; joint 3 follows the gear train until breakaway."""
         velocity, velocity_forces, position, targets, position_forces = [], [], [], [], []
         for i, finger in enumerate(self.fingers):
             for k, tau in enumerate((finger.tau2, finger.tau3)):
@@ -245,10 +257,6 @@ class Hand:
                     position.append(joint)
                     targets.append(min(coupled, JOINT3_MAX))
                     position_forces.append(GEAR_FACTOR * tau)
-                elif held[i, k]:
-                    position.append(joint)
-                    targets.append(float(self._peak[i, k]))
-                    position_forces.append(HOLD_FACTOR * tau)
                 else:
                     velocity.append(joint)
                     velocity_forces.append(tau)
@@ -260,16 +268,16 @@ class Hand:
 
     def state(self) -> HandState:
         """The controller's own state, to restore together with a PyBullet state."""
-        return HandState(self._peak.copy(), self._origin.copy(), self._held.copy(),
+        return HandState(self._peak.copy(), self._origin.copy(),
                          tuple(f.broken_away for f in self.fingers), self._target)
 
     def restore(self, state: HandState) -> None:
         """Bring the controller back to ``state`` (after ``restoreState`` of the same moment)."""
         self._peak, self._origin = state.peak.copy(), state.origin.copy()
-        self._held = state.held.copy()
         for finger, broken in zip(self.fingers, state.broken_away, strict=True):
             finger.broken_away = broken
         self._command_motors()
+        self._raise_floors(np.ones((3, 2), bool))
         self._target = state.palm_target
         self.move(np.asarray(state.palm_target[0]), state.palm_target[1])
 

@@ -306,6 +306,23 @@ class World:
         self.client.setJointMotorControlArray(body, joints, pybullet.POSITION_CONTROL,
                                               targetPositions=targets, forces=torques, **gains)
 
+    def joint_floors(self, body: int, joints: list[int], lowers: list[float],
+                     uppers: list[float], holds: list[float]) -> None:
+        """Raise (or lower) joints' lower limits: one-sided stops of ``holds`` N·m each.
+
+        A joint limit is a unilateral constraint solved together with the contacts and motors
+        (measured: a thumb at its floor, pushed back by 40 N, about 3x its motor, gives 0.02
+        mrad; a stop weaker than the load yields). ``saveState`` does not keep limits.
+        """
+        change = self.client.changeDynamics
+        for joint, low, high, hold in zip(joints, lowers, uppers, holds, strict=True):
+            change(body, joint, jointLowerLimit=low, jointUpperLimit=high, jointLimitForce=hold)
+
+    def joint_limits(self, body: int, joint: int) -> tuple[float, float]:
+        """A joint's lower and upper limits (rad) as loaded (the URDF's)."""
+        info = self.client.getJointInfo(body, joint)
+        return float(info[8]), float(info[9])
+
     def joint_states(
         self, body: int, joints: list[int]
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
