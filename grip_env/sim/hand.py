@@ -28,6 +28,8 @@ with the palm facing down the hand frame is mirrored, so planar finger 1 is URDF
 
 from __future__ import annotations
 
+import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from importlib.resources import files
 from pathlib import Path
@@ -120,7 +122,7 @@ class Hand:
                                    self.config.pad_torsion_mm)
         self.constraint = world.hold(self.uid)
         self.spread = 0.0
-        self._peak = np.zeros((3, 2))
+        self._peaks = [0.0] * 6  # running peak of each flexion joint, in ``_flex`` order
         self._origin = np.zeros((3, 2))
         self._target: tuple[tuple[float, ...], float] = ((0.0, 0.0, 0.0), 0.0)
 
@@ -158,6 +160,16 @@ class Hand:
         yaw = self._target[1]
         return com - palm_to_world(yaw, self._com_offset), orn
 
+    def palm_pose_floats(
+        self,
+    ) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
+        """``palm_pose_mm`` as plain tuples (for per-step checks)."""
+        (x, y, z), orn = self.world.pose_floats_mm(self.uid)
+        yaw = self._target[1]
+        c, s = math.cos(yaw), math.sin(yaw)
+        ox, oy, oz = self._com_offset
+        return (x - (-s * ox + c * oy), y - (c * ox + s * oy), z + oz), orn
+
     def palm_target_mm(self) -> NDArray[np.float64]:
         """Where the palm base is being driven to (mm)."""
         return np.asarray(self._target[0])
@@ -179,10 +191,10 @@ class Hand:
             world.set_joint(self.uid, finger.joints[1], b)
             finger.broken_away = False
         self._origin = np.stack([q2, q3], axis=1)
-        self._peak = self._origin.copy()
+        self._peaks = self._origin.ravel().tolist()
         world.position_motors(self.uid, list(SPREAD_JOINTS), [self.spread] * 2, [10.0] * 2)
         self._command_motors()
-        self._raise_floors(np.ones((3, 2), bool))
+        self._raise_floors(range(6))
 
     def set_finger_torques(self, contact_q2: NDArray, contact_q3: NDArray | None = None) -> None:
         """Motor torques giving ``finger_force_n`` at the fingertips in their contact postures.
@@ -198,7 +210,7 @@ class Hand:
             finger.tau2 = force * max(h - KNUCKLE_HEIGHT_MM, 20.0) * MM
             finger.tau3 = force * max(h - h3, 20.0) * MM
         self._command_motors()
-        self._raise_floors(np.ones((3, 2), bool))
+        self._raise_floors(range(6))
 
     def joint_states(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Flexion joint positions and velocities, shape (3, 2) each, planar finger order."""
@@ -218,31 +230,45 @@ class Hand:
         ``touching`` ((3, 2) proximal/distal contacts) triggers the breakaway of a finger whose
         proximal link is stopped by contact; joint 3 then closes on its own motor.
         """
-        q, dq = self.joint_states()
-        advanced = bool((q[:, 0] > self._peak[:, 0] + GEAR_UPDATE_RAD).any())
-        closed = q > self._peak
-        if closed.any():
-            self._peak = np.maximum(self._peak, q)
-            self._raise_floors(closed)
+        q, dq = self.world.joint_positions_velocities(self.uid, self._flex)
+        advanced = self._follow(q)
         if touching is not None:
             for i, finger in enumerate(self.fingers):
-                if touching[i, 0] and dq[i, 0] < 0.1 * self.close_speed_rad_s:
+                if touching[i, 0] and dq[2 * i] < 0.1 * self.close_speed_rad_s:
                     finger.broken_away = True
         if advanced or touching is not None:
             self._command_motors()
-        return dq
+        return np.array(dq).reshape(3, 2)
 
-    def _raise_floors(self, which: NDArray[np.bool_]) -> None:
-        """Set the lower limit of the ``which`` (3, 2) joints to their peaks, holding
-        ``HOLD_FACTOR`` times their motor torques."""
+    def hold_fingers(self) -> None:
+        """``drive_fingers()`` without contacts, returning nothing: the per-step update while
+        the fingers hold (lean: no arrays)."""
+        if self._follow(self.world.joint_positions_velocities(self.uid, self._flex)[0]):
+            self._command_motors()
+
+    def _follow(self, q: list[float]) -> bool:
+        """Raise the floors of the joints that closed beyond their peaks; whether a joint 2
+        advanced by more than ``GEAR_UPDATE_RAD`` (its joint 3's geared target then moves)."""
+        peaks, advanced, closed = self._peaks, False, []
+        for n, value in enumerate(q):
+            if value > peaks[n]:
+                advanced = advanced or (n % 2 == 0 and value > peaks[n] + GEAR_UPDATE_RAD)
+                peaks[n] = value
+                closed.append(n)
+        if closed:
+            self._raise_floors(closed)
+        return advanced
+
+    def _raise_floors(self, which: Iterable[int]) -> None:
+        """Set the lower limit of the flexion joints ``which`` (indices into ``_flex``) to their
+        peaks, holding ``HOLD_FACTOR`` times their motor torques."""
         joints, lowers, uppers, holds = [], [], [], []
-        for n, (i, k) in enumerate(np.ndindex(3, 2)):
-            if which[i, k]:
-                finger = self.fingers[i]
-                joints.append(finger.joints[k])
-                lowers.append(float(self._peak[i, k]))
-                uppers.append(self._upper[n])
-                holds.append(HOLD_FACTOR * (finger.tau2, finger.tau3)[k])
+        for n in which:
+            finger = self.fingers[n // 2]
+            joints.append(self._flex[n])
+            lowers.append(self._peaks[n])
+            uppers.append(self._upper[n])
+            holds.append(HOLD_FACTOR * (finger.tau2, finger.tau3)[n % 2])
         self.world.joint_floors(self.uid, joints, lowers, uppers, holds)
 
     def _command_motors(self) -> None:
@@ -252,7 +278,7 @@ class Hand:
             for k, tau in enumerate((finger.tau2, finger.tau3)):
                 joint = finger.joints[k]
                 if k == 1 and not finger.broken_away:
-                    closed = self._peak[i, 0] - self._origin[i, 0]
+                    closed = self._peaks[2 * i] - self._origin[i, 0]
                     coupled = self._origin[i, 1] + COUPLING * closed
                     position.append(joint)
                     targets.append(min(coupled, JOINT3_MAX))
@@ -268,16 +294,16 @@ class Hand:
 
     def state(self) -> HandState:
         """The controller's own state, to restore together with a PyBullet state."""
-        return HandState(self._peak.copy(), self._origin.copy(),
+        return HandState(np.reshape(self._peaks, (3, 2)), self._origin.copy(),
                          tuple(f.broken_away for f in self.fingers), self._target)
 
     def restore(self, state: HandState) -> None:
         """Bring the controller back to ``state`` (after ``restoreState`` of the same moment)."""
-        self._peak, self._origin = state.peak.copy(), state.origin.copy()
+        self._peaks, self._origin = state.peak.ravel().tolist(), state.origin.copy()
         for finger, broken in zip(self.fingers, state.broken_away, strict=True):
             finger.broken_away = broken
         self._command_motors()
-        self._raise_floors(np.ones((3, 2), bool))
+        self._raise_floors(range(6))
         self._target = state.palm_target
         self.move(np.asarray(state.palm_target[0]), state.palm_target[1])
 

@@ -20,12 +20,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
-from scipy.spatial.transform import Rotation
 
 from grip_env.config import Config
 from grip_env.finger import ContactPosture, finger_reaches, opening_posture, planar_contacts
 from grip_env.objects import PlanarObject
 from grip_env.objects.meshes import executes_on_mesh, execution_height_mm
+from grip_env.sim import pose
 from grip_env.sim.disturbance import RampProbe, robustness
 from grip_env.sim.hand import Hand, palm_to_world
 from grip_env.sim.uncertainty import TrialNoise, object_mass_kg
@@ -239,18 +239,14 @@ class TrialScene:
         finally:
             world.forget(saved)
 
-    def _object_in_palm(self) -> tuple[NDArray[np.float64], Rotation]:
-        palm_pos, palm_orn = self.hand.palm_pose_mm()
-        obj_pos, obj_orn = self.world.pose_mm(self.object.uid)
-        to_palm = Rotation.from_quat(palm_orn).inv()
-        return to_palm.apply(obj_pos - palm_pos), to_palm * Rotation.from_quat(obj_orn)
+    def _object_in_palm(self) -> tuple[pose.Vector, pose.Quaternion]:
+        """The object's pose (mm, quaternion) in the palm frame."""
+        palm, palm_orn = self.hand.palm_pose_floats()
+        return pose.in_frame(palm, palm_orn, *self.world.pose_floats_mm(self.object.uid))
 
-    def _moved_from(self, reference: tuple[NDArray[np.float64], Rotation]) -> tuple[float, float]:
+    def _moved_from(self, reference: tuple[pose.Vector, pose.Quaternion]) -> tuple[float, float]:
         """Drift (mm) and rotation (deg) of the object in the palm frame since ``reference``."""
-        position, orientation = self._object_in_palm()
-        drift = float(np.linalg.norm(position - reference[0]))
-        turn = float(np.degrees((reference[1].inv() * orientation).magnitude()))
-        return drift, turn
+        return pose.moved_from(reference, self._object_in_palm())
 
     def _object_height(self) -> float:
         return float(self.world.pose_mm(self.object.uid)[0][2])
@@ -263,9 +259,10 @@ class _StepCounter:
         self.world, self.hand, self.steps = world, hand, 0
 
     def step(self, n: int = 1) -> None:
+        hold, step = self.hand.hold_fingers, self.world.step
         for _ in range(n):
-            self.hand.drive_fingers()
-            self.world.step()
+            hold()
+            step()
         self.steps += n
 
 

@@ -76,7 +76,20 @@ class World:
             self.client = BulletClient(connection_mode=pybullet.DIRECT)
         self.timestep = timestep
         self.solver_iterations = solver_iterations
+        self._bind()
         self.reset()
+
+    def _bind(self) -> None:
+        """Hold the client functions the per-step loop calls (``BulletClient`` builds a new
+        partial at every attribute lookup)."""
+        c = self.client
+        self._step_simulation = c.stepSimulation
+        self._get_joint_states = c.getJointStates
+        self._change_dynamics = c.changeDynamics
+        self._base_pose = c.getBasePositionAndOrientation
+        self._motor_array = c.setJointMotorControlArray
+        self._external_force = c.applyExternalForce
+        self._external_torque = c.applyExternalTorque
 
     # ------------------------------------------------------------------ lifecycle
     def reset(self) -> None:
@@ -109,8 +122,9 @@ class World:
 
     def step(self, steps: int = 1) -> None:
         """Advance the simulation ``steps`` fixed steps."""
+        step = self._step_simulation
         for _ in range(steps):
-            self.client.stepSimulation()
+            step()
 
     # ------------------------------------------------------------------ bodies
     def add_table(self, friction: float = 0.5, half_size_mm: float = 500.0) -> Body:
@@ -247,8 +261,15 @@ class World:
 
     def pose_mm(self, body: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Position (mm) and quaternion (x, y, z, w) of a body's base (its centre of mass)."""
-        pos, orn = self.client.getBasePositionAndOrientation(body)
+        pos, orn = self._base_pose(body)
         return np.asarray(pos) / MM, np.asarray(orn)
+
+    def pose_floats_mm(
+        self, body: int
+    ) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
+        """``pose_mm`` as plain tuples (for per-step checks)."""
+        (x, y, z), orn = self._base_pose(body)
+        return (x / MM, y / MM, z / MM), orn
 
     # ------------------------------------------------------------------ robots
     def load_robot(self, urdf: str | Path) -> int:
@@ -296,15 +317,15 @@ class World:
     def velocity_motors(self, body: int, joints: list[int], speeds: list[float],
                         torques: list[float]) -> None:
         """Velocity-controlled joint motors of limited torque (N·m)."""
-        self.client.setJointMotorControlArray(body, joints, pybullet.VELOCITY_CONTROL,
-                                              targetVelocities=speeds, forces=torques)
+        self._motor_array(body, joints, pybullet.VELOCITY_CONTROL, targetVelocities=speeds,
+                          forces=torques)
 
     def position_motors(self, body: int, joints: list[int], targets: list[float],
                         torques: list[float], gain: float | None = None) -> None:
         """Position-controlled joint motors of limited torque (N·m); PyBullet's gain if None."""
         gains = {} if gain is None else {"positionGains": [gain] * len(joints)}
-        self.client.setJointMotorControlArray(body, joints, pybullet.POSITION_CONTROL,
-                                              targetPositions=targets, forces=torques, **gains)
+        self._motor_array(body, joints, pybullet.POSITION_CONTROL, targetPositions=targets,
+                          forces=torques, **gains)
 
     def joint_floors(self, body: int, joints: list[int], lowers: list[float],
                      uppers: list[float], holds: list[float]) -> None:
@@ -314,7 +335,7 @@ class World:
         (measured: a thumb at its floor, pushed back by 40 N, about 3x its motor, gives 0.02
         mrad; a stop weaker than the load yields). ``saveState`` does not keep limits.
         """
-        change = self.client.changeDynamics
+        change = self._change_dynamics
         for joint, low, high, hold in zip(joints, lowers, uppers, holds, strict=True):
             change(body, joint, jointLowerLimit=low, jointUpperLimit=high, jointLimitForce=hold)
 
@@ -327,8 +348,14 @@ class World:
         self, body: int, joints: list[int]
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """Positions, velocities and applied motor torques of ``joints``."""
-        states = self.client.getJointStates(body, joints)
+        states = self._get_joint_states(body, joints)
         return tuple(np.array([s[k] for s in states]) for k in (0, 1, 3))  # type: ignore[return-value]
+
+    def joint_positions_velocities(self, body: int,
+                                   joints: list[int]) -> tuple[list[float], list[float]]:
+        """Positions and velocities of ``joints``, as lists (for the per-step controller)."""
+        states = self._get_joint_states(body, joints)
+        return [s[0] for s in states], [s[1] for s in states]
 
     def touching_links(self, body: int, other: int) -> set[int]:
         """The links of ``body`` in contact with ``other``."""
@@ -349,14 +376,12 @@ class World:
 
     def push(self, body: int, force_n: NDArray) -> None:
         """A world-frame force (N) through ``body``'s centre of mass, for the next step."""
-        com = self.client.getBasePositionAndOrientation(body)[0]
-        self.client.applyExternalForce(body, -1, np.asarray(force_n).tolist(), com,
-                                       pybullet.WORLD_FRAME)
+        com = self._base_pose(body)[0]
+        self._external_force(body, -1, np.asarray(force_n).tolist(), com, pybullet.WORLD_FRAME)
 
     def twist(self, body: int, torque_nm: NDArray) -> None:
         """A world-frame torque (N·m) on ``body``, for the next step."""
-        self.client.applyExternalTorque(body, -1, np.asarray(torque_nm).tolist(),
-                                        pybullet.WORLD_FRAME)
+        self._external_torque(body, -1, np.asarray(torque_nm).tolist(), pybullet.WORLD_FRAME)
 
     # ------------------------------------------------------------------ camera
     def render_top_down(
