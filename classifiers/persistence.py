@@ -18,7 +18,6 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
-import skops.io as sio
 import torch
 from sklearn.pipeline import Pipeline
 
@@ -56,6 +55,8 @@ def save_model(
     selector, estimator = model[0], model[-1]
     if not isinstance(selector, ColumnSelector):
         raise ValueError(f"model {name!r} must start with a ColumnSelector step")
+    import skops.io as sio  # here, not at import: skops' import walks all of scikit-learn
+
     info = {"name": name, "columns": list(selector.columns), **(metadata or {})}
     if type(estimator).__name__ in _TORCH_MODELS and len(model) == 2:
         torch.save(estimator.state_dict(), directory / f"{name}.pt")
@@ -87,6 +88,8 @@ def load_model(directory: str | Path, name: str) -> tuple[Pipeline, dict[str, An
         selector.n_features_out_ = len(selector.columns)
         return Pipeline([("select", selector), ("model", estimator)]), info
     if info.get("format") == "skops":
+        import skops.io as sio
+
         path = directory / f"{name}.skops"
         untrusted = sio.get_untrusted_types(file=path)
         unexpected = sorted(

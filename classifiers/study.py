@@ -1,4 +1,5 @@
-"""The main job: dataset, classifiers, ablation, RL selector, label calibration, report.
+"""The main job: dataset, classifiers, ablation, RL selector, leaderboard, label calibration,
+report.
 
 Every stage records what it read in ``<stage>/stage.json``: the config fields it depends on
 (:data:`STAGE_INPUTS`), the dataset's checksum and the grip-env version, hashed into its key
@@ -38,6 +39,7 @@ STAGE_INPUTS: dict[str, tuple[str, ...]] = {
     "classifiers": ("learning",),
     "ablation": ("learning.folds", "learning.repeats", "learning.seed"),
     "selector": ("learning.models", "learning.seed", "learning.test_fraction", "selector", "sim"),
+    "benchmark": ("learning", "selector", "sim", "grasp.mu"),
     "calibration": ("grasp", "objects", "perception", "synthesis", "sim", "uncertainty",
                     "dataset.seed"),
 }
@@ -82,6 +84,7 @@ def run_study(
     timings: dict[str, float] = {}
 
     from classifiers.ablation import run_ablation
+    from classifiers.benchmark import study_benchmark
     from classifiers.persistence import dataset_checksum
     from classifiers.selector import run_selector
     from classifiers.training import train_and_save
@@ -120,6 +123,8 @@ def run_study(
           lambda: run_ablation(table, out / "ablation", config))
     stage("selector", out / "selector" / "selector.json",
           lambda: run_selector(table, out / "selector", config))
+    stage("benchmark", out / "benchmark" / "leaderboard.json",
+          lambda: study_benchmark(table, out, config))
     stage("calibration", out / "calibration" / "calibration.json",
           lambda: run_calibration(config, out / "calibration", table, quick, log))
     _merge_timings(out / "timings.json", timings)

@@ -161,3 +161,22 @@ def _plain() -> dict[str, float]:
     keys = ("success", "robustness", "regret", "robustness_regret", "ndcg5", "attempts",
             *(f"success_at_{k}" for k in range(1, 6)))
     return dict.fromkeys(keys, 0.5)
+
+
+def test_report_and_readme_show_the_leaderboard_and_its_verdict(tmp_path) -> None:
+    from classifiers.benchmark.leaderboard import write_leaderboard
+    from classifiers.report.document import Report
+    from classifiers.report.readme import _leaderboard_lines
+    from classifiers.report.study_report import _benchmark_section
+
+    rows = [{"method": m, "seed": 0, "object_id": f"o{i}", "normalised": v + 0.01 * i,
+             **_plain()} for i in range(10) for m, v in (("best_qc", 0.1), ("good", 0.9))]
+    board = build_leaderboard(pd.DataFrame(rows), {"name": "t", "version": 0}, reps=300)
+    write_leaderboard(board, tmp_path / "benchmark")
+    report = Report("r")
+    _benchmark_section(report, tmp_path)
+    text = report.to_markdown()
+    assert "## Leaderboard" in text and "Beat the best-Q_C pick" in text
+    assert "| good | 1 |" in text and "benchmark/performance_profile.png" in text
+    readme = "\n".join(_leaderboard_lines(tmp_path))
+    assert "| good | 1 | 0.500 |" in readme and "`good`" in readme

@@ -31,7 +31,8 @@ def test_quick_study_reports_and_a_rerun_recomputes_only_what_changed(tmp_path):
     assert "--quick sets " in result.output and "learning.models=logreg,knn" in result.output
     report = (out / "report.md").read_text()
     for section in ("## Dataset", "## Features and outcomes", "## Grasp ranks against",
-                    "## Classifiers", "## Ablation", "## RL selector", "## Parameters"):
+                    "## Classifiers", "## Ablation", "## RL selector", "## Leaderboard",
+                    "## Parameters"):
         assert section in report
     assert "Not run." not in report and "Stage provenance" in report
     assert (out / "report.html").read_text().startswith("<!doctype html>")
@@ -58,6 +59,8 @@ def test_quick_study_reports_and_a_rerun_recomputes_only_what_changed(tmp_path):
     assert "classifiers: learning changed, recomputing" in again.output
     assert "selector: learning.models changed, recomputing" in again.output
     assert "ablation: reusing" in again.output and "calibration: reusing" in again.output
+    assert "benchmark: learning changed, recomputing" in again.output
+    assert (out / "benchmark" / "leaderboard.json").exists()
     metrics = json.loads((out / "classifiers" / "metrics.json").read_text())
     assert list(metrics["models"]) == [*QUICK_MODELS, "svm"]
     assert "| svm |" in (out / "report.md").read_text()

@@ -35,12 +35,17 @@ VERDICTS = ("beats best_qc", "worse than best_qc", "not distinguishable from bes
 TAUS = np.linspace(-1.0, 1.0, 201)
 
 
+class NoRankableObject(ValueError):
+    """No held-out object has candidates of different success rates: nothing can be ranked."""
+
+
 def score_matrices(metrics: pd.DataFrame) -> tuple[dict[str, np.ndarray], list[str]]:
     """Each method's ``(runs, objects)`` normalised scores over the non-degenerate objects."""
     valid = metrics.groupby("object_id")["normalised"].apply(lambda s: s.notna().all())
     objects = sorted(valid.index[valid.to_numpy(bool)])
     if not objects:
-        raise ValueError("no held-out object separates oracle from random: nothing to rank")
+        raise NoRankableObject("no held-out object has candidates of different success rates "
+                               "(oracle = random on each): nothing to rank")
     kept = metrics[metrics["object_id"].isin(objects)]
     matrices = {
         str(name): group.pivot(index="seed", columns="object_id", values="normalised")
@@ -86,7 +91,8 @@ def build_leaderboard(
         "degenerate_objects": degenerate, "taus": _round(TAUS),
         "interval": (f"95% percentile stratified bootstrap ({reps} resamples, seed {seed}): "
                      "objects resampled, runs resampled within each object (rliable's "
-                     "StratifiedBootstrap, task_bootstrap=True); *_runs_only_ci: runs only"),
+                     "StratifiedBootstrap, task_bootstrap=True); the JSON's `iqm_runs_only_ci` and "
+                     "`mean_runs_only_ci` resample runs only (rliable's default)"),
         "methods": {name: rows[name] for name in order},
     }  # fmt: skip
 
@@ -139,7 +145,7 @@ def leaderboard_markdown(board: Mapping[str, Any]) -> str:
     split = board["split"]
     lines = [
         f"# Grip-selection leaderboard ({split.get('name', 'split')})", "",
-        _split_line(board), "", _table(main), "",
+        split_line(board), "", _table(main), "",
         f"Normalised score: (method - random) / (oracle - random) of the top-1 pick's expected "
         f"success, per object; {board['interval']}. {verdict_sentence(board)}", "",
         "## Success within k attempts (GripAccept-v0 / GripSelect-v0 with max_attempts = k)", "",
@@ -163,7 +169,8 @@ def write_leaderboard(board: Mapping[str, Any], out: str | Path) -> list[Path]:
     return [out / name for name in (JSON_FILE, MARKDOWN_FILE, PROFILE_FILE, ATTEMPTS_FILE)]
 
 
-def _split_line(board: Mapping[str, Any]) -> str:
+def split_line(board: Mapping[str, Any]) -> str:
+    """One sentence: which split, how many objects, seeds and the dataset's checksum."""
     split = board["split"]
     seeds = split.get("seeds")
     return (f"Split `{split.get('name')}` (version {split.get('version')}): "

@@ -3,7 +3,8 @@
 The block sits between :data:`BEGIN` and :data:`END` in the README; :func:`update_readme`
 replaces what is between them with :func:`results_block` of a finished study, so the README's
 numbers are always those of a stored run (its ``classifiers/metrics.json``,
-``ablation/ablation.json``, ``selector/selector.json``, ``timings.json`` and dataset).
+``ablation/ablation.json``, ``selector/selector.json``, ``benchmark/leaderboard.json`` when the
+leaderboard ranked anything, ``timings.json`` and dataset).
 """
 
 from __future__ import annotations
@@ -66,8 +67,27 @@ def results_block(out: Path, table: pd.DataFrame, commit: str, version: str) -> 
               "| success rate (95 % bootstrap interval) |", "| --- | --- |"]
     lines += [f"| {name} | {interval_text(scores['success_rate'], 2)} |"
               for name, scores in policies.items()]
+    lines += _leaderboard_lines(out)
     lines += ["", _meaning(metrics, policies)]
     return "\n".join(lines)
+
+
+def _leaderboard_lines(out: Path) -> list[str]:
+    """The leaderboard's main columns and its verdict (nothing when the stage did not rank)."""
+    path = out / "benchmark" / "leaderboard.json"
+    board = json.loads(path.read_text()) if path.is_file() else {}
+    if not board.get("methods"):
+        return []
+    from classifiers.benchmark.leaderboard import leaderboard_frames, verdict_sentence
+
+    main, _ = leaderboard_frames(board)
+    shown = main[["method", "runs", "top-1 success", "normalised IQM", "mean - best_qc"]]
+    lines = ["", f"| leaderboard ({len(board['objects'])} held-out objects) | runs | top-1 "
+             "success | normalised IQM (95 % stratified bootstrap) | mean - best_qc |",
+             "| --- | --- | --- | --- | --- |"]  # fmt: skip
+    rows = shown.itertuples(index=False)
+    lines += ["| " + " | ".join(str(v) for v in row) + " |" for row in rows]
+    return [*lines, "", verdict_sentence(board)]
 
 
 def update_readme(readme: Path, block: str) -> None:

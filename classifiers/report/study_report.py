@@ -43,6 +43,7 @@ def write_report(out: Path, config: Config, table: pd.DataFrame) -> Path:
     _regression_section(report, out)
     _ablation_section(report, out)
     _selector_section(report, out)
+    _benchmark_section(report, out)
     power_section(report, out)
     _provenance_section(report, out, config)
     md, _ = report.write(out)
@@ -320,6 +321,45 @@ def _selector_section(report: Report, out: Path) -> None:
     report.table(frame_of_intervals(policies, metrics),
                  caption="First-pick success rate on the held-out objects, mean and 95% interval.")
     _stage_figures(report, out, "selector")
+
+
+def _benchmark_section(report: Report, out: Path) -> None:
+    """The leaderboard: every method's pick on the held-out objects, against best-Q_C."""
+    from classifiers.benchmark.leaderboard import (
+        ATTEMPTS_FILE,
+        PROFILE_FILE,
+        leaderboard_frames,
+        split_line,
+        verdict_sentence,
+    )
+
+    report.heading("Leaderboard: the grip each method picks")
+    board = _stage_result(report, out / "benchmark" / "leaderboard.json")
+    if board is None:
+        return
+    if not board.get("methods"):
+        report.text(f"No leaderboard: {board.get('skipped', 'no method was scored')}.")
+        return
+    main, attempts = leaderboard_frames(board)
+    report.text(
+        "Each method picks one grip per held-out object (its highest score; ties count as a "
+        "uniformly random pick among them). Top-1 success and robustness are the recorded "
+        "success rate and robustness of that pick, regret is the oracle's success rate minus the "
+        "pick's, NDCG@5 grades the top five by success rate. The normalised score is (method - "
+        "random) / (oracle - random) per object, random being the exact mean over the "
+        "candidates. " + split_line(board)
+    )
+    report.table(main.set_index("method"), caption="Leaderboard, sorted by the interquartile "
+                 "mean of the normalised score; intervals: " + board["interval"] + ".")
+    report.text("**" + verdict_sentence(board) + "**")
+    report.table(attempts.set_index("method"), caption="Success within k attempts: the chance "
+                 "that one of the method's top-k picks holds, independent trials assumed "
+                 "(GripSelect-v0 with max_attempts = k; GripAccept-v0 executing those k).")
+    for name, caption in ((PROFILE_FILE, "Performance profiles (rliable): fraction of held-out "
+                           "objects x runs whose normalised score exceeds tau."),
+                          (ATTEMPTS_FILE, "Success against the number of attempts allowed.")):
+        if (out / "benchmark" / name).exists():
+            report.figure(_rel(out / "benchmark" / name, out), caption)
 
 
 def _provenance_section(report: Report, out: Path, config: Config) -> None:
