@@ -134,6 +134,26 @@ def test_skops_model_and_sb3_zips(data: Path, tmp_path: Path) -> None:
     out = tmp_path / "never"
     assert_refused(*cli("benchmark", bad, "--data", data, "--out", out), "do not match")
     assert not out.exists()
+    plain = _ppo_zip(tmp_path)
+    code, output = cli("benchmark", plain, "--data", data, "--out", tmp_path / "ppo",
+                       "--reps", 200)  # fmt: skip
+    assert code == 0, output
+    assert board(tmp_path / "ppo")["methods"]["ppo"]["runs"] == 1
+
+
+def _ppo_zip(folder: Path) -> Path:
+    """An untrained plain PPO (no masks) with the stock multi-input policy, K = 64."""
+    from stable_baselines3 import PPO
+
+    from classifiers.selector.training import make_selector_env
+    from grip_env.config import Config
+
+    env = make_selector_env(synthetic_grips(n_objects=6, grips=(4, 6), seed=2), Config(),
+                            split="all", n_envs=1)  # fmt: skip
+    path = folder / "ppo.zip"
+    PPO("MultiInputPolicy", env, n_steps=16, batch_size=16, seed=0).save(path)
+    env.close()
+    return path
 
 
 def _sb3_zip(folder: Path, candidates: int) -> Path:
