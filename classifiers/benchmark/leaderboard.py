@@ -197,11 +197,13 @@ def _table(frame: pd.DataFrame) -> str:
 
 def _ci(value: Mapping[str, Any]) -> str:
     low, high = value["ci"]
-    return f"{value['estimate']:.3f} [{low:.3f}, {high:.3f}]"
+    return f"{_f(value['estimate'])} [{_f(low)}, {_f(high)}]"
 
 
 def _f(value: float | None, digits: int = 3) -> str:
-    return "n/a" if value is None or not np.isfinite(value) else f"{value:.{digits}f}"
+    if value is None or not np.isfinite(value):
+        return "n/a"
+    return f"{round(float(value), digits) + 0.0:.{digits}f}"  # + 0.0: no "-0.000"
 
 
 def _round(value: Any) -> Any:

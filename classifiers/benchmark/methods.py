@@ -249,6 +249,7 @@ def sb3_scores(path: Path, sets: Sequence[CandidateSet], seed: int, name: str) -
 def study_scores(out: Path) -> pd.DataFrame | None:
     """The learners' per-seed score tables of a study folder (classifiers, rankers, RL)."""
     frames = [pd.read_parquet(out / f) for f in SCORE_FILES if (out / f).exists()]
+    frames = [frame for frame in frames if len(frame)]
     if not frames:
         return None
     table = pd.concat(frames, ignore_index=True)

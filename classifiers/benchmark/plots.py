@@ -20,14 +20,25 @@ def _pyplot() -> Any:
     return plt
 
 
+def _colors(plt: Any, board: Mapping[str, Any]) -> list[Any]:
+    """One distinct colour per method (tab20: up to 20 methods before a colour repeats)."""
+    cmap = plt.get_cmap("tab20")
+    return [cmap(i % 20) for i in range(len(board["methods"]))]
+
+
+def _style(name: str, board: Mapping[str, Any]) -> str:
+    """Dashed for the references (oracle, random, best-Q_C), solid for the rest."""
+    return "--" if name in ("random", "oracle", board["reference"]) else "-"
+
+
 def plot_profiles(board: Mapping[str, Any], path: str | Path) -> Path:
     """Fraction of (object, run) pairs whose normalised score exceeds tau, per method."""
     plt = _pyplot()
     taus = np.asarray(board["taus"], dtype=float)
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    for name, row in board["methods"].items():
-        style = "--" if name in ("random", "oracle", board["reference"]) else "-"
-        ax.step(taus, np.asarray(row["profile"], dtype=float), where="post", ls=style, label=name)
+    for (name, row), color in zip(board["methods"].items(), _colors(plt, board), strict=True):
+        ax.step(taus, np.asarray(row["profile"], dtype=float), where="post", color=color,
+                ls=_style(name, board), label=name)  # fmt: skip
     ax.set_xlabel("normalised score tau  (0 = random pick, 1 = oracle)")
     ax.set_ylabel("fraction of objects x runs with score > tau")
     ax.set_xlim(taus.min(), taus.max())
@@ -46,10 +57,9 @@ def plot_attempts(board: Mapping[str, Any], path: str | Path) -> Path:
     plt = _pyplot()
     ks = np.arange(1, MAX_ATTEMPTS + 1)
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    for name, row in board["methods"].items():
+    for (name, row), color in zip(board["methods"].items(), _colors(plt, board), strict=True):
         values = [row[f"success_at_{k}"] for k in ks]
-        ax.plot(ks, values, marker="o", ls="--" if name in ("random", "oracle") else "-",
-                label=name)  # fmt: skip
+        ax.plot(ks, values, marker="o", color=color, ls=_style(name, board), label=name)
     ax.set_xticks(ks)
     ax.set_xlabel("attempts allowed")
     ax.set_ylabel("P(one of the top-k picks holds)")
