@@ -14,6 +14,9 @@ seaborn); the estimators and the resampling scheme are rliable's:
   resampled too (the same objects for every method, so comparisons stay paired). The interval
   is the percentile interval of the statistic over the resamples.
 
+``scripts/check_rliable.py`` checks them against rliable 1.2.0: identical point estimates,
+intervals equal to Monte-Carlo error.
+
 The leaderboard uses ``task_bootstrap=True``: the held-out objects are a sample of the objects a
 robot meets, and the analytic baselines have one run, so resampling runs alone would give them a
 zero-width interval. The runs-only interval (rliable's default) is reported beside it.
