@@ -180,3 +180,39 @@ def test_report_and_readme_show_the_leaderboard_and_its_verdict(tmp_path) -> Non
     assert "| good | 1 |" in text and "benchmark/performance_profile.png" in text
     readme = "\n".join(_leaderboard_lines(tmp_path))
     assert "| good | 1 | 0.500 |" in readme and "`good`" in readme
+
+
+@pytest.mark.parametrize("attempts", [1, 2, 3])
+def test_success_within_k_is_what_grip_accept_earns_executing_the_top_k(attempts: int) -> None:
+    """GripAccept-v0 shows candidates in Q_C order; an agent executing exactly the method's
+    top-k (in another order) holds as often as the exact ``success_at_k`` says."""
+    import gymnasium
+
+    import grip_env  # noqa: F401  (registers the environments)
+    from classifiers.synthetic import synthetic_grips
+    from grip_env.envs.observation import best_candidates
+
+    table = synthetic_grips(n_objects=2, grips=(8, 8), trials=4, seed=0)
+    rows = best_candidates(table[table["object_id"] == 0], 8)
+    candidates = pd.DataFrame({"object_id": "0", "candidate": np.arange(8),
+                               "success_rate": rows["successes"] / rows["trials"]})
+    score = np.array([7.0, 1, 2, 8, 3, 6, 4, 5])  # top 3 in slots 3, 0, 5 (not Q_C order)
+    exact = selection_metrics(candidates, pd.DataFrame({
+        "method": "m", "seed": 0, "object_id": "0", "candidate": np.arange(8), "score": score,
+    }))[f"success_at_{attempts}"].item()  # fmt: skip
+    top = set(np.argsort(-score)[:attempts].tolist())
+    env = gymnasium.make("GripAccept-v0", data=table, max_candidates=8, max_attempts=attempts,
+                         split="all")  # fmt: skip
+    episodes, held = 3000, 0
+    for episode in range(episodes):
+        env.reset(seed=episode if episode == 0 else None, options={"object_id": "0"})
+        for position in range(8):
+            _, _, terminated, _, info = env.step(int(position in top))
+            if terminated:
+                held += bool(info["success"])
+                break
+    env.close()
+    rates = candidates["success_rate"].to_numpy()
+    assert exact == pytest.approx(1 - np.prod(1 - rates[[3, 0, 5][:attempts]]))
+    assert 0.05 < exact < 0.95  # (0.25, 0.5, 0.25 today): a check the simulation can fail
+    assert abs(held / episodes - exact) < 4 * np.sqrt(exact * (1 - exact) / episodes)
