@@ -179,7 +179,7 @@ def test_report_and_readme_show_the_leaderboard_and_its_verdict(tmp_path) -> Non
     assert "## Leaderboard" in text and "Beat the best-Q_C pick" in text
     assert "| good | 1 |" in text and "benchmark/performance_profile.png" in text
     readme = "\n".join(_leaderboard_lines(tmp_path))
-    assert "| good | 1 | 0.500 |" in readme and "`good`" in readme
+    assert "| good | 1 | 0.500 [0.500, 0.500] |" in readme and "`good`" in readme
 
 
 @pytest.mark.parametrize("attempts", [1, 2, 3])

@@ -46,13 +46,18 @@ def score_matrices(metrics: pd.DataFrame) -> tuple[dict[str, np.ndarray], list[s
     if not objects:
         raise NoRankableObject("no held-out object has candidates of different success rates "
                                "(oracle = random on each): nothing to rank")
+    return metric_matrices(metrics, "normalised", objects), objects
+
+
+def metric_matrices(metrics: pd.DataFrame, column: str, objects: Sequence[str]) -> dict[
+        str, np.ndarray]:  # fmt: skip
+    """Each method's ``(runs, objects)`` values of ``column`` on ``objects``."""
     kept = metrics[metrics["object_id"].isin(objects)]
-    matrices = {
-        str(name): group.pivot(index="seed", columns="object_id", values="normalised")
-        .loc[:, objects].to_numpy(float)
+    return {
+        str(name): group.pivot(index="seed", columns="object_id", values=column)
+        .loc[:, list(objects)].to_numpy(float)
         for name, group in kept.groupby("method", sort=True)
     }  # fmt: skip
-    return matrices, objects
 
 
 def build_leaderboard(
@@ -67,12 +72,16 @@ def build_leaderboard(
     runs_only = paired_bootstraps(matrices, reps, seed, task_bootstrap=False)
     ref, ref_boot = matrices[reference], boot[reference]
     plain = metrics.groupby("method")[list(PLAIN)].mean()
+    every = sorted(set(metrics["object_id"]))
+    success = metric_matrices(metrics, "success", every)
+    success_boot = paired_bootstraps(success, reps, seed + 1, task_bootstrap=True)
     rows = {}
     for name, matrix in matrices.items():
         difference = estimate(mean(matrix) - mean(ref), mean(boot[name]) - mean(ref_boot))
         rows[name] = {
             "runs": int(matrix.shape[0]),
             **{k: _round(plain.loc[name, k]) for k in PLAIN},
+            "success_ci": estimate(mean(success[name]), mean(success_boot[name]))["ci"],
             "iqm": estimate(iqm(matrix), iqm(boot[name])),
             "mean": estimate(mean(matrix), mean(boot[name])),
             "iqm_runs_only_ci": estimate(iqm(matrix), iqm(runs_only[name]))["ci"],
@@ -125,7 +134,8 @@ def leaderboard_frames(board: Mapping[str, Any]) -> tuple[pd.DataFrame, pd.DataF
     main, attempts = [], []
     for name, row in board["methods"].items():
         main.append({
-            "method": name, "runs": row["runs"], "top-1 success": _f(row["success"]),
+            "method": name, "runs": row["runs"],
+            "top-1 success": _ci({"estimate": row["success"], "ci": row["success_ci"]}),
             "top-1 robustness (g)": _f(row["robustness"], 1), "regret": _f(row["regret"]),
             "NDCG@5": _f(row["ndcg5"]), "normalised IQM": _ci(row["iqm"]),
             "normalised mean": _ci(row["mean"]),
