@@ -216,3 +216,30 @@ def test_success_within_k_is_what_grip_accept_earns_executing_the_top_k(attempts
     assert exact == pytest.approx(1 - np.prod(1 - rates[[3, 0, 5][:attempts]]))
     assert 0.05 < exact < 0.95  # (0.25, 0.5, 0.25 today): a check the simulation can fail
     assert abs(held / episodes - exact) < 4 * np.sqrt(exact * (1 - exact) / episodes)
+
+
+def test_study_benchmark_reads_the_learners_per_seed_score_files(tmp_path) -> None:
+    from classifiers.benchmark import study_benchmark
+    from classifiers.benchmark.split import candidate_sets, candidate_table, study_split
+    from classifiers.synthetic import synthetic_grips
+    from grip_env.config import Config
+
+    table = synthetic_grips(n_objects=16, grips=(5, 9), seed=3)
+    table["object_id"] = table["object_id"].astype(str)
+    table["grip_id"] = table["grip_id"].astype(str)
+    config = Config().override(selector={"max_candidates": 8})
+    held = candidate_table(candidate_sets(table, config, study_split(table, config, [0])))
+    rng = np.random.default_rng(0)
+    frames = [held[["object_id", "candidate", "grip_id"]].assign(method=m, seed=s,
+                                                                 score=rng.random(len(held)))
+              for m in ("classifier_x", "classifier_rank_qc") for s in (0, 1, 2)]  # fmt: skip
+    (tmp_path / "classifiers").mkdir()
+    pd.concat(frames).to_parquet(tmp_path / "classifiers" / "scores.parquet")
+    board = study_benchmark(table, tmp_path, config, reps=200)
+    assert board["methods"]["classifier_x"]["runs"] == 3
+    assert "classifier_rank_qc" not in board["methods"] and "best_qc" in board["methods"]
+    assert board["split"]["seeds"] == [0, 1, 2] and board["split"]["name"] == "study"
+    assert (tmp_path / "benchmark" / "leaderboard.md").exists()
+    pd.concat(frames).iloc[1:].to_parquet(tmp_path / "classifiers" / "scores.parquet")
+    with pytest.raises(ValueError, match="every candidate"):
+        study_benchmark(table, tmp_path, config, reps=200)
