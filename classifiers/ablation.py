@@ -13,6 +13,11 @@ interval; not the leave-one-feature-out sets). ``eps`` is the Ferrari–Canny ε
 When the table has the graded outcome, the regression task runs alongside on the same folds:
 one regressor (default ``"svr"``) of ``robustness_mean`` per feature set, scored by Spearman
 (pooled and within object, :mod:`classifiers.regression`), with the same paired differences.
+
+``"learners"`` repeats the question for the stronger learners (:data:`STRONGER_LEARNERS`: the
+gradient-boosted classifier and regressor "hgb" and the lambdarank ranker of
+:mod:`classifiers.ranking`) on the named feature sets (not the leave-one-feature-out ones, to
+bound the cost), on the same folds, each paired against its own all-twelve run.
 """
 
 from __future__ import annotations
@@ -39,6 +44,12 @@ from classifiers.evaluation import (
 )
 from classifiers.models import make_model
 from classifiers.plots import plot_ablation
+from classifiers.ranking import (
+    RANKING_METRICS,
+    cross_validate_rankers,
+    paired_ranking_difference,
+    summarise_ranking,
+)
 from classifiers.regression import (
     REGRESSION_METRICS,
     cross_validate_regressors,
@@ -46,6 +57,7 @@ from classifiers.regression import (
     paired_regression_difference,
     summarise_regression,
 )
+from classifiers.threads import single_threaded
 from grip_env.columns import FEATURES
 from grip_env.config import Config, LearningConfig
 from grip_env.epsilon import EPSILON_COLUMN, add_epsilon
@@ -58,6 +70,10 @@ HAND = ("C1", "C2", "C3", "C4", "C5", "C6")
 
 
 _LEAVE_ONE_OUT = frozenset(f"without_{feature}" for feature in FEATURES)
+#: The learners the ablation also runs on the named feature sets: task → model names.
+STRONGER_LEARNERS: dict[str, tuple[str, ...]] = {
+    "classifier": ("hgb",), "regressor": ("hgb",), "ranker": ("lambdarank",),
+}
 
 
 def feature_sets() -> dict[str, tuple[str, ...]]:
@@ -85,7 +101,14 @@ def ablation_study(
 ) -> dict[str, Any]:
     """Run the study; returns the ``ablation.json`` content (``"regression"``: the graded task,
     present when the table has ``robustness_mean``)."""
-    config = config or Config()
+    with single_threaded():
+        return _ablation_study(table, config or Config(), model, sets, importance_repeats,
+                               regressor)
+
+
+def _ablation_study(table: pd.DataFrame, config: Config, model: str,
+                    sets: dict[str, Sequence[str]] | None, importance_repeats: int,
+                    regressor: str) -> dict[str, Any]:
     learning = config.learning
     sets = dict(sets or feature_sets())
     if REFERENCE not in sets:
@@ -114,6 +137,41 @@ def ablation_study(
     }
     if has_target(table):
         output["regression"] = regression_ablation(table, learning, regressor, sets)
+    named = {name: features for name, features in sets.items() if name not in _LEAVE_ONE_OUT}
+    output["learners"] = learner_ablation(table, config, named)
+    return output
+
+
+def learner_ablation(
+    table: pd.DataFrame, config: Config, sets: dict[str, Sequence[str]],
+    learners: dict[str, tuple[str, ...]] = STRONGER_LEARNERS,
+) -> dict[str, Any]:
+    """``{"<task>_<name>": {"metrics", "feature_sets": {set: {"models", "paired_difference"}}}}``
+    for each learner of ``learners`` (regressors only with the graded outcome)."""
+    learning = config.learning
+    tasks: dict[str, tuple[Callable[..., pd.DataFrame], Callable[..., Any],
+                           Callable[..., Any], tuple[str, ...]]] = {
+        "classifier": (cross_validate_models, summarise, paired_difference, METRICS),
+        "regressor": (cross_validate_regressors, summarise_regression,
+                      paired_regression_difference, REGRESSION_METRICS),
+        "ranker": (lambda t, m, f, c: cross_validate_rankers(t, m, f, c, config.sim),
+                   summarise_ranking, paired_ranking_difference, RANKING_METRICS),
+    }  # fmt: skip
+    output = {}
+    for task, names in learners.items():
+        if task == "regressor" and not has_target(table):
+            continue
+        validate, summary, paired, metrics = tasks[task]
+        for name in names:
+            per_fold = _per_set(sets, f"ablation ({task} {name})",
+                                lambda features, v=validate, n=name: v(table, [n], features,
+                                                                       learning))  # fmt: skip
+            reference = per_fold[REFERENCE]
+            output[f"{task}_{name}"] = {"metrics": list(metrics), "feature_sets": {
+                set_name: {"features": list(sets[set_name]),
+                           "models": summary(frame, learning.folds),
+                           "paired_difference": {name: paired(frame, reference, learning.folds)}}
+                for set_name, frame in per_fold.items()}}  # fmt: skip
     return output
 
 

@@ -32,6 +32,7 @@ from sklearn.metrics import (
 from sklearn.model_selection import GridSearchCV, GroupKFold, StratifiedGroupKFold
 
 from classifiers.models import check_features, make_model
+from classifiers.threads import single_threaded
 from grip_env.columns import FEATURES
 from grip_env.config import LearningConfig
 from grip_env.dataset.split import held_out_objects, split_table
@@ -136,10 +137,11 @@ def held_out_metrics(
     if test.empty or np.unique(labels).size < 2:
         return {"split": split, "models": {}}
     scores = {}
-    for name, model in models.items():
-        fitted = clone(model).fit(train, labels)
-        scores[name] = {k: (float(v) if np.isfinite(v) else None)
-                        for k, v in fold_metrics(fitted, test).items()}  # fmt: skip
+    with single_threaded():
+        for name, model in models.items():
+            fitted = clone(model).fit(train, labels)
+            scores[name] = {k: (float(v) if np.isfinite(v) else None)
+                            for k, v in fold_metrics(fitted, test).items()}  # fmt: skip
     return {"split": split, "models": scores}
 
 
@@ -207,7 +209,8 @@ def grouped_cv(
     """The repeated grouped folds: ``fresh(seed)`` estimators fitted on each training fold,
     ``score(model, test)`` on its test fold; one row per (model, repeat, fold)."""
     records = []
-    with progress_bar(config.repeats * config.folds, "cross-validation") as bar:
+    total = config.repeats * config.folds
+    with single_threaded(), progress_bar(total, "cross-validation") as bar:
         for repeat in range(config.repeats):
             seed = config.seed + repeat
             for fold, (train, test) in enumerate(grouped_folds(table, config.folds, seed)):

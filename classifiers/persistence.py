@@ -31,6 +31,8 @@ TRUSTED_TYPES = frozenset(
         "classifiers.baselines.RandomClassifier",
         "classifiers.baselines.RankingRegressor",
         "classifiers.baselines.RandomRegressor",
+        "classifiers.threads.OneThreadHGBClassifier",
+        "classifiers.threads.OneThreadHGBRegressor",
     }
 )
 _TORCH_MODELS = {cls.__name__: cls for cls in (TorchMLPClassifier, TorchMLPRegressor)}

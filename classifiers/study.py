@@ -30,13 +30,14 @@ QUICK_OVERRIDES: dict[str, dict[str, Any]] = {
     "objects": {"set": "basic", "procedural_count": 2},
     "dataset": {"trials": 2, "max_grips_per_object": 8},
     "learning": {"folds": 2, "repeats": 1, "models": ("logreg", "knn", "rank_qc", "random"),
-                 "regressors": ("ridge", "rank_qc", "rank_qg", "random")},
-    "selector": {"timesteps": 512, "max_candidates": 16},
+                 "regressors": ("ridge", "rank_qc", "rank_qg", "random"),
+                 "rankers": ("lambdarank", "rank_qc", "random"), "seeds": 2},
+    "selector": {"timesteps": 512, "max_candidates": 16, "seeds": 2},
 }
 STAGE_FILE = "stage.json"
 #: The config fields (a section, or ``section.field``) each stage reads.
 STAGE_INPUTS: dict[str, tuple[str, ...]] = {
-    "classifiers": ("learning",),
+    "classifiers": ("learning", "selector.max_candidates", "sim.ramp_levels_g", "sim.ramp_ratio"),
     "ablation": ("learning.folds", "learning.repeats", "learning.seed"),
     "selector": ("learning.models", "learning.seed", "learning.test_fraction", "selector", "sim"),
     "benchmark": ("learning", "selector", "sim", "grasp.mu"),
@@ -86,7 +87,7 @@ def run_study(
     from classifiers.ablation import run_ablation
     from classifiers.benchmark import study_benchmark
     from classifiers.persistence import dataset_checksum
-    from classifiers.selector import run_selector
+    from classifiers.selector.seeds import run_selectors
     from classifiers.training import train_and_save
     from grip_env.dataset import generate, load
 
@@ -122,7 +123,7 @@ def run_study(
     stage("ablation", out / "ablation" / "ablation.json",
           lambda: run_ablation(table, out / "ablation", config))
     stage("selector", out / "selector" / "selector.json",
-          lambda: run_selector(table, out / "selector", config))
+          lambda: run_selectors(table, out / "selector", config))
     stage("benchmark", out / "benchmark" / "leaderboard.json",
           lambda: study_benchmark(table, out, config))
     stage("calibration", out / "calibration" / "calibration.json",

@@ -16,7 +16,12 @@
   (feature list, parameters, dataset checksum, seed);
 - when the table has the graded outcome: ``regression.json`` (grouped CV of
   ``learning.regressors`` on ``robustness_mean``, see :mod:`classifiers.regression`) and
-  ``models/regressor_<name>.*``.
+  ``models/regressor_<name>.*``;
+- ``ranking.json``: grouped CV of ``learning.rankers`` (:mod:`classifiers.ranking`), with
+  ``models/ranker_<name>.*`` (lambdarank: LightGBM's text model ``.txt`` beside its ``.json``);
+- ``scores.parquet``: every learner fitted with each of ``learning.seeds`` seeds on the split's
+  training objects, scoring each held-out object's candidates
+  (:mod:`classifiers.candidate_scores`).
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from classifiers.candidate_scores import SCORES_FILE, learner_scores, write_scores
 from classifiers.evaluation import (
     LABEL_COLUMN,
     evaluate_models,
@@ -40,7 +46,9 @@ from classifiers.evaluation import (
 from classifiers.models import make_model, make_regressor
 from classifiers.persistence import dataset_checksum, save_model
 from classifiers.plots import plot_calibration, plot_roc
+from classifiers.ranking import GroupedRanker, evaluate_rankers, make_ranker, relevance
 from classifiers.regression import TARGET_COLUMN, evaluate_regressors, has_target
+from classifiers.threads import single_threaded
 from grip_env.columns import FEATURES
 from grip_env.config import Config
 
@@ -49,7 +57,11 @@ def train_and_save(
     table: pd.DataFrame, out_dir: str | Path, config: Config | None = None
 ) -> dict[str, Any]:
     """Cross-validate, plot, refit on everything and save; returns the metrics dict."""
-    config = config or Config()
+    with single_threaded():
+        return _train_and_save(table, out_dir, config or Config())
+
+
+def _train_and_save(table: pd.DataFrame, out_dir: str | Path, config: Config) -> dict[str, Any]:
     learning = config.learning
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -67,6 +79,8 @@ def train_and_save(
         save_model(model, out_dir / "models", name, meta)
     if has_target(table):
         train_regressors(table, out_dir, config, checksum)
+    train_rankers(table, out_dir, config, checksum)
+    write_scores(learner_scores(table, config), out_dir / SCORES_FILE)
     return metrics
 
 
@@ -100,6 +114,29 @@ def train_regressors(
         meta = {"features": list(FEATURES), "target": TARGET_COLUMN, "dataset_sha256": checksum,
                 "seed": learning.seed}  # fmt: skip
         save_model(model, out_dir / "models", f"regressor_{name}", meta)
+    return result
+
+
+def train_rankers(
+    table: pd.DataFrame, out_dir: Path, config: Config, checksum: str
+) -> dict[str, Any]:
+    """Cross-validate the rankers into ``ranking.json``, refit and save each one."""
+    learning = config.learning
+    result = evaluate_rankers(table, learning.rankers, FEATURES, learning, config.sim)
+    result["dataset"] = {"sha256": checksum, "rows": len(table)}
+    (out_dir / "ranking.json").write_text(json.dumps(result, indent=2))
+    grades = relevance(table, config.sim)
+    for name in learning.rankers:
+        model = make_ranker(name, learning.seed, FEATURES).fit(table, grades)
+        meta = {"features": list(FEATURES), "target": result["relevance"],
+                "dataset_sha256": checksum, "seed": learning.seed}  # fmt: skip
+        if isinstance(model, GroupedRanker):
+            path = model.save(out_dir / "models", f"ranker_{name}")
+            meta |= {"name": f"ranker_{name}", "format": "lightgbm_text", "model": path.name,
+                     "params": model.get_params()}  # fmt: skip
+            (out_dir / "models" / f"ranker_{name}.json").write_text(json.dumps(meta, indent=2))
+        else:
+            save_model(model, out_dir / "models", f"ranker_{name}", meta)
     return result
 
 

@@ -222,14 +222,25 @@ class LearningConfig(_Section):
     """Classifiers, evaluation and ablation."""
 
     models: tuple[str, ...] = Field(
-        ("svm", "mlp_torch", "mlp_sklearn", "knn", "logreg", "rank_qc", "rank_qg", "random"),
+        ("svm", "mlp_torch", "mlp_sklearn", "knn", "logreg", "hgb", "rank_qc", "rank_qg",
+         "random"),
         min_length=1,
         description="models trained and compared",
     )
     regressors: tuple[str, ...] = Field(
-        ("svr", "mlp_torch", "ridge", "rank_qc", "rank_qg", "random"),
+        ("svr", "mlp_torch", "ridge", "hgb", "rank_qc", "rank_qg", "random"),
         min_length=1,
         description="regressors of robustness_mean trained and compared",
+    )
+    rankers: tuple[str, ...] = Field(
+        ("lambdarank", "rank_qc", "rank_qg", "random"),
+        min_length=1,
+        description="learning-to-rank models (a group: one object's grips) trained and compared",
+    )
+    seeds: int = Field(
+        5, ge=1, le=100,
+        description="training seeds (seed, seed+1, ...) of every learner scored on the held-out "
+        "objects",
     )
     folds: int = Field(5, ge=2, le=100, description="grouped CV folds")
     repeats: int = Field(3, ge=1, le=100, description="CV repeats over seeds")
@@ -247,6 +258,7 @@ class SelectorConfig(_Section):
         "success", description="reward of a pick: success (0/1) or robustness / reference level"
     )
     seed: int = Field(0, ge=0, le=MAX_SEED, description="training seed")
+    seeds: int = Field(5, ge=1, le=100, description="training runs, seeds seed, seed+1, ...")
     n_envs: int = Field(4, ge=1, le=256, description="environment copies stepped together")
     rollout_steps: int = Field(
         512, ge=16, le=1_000_000, description="PPO rollout, steps over all environment copies"

@@ -18,6 +18,6 @@ OutputDir = Annotated[
     Path, typer.Option("--out", "-o", help="output directory (created if needed)")
 ]
 
-MODEL_NAMES_HELP = "svm, mlp_torch, mlp_sklearn, knn, logreg, rank_qc, rank_qg, random"
+MODEL_NAMES_HELP = "svm, mlp_torch, mlp_sklearn, knn, logreg, hgb, rank_qc, rank_qg, random"
 """The model names of ``classifiers.models.MODEL_NAMES`` (a test keeps them equal), for help
 texts: importing the learning package to list them would load torch on every command."""

@@ -1,0 +1,253 @@
+"""Learning to rank the grips of one object: LightGBM lambdarank, one query group per object.
+
+A robot picks one grip per object, so what matters is the order of each object's candidates, not
+a probability comparable across objects. :class:`GroupedRanker` fits LightGBM's ``LGBMRanker``
+with the ``lambdarank`` objective (it optimises NDCG within each group), a group being all the
+training grips of one object; its ``predict`` score is comparable only within an object.
+
+Graded relevance (:func:`relevance`): the number of the load ramp's levels (``sim.ramp_levels_g``
+from the lowest, ratio ``sim.ramp_ratio``, a quarter octave by default) that the grip's mean
+robustness reaches, 0 below the first level: 0..25 on the default ramp. Robustness, not success,
+because it is graded far more finely: on the default dataset 438 of 1332 grips tie at success
+rate 1.0 (five values in all from four trials), while robustness spreads them over 25 grades and
+agrees with the success rate within objects (mean Spearman 0.80). Without ``robustness_mean`` the
+grade is the number of successful trials. The gain of grade g is g (linear), so a miss by one
+level costs the same anywhere on the ramp.
+
+Metrics per fold (:func:`ranking_fold_metrics`): ``spearman_object``, the mean over test objects
+of the within-object Spearman correlation of score and robustness (``spearman_object_rate``:
+with the success rate); ``roc_auc_object``, the mean within-object ROC-AUC of score against
+``success`` over objects holding both classes (a pooled ROC-AUC is not reported: scores of two
+objects are not on one scale); ``top1_success``, ``top1_rate`` and ``top1_robustness`` of each
+object's top-scored grip. ``make_ranker`` also gives the rank baselines ``rank_qc``, ``rank_qg``
+and ``random``, scored the same way.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from lightgbm import LGBMRanker
+from sklearn.base import BaseEstimator, clone
+from sklearn.metrics import roc_auc_score
+from sklearn.pipeline import Pipeline
+from sklearn.utils.validation import check_is_fitted
+
+from classifiers.baselines import ColumnSelector, RandomRegressor, RankingRegressor
+from classifiers.evaluation import GROUP_COLUMN, LABEL_COLUMN, check_dataset, grouped_cv, interval
+from classifiers.models import check_features
+from classifiers.regression import TARGET_COLUMN, spearman
+from grip_env.columns import FEATURES
+from grip_env.config import LearningConfig, SimConfig
+
+RANKING_METRICS = ("spearman_object", "spearman_object_rate", "roc_auc_object", "top1_success",
+                   "top1_rate", "top1_robustness")  # fmt: skip
+BASELINES = ("rank_qc", "rank_qg")
+_BOUNDS = {"top1_robustness": (0.0, np.inf), "spearman_object": (-1.0, 1.0),
+           "spearman_object_rate": (-1.0, 1.0)}  # fmt: skip
+
+
+def relevance(table: pd.DataFrame, sim: SimConfig | None = None) -> np.ndarray:
+    """Integer relevance grade of each grip (see the module docstring)."""
+    if TARGET_COLUMN not in table.columns:
+        return table["successes"].to_numpy().astype(np.int64)
+    sim = sim or SimConfig()
+    load = table[TARGET_COLUMN].to_numpy(float)
+    if not np.isfinite(load).all():
+        raise ValueError(f"{TARGET_COLUMN!r} holds NaN or infinite values")
+    lowest, ratio = float(sim.ramp_levels_g[0]), float(sim.ramp_ratio)
+    levels = np.floor(np.log(np.maximum(load, lowest) / lowest) / np.log(ratio) + 1e-9) + 1
+    return np.where(load < lowest, 0, levels).astype(np.int64)
+
+
+class GroupedRanker(BaseEstimator):
+    """LightGBM lambdarank on a grip table; the rows of one ``group_column`` value are a query.
+
+    ``fit(table, grade)`` takes the table (any row order) and integer grades; ``predict(table)``
+    returns one score per row (higher = pick first). ``decision_function`` is the same score.
+    Bagging (``subsample``) and feature subsampling are seeded by ``random_state``.
+    """
+
+    def __init__(self, features: Sequence[str] = FEATURES, group_column: str = GROUP_COLUMN,
+                 n_estimators: int = 200, learning_rate: float = 0.05, num_leaves: int = 15,
+                 min_child_samples: int = 10, subsample: float = 0.8,
+                 colsample_bytree: float = 0.9, reg_lambda: float = 1.0,
+                 random_state: int = 0) -> None:  # fmt: skip
+        self.features = features
+        self.group_column = group_column
+        self.n_estimators = n_estimators
+        self.learning_rate = learning_rate
+        self.num_leaves = num_leaves
+        self.min_child_samples = min_child_samples
+        self.subsample = subsample
+        self.colsample_bytree = colsample_bytree
+        self.reg_lambda = reg_lambda
+        self.random_state = random_state
+
+    def fit(self, X: pd.DataFrame, y: Any) -> GroupedRanker:
+        """Fit on ``X``'s grips grouped by ``group_column``; ``y`` the integer grades."""
+        grades = np.asarray(y)
+        if grades.shape != (len(X),) or not np.issubdtype(grades.dtype, np.integer):
+            raise ValueError(f"grades must be {len(X)} integers, got {grades.dtype} "
+                             f"{grades.shape}")  # fmt: skip
+        if grades.min(initial=0) < 0:
+            raise ValueError(f"grades must be >= 0, got {int(grades.min())}")
+        values = self._values(X)
+        groups = X[self.group_column].astype(str).to_numpy()
+        # a canonical row order (object, then feature values), so that bagging, which depends
+        # on the row order, draws the same rows however the table is sorted
+        order = np.lexsort((*values.T[::-1], groups))
+        _, sizes = np.unique(groups[order], return_counts=True)
+        self.ranker_ = LGBMRanker(
+            objective="lambdarank", n_estimators=self.n_estimators,
+            learning_rate=self.learning_rate, num_leaves=self.num_leaves,
+            min_child_samples=self.min_child_samples, subsample=self.subsample, subsample_freq=1,
+            colsample_bytree=self.colsample_bytree, reg_lambda=self.reg_lambda,
+            random_state=self.random_state, n_jobs=1, deterministic=True, force_row_wise=True,
+            label_gain=list(range(int(grades.max()) + 1)), verbose=-1,
+        )  # fmt: skip
+        self.ranker_.fit(values[order], grades[order], group=sizes)
+        self.n_groups_ = int(sizes.size)
+        return self
+
+    def predict(self, X: pd.DataFrame) -> np.ndarray:
+        """The ranking score of each row (comparable within one object only)."""
+        check_is_fitted(self, "ranker_")
+        return np.asarray(self.ranker_.predict(self._values(X)), dtype=float)
+
+    def decision_function(self, X: pd.DataFrame) -> np.ndarray:
+        """Same as :meth:`predict`, the name :func:`classifiers.evaluation.ranking_score` reads."""
+        return self.predict(X)
+
+    def save(self, directory: str | Path, name: str) -> Path:
+        """Write the booster as LightGBM's own text model ``name.txt``; returns its path."""
+        check_is_fitted(self, "ranker_")
+        path = Path(directory) / f"{name}.txt"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.ranker_.booster_.save_model(str(path))
+        return path
+
+    def _values(self, X: pd.DataFrame) -> np.ndarray:
+        return ColumnSelector(check_features(self.features)).fit_transform(X)
+
+
+RANKER_NAMES = ("lambdarank", "rank_qc", "rank_qg", "random")
+
+
+def make_ranker(name: str, seed: int = 0, features: Sequence[str] = FEATURES) -> BaseEstimator:
+    """A fresh ranker; the baselines are the regression task's (a monotone map of one column)."""
+    features = check_features(features)
+    if name == "lambdarank":
+        return GroupedRanker(features, random_state=seed)
+    baselines = {"rank_qc": (("Q_C",), RankingRegressor(sign=-1.0)),
+                 "rank_qg": (("Q_G",), RankingRegressor(sign=-1.0)),
+                 "random": (("Q_C",), RandomRegressor(random_state=seed))}  # fmt: skip
+    if name not in baselines:
+        raise ValueError(f"unknown ranker name {name!r}; known: {list(RANKER_NAMES)}")
+    columns, estimator = baselines[name]
+    return Pipeline([("select", ColumnSelector(columns)), ("model", estimator)])
+
+
+def ranking_fold_metrics(model: BaseEstimator, test: pd.DataFrame) -> dict[str, float]:
+    """The ranking metrics of a fitted ranker on one test fold (see the module docstring)."""
+    frame = pd.DataFrame({
+        "group": test[GROUP_COLUMN].to_numpy(), "score": np.asarray(model.predict(test), float),
+        "success": test[LABEL_COLUMN].to_numpy().astype(bool),
+        "rate": test["success_rate"].to_numpy(float),
+        "load": test[TARGET_COLUMN].to_numpy(float) if TARGET_COLUMN in test else np.nan,
+    })  # fmt: skip
+    within, within_rate, auc = [], [], []
+    for _, group in frame.groupby("group"):
+        within.append(spearman(group["score"], group["load"]))
+        within_rate.append(spearman(group["score"], group["rate"]))
+        if group["success"].nunique() == 2:
+            auc.append(roc_auc_score(group["success"], group["score"]))
+    picks = frame.loc[frame.groupby("group")["score"].idxmax()]
+    return {
+        "spearman_object": _nanmean(within),
+        "spearman_object_rate": _nanmean(within_rate),
+        "roc_auc_object": _nanmean(auc),
+        "top1_success": float(picks["success"].mean()),
+        "top1_rate": float(picks["rate"].mean()),
+        "top1_robustness": float(picks["load"].mean()),
+    }
+
+
+def _nanmean(values: Sequence[float]) -> float:
+    values = np.asarray(values, float)
+    return float(np.nanmean(values)) if np.isfinite(values).any() else float("nan")
+
+
+def cross_validate_rankers(
+    table: pd.DataFrame,
+    models: Sequence[str] | Mapping[str, BaseEstimator],
+    features: Sequence[str] = FEATURES,
+    config: LearningConfig | None = None,
+    sim: SimConfig | None = None,
+) -> pd.DataFrame:
+    """Per-fold ranking metrics on the classifiers' grouped folds: a row per (model, repeat,
+    fold). Folds are whole objects, so every query group is entirely in train or in test."""
+    config = config or LearningConfig()
+    check_dataset(table, features, config.folds)
+    table = table.reset_index(drop=True)
+    grades = relevance(table, sim)
+    return grouped_cv(table, grades, lambda seed: _fresh(models, seed, features),
+                      ranking_fold_metrics, config)
+
+
+def summarise_ranking(per_fold: pd.DataFrame, folds: int) -> dict[str, dict[str, Any]]:
+    """Mean and corrected 95% interval of each ranking metric, per model."""
+    return {
+        str(name): {m: interval(group[m].to_numpy(float), folds, _BOUNDS.get(m, (0.0, 1.0)))
+                    for m in RANKING_METRICS}
+        for name, group in per_fold.groupby("model", sort=False)
+    }  # fmt: skip
+
+
+def paired_ranking_difference(
+    frame: pd.DataFrame, reference: pd.DataFrame, folds: int
+) -> dict[str, dict[str, Any]]:
+    """Mean and interval of (frame − reference) per ranking metric, matched on (repeat, fold)."""
+    merged = frame.merge(reference, on=["repeat", "fold"], suffixes=("", "_ref"),
+                         validate="one_to_one")  # fmt: skip
+    return {m: interval((merged[m] - merged[f"{m}_ref"]).to_numpy(float), folds)
+            for m in RANKING_METRICS}  # fmt: skip
+
+
+def evaluate_rankers(
+    table: pd.DataFrame,
+    models: Sequence[str] | Mapping[str, BaseEstimator],
+    features: Sequence[str] = FEATURES,
+    config: LearningConfig | None = None,
+    sim: SimConfig | None = None,
+) -> dict[str, Any]:
+    """The ``ranking.json`` content: summaries and paired differences to the rank baselines."""
+    config = config or LearningConfig()
+    per_fold = cross_validate_rankers(table, models, features, config, sim)
+    by_model = {name: group.drop(columns="model") for name, group in per_fold.groupby("model")}
+    against = {
+        name: {f"vs_{base}": paired_ranking_difference(frame, by_model[base], config.folds)
+               for base in BASELINES if base in by_model and base != name}
+        for name, frame in by_model.items()
+    }  # fmt: skip
+    return {
+        "relevance": "robustness_mean in ramp levels reached (0..), linear gain"
+        if TARGET_COLUMN in table.columns else "successful trials (0..trials), linear gain",
+        "models": summarise_ranking(per_fold, config.folds),
+        "paired_difference": against,
+        "cv": {"folds": config.folds, "repeats": config.repeats,
+               "seeds": [config.seed + r for r in range(config.repeats)], "groups": GROUP_COLUMN,
+               "query_groups": "one object's grips", "features": list(features),
+               "n_grips": len(table), "n_objects": int(table[GROUP_COLUMN].nunique())},
+    }  # fmt: skip
+
+
+def _fresh(models: Sequence[str] | Mapping[str, BaseEstimator], seed: int,
+           features: Sequence[str]) -> dict[str, BaseEstimator]:
+    if isinstance(models, Mapping):
+        return {name: clone(model) for name, model in models.items()}
+    return {name: make_ranker(name, seed, features) for name in models}

@@ -1,0 +1,88 @@
+"""The RL selector trained with several seeds, each run kept, every candidate scored per seed.
+
+:func:`run_selectors` trains ``selector.seeds`` selectors, seeds ``selector.seed + k``, each
+with :func:`classifiers.selector.run_selector` into ``out/seed_<s>/``. The first seed's
+``selector.json``, ``model.zip`` and ``learning_curve.png`` are copied to ``out/`` (what a
+single-seed run writes there), with ``"seeds"``: every run's seed, folder, training time and
+held-out first-pick success.
+``out/scores.parquet`` holds each run's action probabilities for every candidate of every
+held-out object, in the layout of :mod:`classifiers.candidate_scores` (method ``"rl"``).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import torch as th
+
+from grip_env.config import Config
+from grip_env.envs.observation import CandidateSet
+
+METHOD = "rl"
+_COPIED = ("model.zip", "learning_curve.png")
+
+
+def seed_dir(out: str | Path, seed: int) -> Path:
+    """The folder of the run with ``seed``."""
+    return Path(out) / f"seed_{seed}"
+
+
+def action_probabilities(model: Any, found: CandidateSet) -> np.ndarray:
+    """The policy's probability of picking each real candidate of ``found`` (masked softmax)."""
+    observation = {"features": found.features[None], "mask": found.mask[None]}
+    tensor, _ = model.policy.obs_to_tensor(observation)
+    with th.no_grad():
+        distribution = model.policy.get_distribution(tensor, action_masks=found.mask[None] > 0)
+        probs = distribution.distribution.probs[0].cpu().numpy().astype(np.float64)
+    return probs[: found.count]
+
+
+def policy_scores(model: Any, table: pd.DataFrame, config: Config, seed: int) -> pd.DataFrame:
+    """``model``'s score rows (:data:`classifiers.candidate_scores.SCORE_COLUMNS`)."""
+    from classifiers.candidate_scores import score_frame
+    from classifiers.selector.evaluation import held_out_candidate_sets
+
+    return pd.concat([score_frame(found.object_id, seed, METHOD, found.rows,
+                                  action_probabilities(model, found))
+                      for found in held_out_candidate_sets(table, config)],
+                     ignore_index=True)  # fmt: skip
+
+
+def run_selectors(
+    table: pd.DataFrame, out_dir: str | Path, config: Config, policy: str = "set",
+    progress: bool = True,
+) -> dict[str, Any]:
+    """Train and evaluate one selector per seed; returns the first seed's report (with
+    ``"seeds"``), which is also written to ``out_dir/selector.json``."""
+    from classifiers.candidate_scores import SCORES_FILE, training_seeds, write_scores
+    from classifiers.selector import REPORT_FILE, run_selector
+    from classifiers.selector.training import check_grip_table
+
+    table = check_grip_table(table)
+    out = Path(out_dir)
+    settings = config.selector
+    runs, scores, first = [], [], None
+    for seed in training_seeds(settings.seed, settings.seeds):
+        seeded = config.override(selector={"seed": seed})
+        folder = seed_dir(out, seed)
+        report = run_selector(table, folder, seeded, policy, progress=progress)
+        from sb3_contrib import MaskablePPO
+
+        model = MaskablePPO.load(folder / "model.zip", device="cpu")
+        scores.append(policy_scores(model, table, seeded, seed))
+        rl = report["policies"]["rl"]["success_rate"]["mean"]
+        runs.append({"seed": seed, "dir": folder.name, "held_out_success_rate": rl,
+                     "seconds": report["training"]["seconds"]})  # fmt: skip
+        first = first or report
+    for name in _COPIED:
+        shutil.copyfile(seed_dir(out, settings.seed) / name, out / name)
+    training = {**first["training"], "tensorboard": f"{seed_dir(out, settings.seed).name}/tb"}
+    first = {**first, "training": training, "seeds": runs, "scores": SCORES_FILE}
+    (out / REPORT_FILE).write_text(json.dumps(first, indent=2))
+    write_scores(scores, out / SCORES_FILE)
+    return first
