@@ -66,6 +66,12 @@ def test_ties_are_averaged_exactly_and_random_is_the_exact_expectation() -> None
     assert rand["ndcg5"] == pytest.approx(0.5 * (1 + 1 / LOG3 + 0.5) / (1 + 0.5 / LOG3))
 
 
+def test_expected_attempts_stop_when_the_candidates_run_out() -> None:
+    row = metrics_of(scores("m", [3, 2, 1], [1, 0])).loc[("m", "B")]
+    assert row["attempts"] == pytest.approx(1 + 0.75)  # two grips: a second try, never a third
+    assert row["success_at_5"] == pytest.approx(1 - 0.75**2)
+
+
 def test_degenerate_object_has_no_normalised_score_and_all_failing_no_ndcg() -> None:
     table = tiny()
     table.loc[table["object_id"] == "B", "success_rate"] = 0.0

@@ -30,8 +30,8 @@ Per (method, seed, object):
   agent of ``GripAccept-v0`` that executes exactly these k candidates earns. Tie groups that the
   budget cuts through are averaged exactly over random subsets (elementary symmetric
   polynomials of the failure probabilities, from power sums by Newton's identities);
-- ``attempts``: expected number of grips executed with a budget of 5 attempts, stopping at the
-  first hold.
+- ``attempts``: expected number of grips executed with a budget of 5 attempts (or all the
+  candidates, when fewer), stopping at the first hold.
 """
 
 from __future__ import annotations
@@ -173,7 +173,10 @@ def _within_attempts(frame: pd.DataFrame, start: np.ndarray, size: np.ndarray) -
     out = pd.DataFrame(index=all_fail.index)
     for k in range(1, MAX_ATTEMPTS + 1):
         out[f"success_at_{k}"] = 1.0 - all_fail[f"f{k}"]
-    out["attempts"] = all_fail[[f"f{k}" for k in range(MAX_ATTEMPTS)]].sum(axis=1)
+    count = frame.groupby(list(KEYS), sort=True).size().loc[all_fail.index].to_numpy()
+    tries = np.arange(MAX_ATTEMPTS)[None, :] < count[:, None]  # no attempt beyond the candidates
+    before = all_fail[[f"f{k}" for k in range(MAX_ATTEMPTS)]].to_numpy()
+    out["attempts"] = (before * tries).sum(axis=1)
     return out
 
 
