@@ -27,7 +27,7 @@ from grip_env.config import Config
 #: ``--quick``: a tiny profile for tests; a field is replaced only where the config leaves it at
 #: its default, so settings the user chose are kept (and the log says which were replaced).
 QUICK_OVERRIDES: dict[str, dict[str, Any]] = {
-    "objects": {"set": "basic", "procedural_count": 2},
+    "objects": {"set": "basic", "procedural_count": 2, "mesh_count": 1},
     "dataset": {"trials": 2, "max_grips_per_object": 8},
     "learning": {"folds": 2, "repeats": 1, "models": ("logreg", "knn", "rank_qc", "random"),
                  "regressors": ("ridge", "rank_qc", "rank_qg", "random"),

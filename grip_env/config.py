@@ -55,7 +55,7 @@ class ObjectsConfig(_Section):
     """Which objects a job runs on."""
 
     set: str = Field("default", description="named object set, or 'procedural'")
-    procedural_count: int = Field(42, ge=0, le=1_000_000, description="extra procedural objects")
+    procedural_count: int = Field(24, ge=0, le=1_000_000, description="extra procedural objects")
     procedural_size_mm: tuple[ObjectSize, ObjectSize] = Field(
         (50.0, 150.0), description="size range across (5..1000 mm)"
     )
@@ -68,11 +68,11 @@ class ObjectsConfig(_Section):
         500.0, ge=10.0, le=20_000.0, description="density for W = 1 (household object)"
     )
     mesh_count: int = Field(
-        0, ge=0, le=10_000,
+        18, ge=0, le=10_000,
         description="extra mesh objects: pybullet_data household models, then random_urdfs",
     )
     mesh_size_mm: tuple[ObjectSize, ObjectSize] = Field(
-        (60.0, 130.0), description="range of a mesh's longest bounding-box side (mm)"
+        (80.0, 150.0), description="range of a mesh's longest bounding-box side (mm)"
     )
     execute_on: Literal["extrusion", "mesh"] = Field(
         "extrusion", description="body a mesh object's trials run on: its extruded silhouette "

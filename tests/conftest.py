@@ -26,7 +26,7 @@ def generated_dataset_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
     from grip_env.dataset import generate
 
     config = Config().override(
-        objects={"set": "basic", "procedural_count": 4},
+        objects={"set": "basic", "procedural_count": 4, "mesh_count": 0},
         dataset={"trials": 2, "max_grips_per_object": 6, "workers": 1},
     )
     return generate(config, tmp_path_factory.mktemp("generated") / "data", progress=False)

@@ -250,3 +250,31 @@ def test_a_run_adds_mesh_objects_records_what_it_skipped_and_runs_on_the_mesh(
     assert reloaded.mesh == mesh_object(box, 90.0).mesh
     grips = load(out)
     assert (grips["object_id"] == "box").sum() >= 1
+
+
+def test_the_household_names_in_show_help_are_the_household_meshes():
+    from grip_env.mesh_sets import HOUSEHOLD_MESHES
+
+    code, output = cli("show", "--help")
+    assert code == 0
+    assert ", ".join(HOUSEHOLD_MESHES) in " ".join(output.split())
+
+
+def test_generate_takes_a_folder_at_the_scale_of_its_scale_file(photos, tmp_path):
+    import yaml
+
+    from grip_env.dataset import read_objects
+
+    small = Config().override(dataset={"max_grips_per_object": 2, "trials": 1})
+    config = tmp_path / "small.yaml"
+    config.write_text(yaml.safe_dump(small.model_dump(mode="json")))
+    out = tmp_path / "data"
+    code, output = cli("generate", "--out", out, "--objects", photos, "--config", config,
+                       "--workers", 1, "--no-progress")
+    assert code == 0, output
+    objects = read_objects(out)
+    assert objects["name"].tolist() == ["cup", "lid"]
+    assert objects["family"].tolist() == ["file", "file"]
+    assert objects["area"].iloc[1] == pytest.approx(np.pi * (30 * 1.5) ** 2, rel=0.03)
+    assert_refused(*cli("generate", "--out", tmp_path / "d2", "--objects", photos,
+                        "--mm-per-px", 1, "--config", config), "contradicts", "scale.yaml")

@@ -145,4 +145,7 @@ def register(app: typer.Typer) -> None:
     """Add the command to the CLI, with the shape names in its help."""
     from grip_env.objects.shapes import SHAPE_NAMES
 
-    app.command("show", epilog=f"Shape names: {', '.join(SHAPE_NAMES)}.")(show)
+    meshes = "duck, teddy, mug, lego, jenga, domino, cube, bunny, soccerball"
+    app.command("show", epilog=f"Shape names: {', '.join(SHAPE_NAMES)}. Meshes of pybullet_data "
+                f"(dropped on the table, seen at rest): {meshes}, urdf_000 to urdf_999, or "
+                "an .obj file.")(show)
