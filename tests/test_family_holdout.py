@@ -42,3 +42,21 @@ def test_families_come_from_the_manifest(synthetic_grips_table):
                                            {"object_id": "b"}]}
     assert object_families(table) == {"a": "mesh"}
     assert object_families(synthetic_grips_table.iloc[:0]) == {}
+
+
+def test_the_report_shows_each_family_held_out():
+    from classifiers.report.document import Report
+    from classifiers.report.study_report import _family_holdout_table
+
+    report = Report("t")
+    scores = {"logreg": {"roc_auc": 0.71, "top1_success": 0.5}}
+    _family_holdout_table(report, {"families": {
+        "mesh": {"objects": 18, "grips": 300, "models": scores},
+        "named": {"objects": 18, "grips": 400, "models": scores},
+        "file": {"objects": 2, "grips": 9, "models": {}}}})
+    text = report.to_markdown()
+    assert "mesh ROC-AUC" in text and "named top-1" in text and "0.71" in text
+    assert "file" not in text.split("Family holdout")[0] and "mesh 18 objects" in text
+    empty = Report("t")
+    _family_holdout_table(empty, {"families": {}})
+    assert "Family holdout" not in empty.to_markdown()
