@@ -25,3 +25,10 @@ ROBUSTNESS = ("robustness_mean", "robustness_std")
 DESCRIPTORS = CONTACTS + NORMALS + FORCES + REGIONS + CURVATURES + FOCI + HAND + OBJECT
 CANDIDATE_COLUMNS = IDENTITY + DESCRIPTORS + FEATURES + INDEXES
 DATASET_COLUMNS = CANDIDATE_COLUMNS + OUTCOMES + ROBUSTNESS
+
+#: Objects table (``objects.parquet``), beside its contour and descriptors: the object's family
+#: (``grip_env.objects.family``) and, for a mesh object, its source mesh and resting pose
+#: (``grip_env.objects.meshes.MeshPose``; empty for other objects).
+FAMILY = "family"
+MESH_POSE = ("mesh_file", "mesh_scale", "mesh_com_mm", "mesh_position_mm", "mesh_orientation",
+             "mesh_height_mm")

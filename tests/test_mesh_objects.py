@@ -12,6 +12,7 @@ from PIL import Image
 from scipy.spatial.transform import Rotation
 
 import grip_env.mesh_sets as mesh_sets
+from grip_env.columns import MESH_POSE
 from grip_env.config import Config
 from grip_env.dataset.catalog import DatasetObject, objects_table
 from grip_env.mesh_sets import mesh_from_spec, mesh_object, mesh_set
@@ -133,6 +134,8 @@ def test_mesh_pose_is_kept_in_the_objects_table(box):
     rows = objects_table(entries).to_pylist()
     assert [r["family"] for r in rows] == ["mesh", "named", "procedural"]
     assert MeshPose.from_record(rows[0]) == obj.mesh
+    assert tuple(obj.mesh.record()) == MESH_POSE
+    assert all(rows[1][name] is None for name in MESH_POSE)
     assert MeshPose.from_record(rows[1]) is None
 
 
@@ -278,3 +281,12 @@ def test_generate_takes_a_folder_at_the_scale_of_its_scale_file(photos, tmp_path
     assert objects["area"].iloc[1] == pytest.approx(np.pi * (30 * 1.5) ** 2, rel=0.03)
     assert_refused(*cli("generate", "--out", tmp_path / "d2", "--objects", photos,
                         "--mm-per-px", 1, "--config", config), "contradicts", "scale.yaml")
+
+
+def test_generate_takes_the_mesh_set_names():
+    from grip_env.cli.generate import _objects
+    from grip_env.mesh_sets import MESH_SET_NAMES
+
+    assert [_objects(name, None) for name in MESH_SET_NAMES] == list(MESH_SET_NAMES)
+    with pytest.raises(ValueError, match="--mm-per-px 1 is for image files"):
+        _objects("household", 1.0)

@@ -13,6 +13,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from grip_env.columns import FAMILY
 from grip_env.config import Config, check_contour_budget
 from grip_env.dataset.files import write_atomically
 from grip_env.mesh_sets import configured_meshes, named_set
@@ -154,7 +155,7 @@ def objects_table(
         **entry.obj.descriptors(),
         **entry.obj.simulated_shape(tolerance_mm).record(),
         "sim_contour": entry.obj.simulated_shape(tolerance_mm).contour.tolist(),
-        "family": object_family(entry.obj),
+        FAMILY: object_family(entry.obj),
         **_mesh_record(entry.obj),
     } for entry in entries]
     return pa.Table.from_pylist(rows)

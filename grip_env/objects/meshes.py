@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 from shapely.geometry import MultiPoint, Polygon
 
+from grip_env.columns import MESH_POSE
 from grip_env.config import ObjectsConfig
 
 #: Parts and holes of a silhouette smaller than this (mm²) are numerical slivers between pieces.
@@ -82,8 +83,7 @@ class MeshPose:
 
 
 #: The objects table's mesh columns, empty (None) for an object without a mesh.
-MESH_COLUMNS = ("mesh_file", "mesh_scale", "mesh_com_mm", "mesh_position_mm", "mesh_orientation",
-                "mesh_height_mm")
+MESH_COLUMNS = MESH_POSE
 
 
 def executes_on_mesh(obj: object, objects: ObjectsConfig) -> bool:
