@@ -290,3 +290,15 @@ def test_generate_takes_the_mesh_set_names():
     assert [_objects(name, None) for name in MESH_SET_NAMES] == list(MESH_SET_NAMES)
     with pytest.raises(ValueError, match="--mm-per-px 1 is for image files"):
         _objects("household", 1.0)
+
+
+def test_the_live_environment_runs_on_a_mesh_set(monkeypatch, box):
+    import gymnasium
+
+    monkeypatch.setattr(mesh_sets, "household_meshes", lambda: [box])
+    env = gymnasium.make("GripSelect-v0", objects="household", split="all")
+    _, info = env.reset(seed=0)
+    assert info["object_id"] == "box"
+    _, reward, terminated, _, _ = env.step(0)
+    assert terminated and np.isfinite(reward)
+    env.close()

@@ -17,7 +17,8 @@ from numpy.typing import NDArray
 
 from grip_env.config import Config
 from grip_env.envs.observation import CandidateSet
-from grip_env.objects import SHAPE_NAMES, PlanarObject, load_object_set, make_shape
+from grip_env.mesh_sets import named_set
+from grip_env.objects import SHAPE_NAMES, PlanarObject, make_shape
 
 ObjectsArg = str | Sequence[str | PlanarObject] | None
 _REPLAY_COLUMNS = ("object_id", "grip_id", "Q_C")
@@ -161,7 +162,7 @@ def _given_objects(objects: ObjectsArg) -> dict[str, PlanarObject | None] | None
     if objects is None:
         return None
     if isinstance(objects, str):
-        return {obj.name: obj for obj in load_object_set(objects)}
+        return {obj.name: obj for obj in named_set(objects).objects}
     given: dict[str, PlanarObject | None] = {}
     for item in objects:
         if isinstance(item, PlanarObject):
@@ -177,7 +178,8 @@ def _given_objects(objects: ObjectsArg) -> dict[str, PlanarObject | None] | None
 
 def _live_objects(objects: ObjectsArg, config: Config) -> dict[str, PlanarObject]:
     if objects is None or isinstance(objects, str):
-        found = load_object_set(objects if objects is not None else config.objects.set)
+        name = objects if objects is not None else config.objects.set
+        found = named_set(name, config.dataset.seed, config.objects).objects
     else:
         found = [item if isinstance(item, PlanarObject) else _shape(item) for item in objects]
     names = [obj.name for obj in found]
