@@ -357,8 +357,10 @@ def cone_check(trials: pd.DataFrame) -> dict[str, Any]:
     passed = difference["ci"][1] is not None and difference["ci"][1] < 0 and difference["n"] > 1
     per_object = pd.DataFrame({"best_g": means["best"], "outside_g": means["outside"],
                                "best_held": held["best"], "outside_held": held["outside"]})
+    low, high = difference["ci"]
     return _check("cone", difference["mean"], difference["ci"],
                   "outside-cone minus best < 0, 95% interval below 0", bool(passed),
+                  half_width=None if low is None else (high - low) / 2,
                   per_object=per_object.reset_index().to_dict(orient="records"))
 
 

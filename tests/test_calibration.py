@@ -106,6 +106,10 @@ def test_cone_and_retest_checks_pass_on_separated_grips_and_fail_on_noise():
     cone = pd.concat([_trials("cone", {f"{o}/a": ("best", 6.0), f"{o}/b": ("outside", 2.0)}, 4,
                               rng, obj=o) for o in "uvw"])  # fmt: skip
     assert cone_check(cone)["passed"] and cone_check(cone)["measured"] == pytest.approx(-4, 0.1)
+    differences = cone[cone["end"] == "outside"].groupby("object_id")["robustness"].mean() - \
+        cone[cone["end"] == "best"].groupby("object_id")["robustness"].mean()
+    expected = stats.t.ppf(0.975, 2) * differences.std(ddof=1) / np.sqrt(3)
+    assert cone_check(cone)["half_width"] == pytest.approx(expected)
     levels = {f"g{i}": ("best", float(i)) for i in range(30)}
     settings = CalibrationSettings(trials_per_set=4, bootstrap=200)
     assert retest_check(_trials("retest", levels, 8, rng), settings)["passed"]

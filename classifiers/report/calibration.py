@@ -132,8 +132,10 @@ def _cone(report: Report, check: dict[str, Any], fig_dir: Path, root: Path, leve
         f"Per object, the best grip by Q_C whose finger force leaves the cone against the best "
         f"grip inside it, at friction mu: mean robustness difference "
         f"{_number(check['measured'])} g, "
-        f"95% t-interval over {len(rows)} objects {_ci(check['ci'])} "
-        f"({_verdict(check['passed'])})."
+        f"95% t-interval over {len(rows)} objects {_ci(check['ci'])}, half-width "
+        f"{_number(check.get('half_width'))} g ({_verdict(check['passed'])}). The spread of the "
+        "difference is between objects, so the interval narrows as 1/sqrt(objects) and hardly "
+        "with trials per grip; `grip-env calibrate --cone-objects N --cone-trials K` resizes it."
     )
     report.table(rows.set_index("object_id"), caption="Mean robustness (g) and share of trials "
                  "holding the reference level.")
