@@ -49,7 +49,8 @@ def generate(
     ] = None,
     address: Annotated[
         str | None,
-        typer.Option(help="Ray cluster address, e.g. ray://host:10001 (default: local Ray)"),
+        typer.Option(help="Ray cluster address, e.g. HEAD_IP:6379 or ray://host:10001 (default: "
+                          "$RAY_ADDRESS, else a new local Ray)"),
     ] = None,
     overwrite: Annotated[
         bool, typer.Option("--overwrite", help="replace a dataset made with other settings")

@@ -7,7 +7,8 @@ Run ``python -m tests.benchmarks.bench_cluster`` (sizes: ``GRIP_BENCH_OBJECTS`` 
   trials, shards written) per backend and worker count, on the same fixed procedural objects;
   ``ray.init`` is timed apart and not counted;
 - the cost of an object *without* its work: ``run_jobs`` of a job that returns a stored
-  30-row result, through each backend, and the driver writing one shard. Against the work per
+  30-row result, through each backend (Ray: its first ``2 x workers`` jobs, which start its
+  worker processes, apart from the rest), and the driver writing one shard. Against the work per
   object (the 1-worker run's seconds per object) this is what the projection of
   ``docs/cluster.md`` uses.
 
@@ -57,11 +58,11 @@ def stored_result(rows: pd.DataFrame, task: ObjectTask) -> pd.DataFrame:
     return rows
 
 
-def empty_jobs(rows: pd.DataFrame, workers: int, backend: str) -> float:
-    """Seconds per object of ``run_jobs`` with a job that does no work (``EMPTY_JOBS`` objects)."""
+def empty_jobs(rows: pd.DataFrame, workers: int, backend: str, count: int = EMPTY_JOBS) -> float:
+    """Seconds per object of ``run_jobs`` with a job that does no work (``count`` objects)."""
     import importlib
 
-    shapes = procedural_objects(EMPTY_JOBS, 3)
+    shapes = procedural_objects(count, 3)
     tasks = [ObjectTask(i, o.name, o, CONFIG, i) for i, o in enumerate(shapes)]
     # by its module's name, not __main__'s, so that pool workers can import it
     module = importlib.import_module("tests.benchmarks.bench_cluster")
@@ -79,6 +80,17 @@ def shard_write_seconds(rows: pd.DataFrame, repeats: int = 50) -> float:
         for i in range(repeats):
             write_shard(Path(scratch) / f"part-{i}.parquet", rows, {"object_id": "o"})
         return (time.perf_counter() - started) / repeats
+
+
+def planning_seconds(objects: int = 20) -> float:
+    """Seconds per object of planning alone (candidates on the true contour), one core."""
+    from grip_env.pipeline import candidates
+
+    shapes = procedural_objects(objects, 1)
+    started = time.perf_counter()
+    for obj in shapes:
+        candidates(obj, CONFIG.grasp, CONFIG)
+    return (time.perf_counter() - started) / objects
 
 
 def measure() -> dict[str, Any]:
@@ -104,12 +116,14 @@ def measure() -> dict[str, Any]:
         rows = load(generate(CONFIG.override(dataset={"max_grips_per_object": 30, "trials": 1}),
                              Path(scratch) / "d", objects=1, progress=False), verify=False)
     figures["stored_rows"] = len(rows)
+    figures["planning_s"] = planning_seconds()
     figures["shard_write_s"] = shard_write_seconds(rows)
     for workers in (1, 2):
         figures["empty"][f"process x{workers}"] = empty_jobs(rows, workers, "process")
         ray.init(num_cpus=workers, **_RAY_OPTIONS)
-        try:
-            figures["empty"][f"ray x{workers}"] = empty_jobs(rows, workers, "ray")
+        try:  # the first jobs start Ray's worker processes (cold); then they are reused (warm)
+            figures["empty"][f"ray x{workers} cold"] = empty_jobs(rows, workers, "ray", 2 * workers)
+            figures["empty"][f"ray x{workers} warm"] = empty_jobs(rows, workers, "ray")
         finally:
             ray.shutdown()
     return figures
@@ -128,9 +142,13 @@ def main() -> None:
     print(f"no-work job ({figures['stored_rows']} rows returned), {EMPTY_JOBS} objects, "
           "ms per object:")
     for name, seconds in figures["empty"].items():
-        print(f"  {name:11s} {1000 * seconds:8.2f}")
+        print(f"  {name:16s} {1000 * seconds:8.2f}")
     print(f"driver writes one {figures['stored_rows']}-row shard: "
           f"{1000 * figures['shard_write_s']:.2f} ms")
+    print(f"planning alone (candidates), one core: {1000 * figures['planning_s']:.1f} ms/object")
+    one = figures["real"]["process x1"]
+    per_trial = (one["seconds"] - one["objects"] * figures["planning_s"]) / one["trials"]
+    print(f"work per trial, 1 worker, planning removed: {1000 * per_trial:.1f} ms")
 
 
 if __name__ == "__main__":
