@@ -97,6 +97,9 @@ def _design(report: Report, check: dict[str, Any], reference: float, fig_dir: Pa
     ax = fig.subplots()
     ax.bar(rows["object_id"], rows["robustness"], color="tab:blue")
     ax.axhline(reference, color="tab:red", linestyle="--", label=f"reference {reference:g} g")
+    if "friction_ceiling_g" in rows:
+        ax.scatter(rows["object_id"], rows["friction_ceiling_g"], marker="_", s=900,
+                   color="black", label="friction ceiling at mu", zorder=3)  # fmt: skip
     ax.set_ylabel("robustness (g)")
     ax.set_title("Best-Q_C grip at friction mu, no pose error")
     ax.legend(fontsize=8)

@@ -12,7 +12,9 @@ Run ``python -m tests.benchmarks.bench_cluster`` (sizes: ``GRIP_BENCH_OBJECTS`` 
   object (the 1-worker run's seconds per object) this is what the projection of
   ``docs/cluster.md`` uses.
 
-Nothing is asserted; the machine it runs on is reported with the figures.
+It also times a pure CPU-bound loop on 1 and 2 processes before and after (the speed-up the
+machine offers at that moment: on a shared machine 2 workers cannot beat it). Nothing is
+asserted; report the machine and its load with the figures.
 """
 
 from __future__ import annotations
@@ -101,7 +103,10 @@ def measure() -> dict[str, Any]:
 
     # Ray workers do not have the tests on their path: ship this module's functions by value
     ray.cloudpickle.register_pickle_by_value(importlib.import_module("tests.benchmarks"))
-    figures: dict[str, Any] = {"real": {}, "empty": {}, "ray_init_s": {}}
+    from tests.benchmarks.test_bench_generate import hardware_speedup
+
+    figures: dict[str, Any] = {"real": {}, "empty": {}, "ray_init_s": {},
+                               "cpu_speedup_before": hardware_speedup()}  # fmt: skip
     for workers in (1, 2):
         figures["real"][f"process x{workers}"] = real_run(workers, "process")
     for workers in (1, 2):
@@ -126,6 +131,7 @@ def measure() -> dict[str, Any]:
             figures["empty"][f"ray x{workers} warm"] = empty_jobs(rows, workers, "ray")
         finally:
             ray.shutdown()
+    figures["cpu_speedup_after"] = hardware_speedup()
     return figures
 
 
@@ -138,6 +144,8 @@ def main() -> None:
         s = run["seconds"]
         print(f"{name:11s} {s:7.1f} {run['objects'] / s:10.3f} {run['grips'] / s:8.2f} "
               f"{run['trials'] / s:9.2f}   ({run['grips']} grips, {run['trials']} trials)")
+    print(f"CPU-bound control, 2 processes / 1 (what the machine offers now): "
+          f"{figures['cpu_speedup_before']:.2f}x before, {figures['cpu_speedup_after']:.2f}x after")
     print(f"ray.init: {', '.join(f'x{w} {s:.1f} s' for w, s in figures['ray_init_s'].items())}")
     print(f"no-work job ({figures['stored_rows']} rows returned), {EMPTY_JOBS} objects, "
           "ms per object:")
