@@ -24,13 +24,13 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import ConvexHull, QhullError
 from scipy.spatial.transform import Rotation
 
 from grip_env.config import ObjectsConfig
 from grip_env.objects import PlanarObject
 from grip_env.objects.meshes import (
     MeshPose,
+    mass_properties,
     mesh_label,
     posed_pieces,
     pybullet_data_path,
@@ -132,14 +132,14 @@ def rest_pose(
     """
     from grip_env.sim.world import COLLISION_MARGIN_MM, World
 
-    com = pieces_centroid([piece * scale for piece in pieces])
+    com, inertia, axes = mass_properties([piece * scale for piece in pieces])
     lowest = min(float((piece * scale - com)[:, 2].min()) for piece in pieces)
     start = np.array([0.0, 0.0, -lowest + RELEASE_GAP_MM])
     steps = max(1, round(SETTLE_WINDOW_S * 240))
     with World(timestep=1.0 / 240.0) as world:
         world.add_table()
         body = world.add_mesh(path, scale, com, start, (0.0, 0.0, 0.0, 1.0), DROP_MASS_KG,
-                              DROP_FRICTION)
+                              DROP_FRICTION, inertia, axes)
         previous = world.pose_mm(body.uid)
         for window in range(round(MAX_SETTLE_S / SETTLE_WINDOW_S)):
             world.step(steps)
@@ -155,32 +155,13 @@ def rest_pose(
             raise ValueError(
                 f"mesh {name!r} does not rest stably: still moving after {MAX_SETTLE_S:g} s "
                 f"({drift / SETTLE_WINDOW_S:.1f} mm/s, {turn / SETTLE_WINDOW_S:.1f} deg/s)")
-    position, orientation = current
+    position = current[0]  # the centre of mass; the reported frame is the inertia's axes
+    orientation = (Rotation.from_quat(current[1]) * Rotation.from_quat(axes).inv()).as_quat()
     posed = posed_pieces(pieces, MeshPose("", scale, tuple(com), tuple(position),
                                           tuple(orientation), 0.0))
     height = float(max(piece[:, 2].max() for piece in posed)) + COLLISION_MARGIN_MM
     return MeshPose(mesh_label(path), float(scale), tuple(map(float, com)),
                     tuple(map(float, position)), tuple(map(float, orientation)), height)
-
-
-def pieces_centroid(pieces: list[NDArray[np.float64]]) -> NDArray[np.float64]:
-    """The centre of mass of the union of the pieces' convex hulls, uniform density, counting
-    overlaps once per piece (the pieces of a decomposition barely overlap)."""
-    volumes, centres = [], []
-    for piece in pieces:
-        try:
-            hull = ConvexHull(piece)
-        except QhullError:
-            continue
-        apex = piece[hull.vertices].mean(axis=0)
-        tetra = piece[hull.simplices]
-        v = np.abs(np.einsum("ij,ij->i", tetra[:, 0] - apex,
-                             np.cross(tetra[:, 1] - apex, tetra[:, 2] - apex))) / 6.0
-        volumes.append(v.sum())
-        centres.append((v[:, None] * (tetra.sum(axis=1) + apex) / 4.0).sum(axis=0) / v.sum())
-    if not volumes:
-        return np.vstack(pieces).mean(axis=0)
-    return np.average(np.array(centres), axis=0, weights=np.array(volumes))
 
 
 def _turn_deg(q0: NDArray[np.float64], q1: NDArray[np.float64]) -> float:

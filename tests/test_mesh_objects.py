@@ -77,6 +77,35 @@ def test_a_tilted_box_falls_onto_its_large_face(tmp_path):
     np.testing.assert_allclose(sorted(np.ptp(obj.contour, axis=0)), [42, 62], atol=0.5)
 
 
+def test_box_mass_properties_are_the_solid_box_s():
+    from grip_env.objects.meshes import mass_properties
+
+    pieces = [np.array([[x, y, z] for x in (0, 60) for y in (0, 40) for z in (0, 20)], float)]
+    com, inertia, _ = mass_properties(pieces)
+    np.testing.assert_allclose(com, [30, 20, 10], atol=1e-9)
+    expected = sorted([(0.04**2 + 0.02**2) / 12, (0.06**2 + 0.02**2) / 12,
+                       (0.06**2 + 0.04**2) / 12])
+    np.testing.assert_allclose(sorted(inertia), expected, rtol=1e-9)
+
+
+def test_an_off_centre_l_mesh_rests_and_runs_where_its_silhouette_is(tmp_path):
+    """Mesh origin far from its centre of mass and inertia axes turned: the body of a trial
+    stands exactly at the resting pose its silhouette was projected from."""
+    from grip_env.sim.trial import TrialScene
+
+    l_mesh = write_boxes(tmp_path / "ell.obj", [((0, 0, 0), (6, 2, 2)), ((0, 2, 0), (2, 6, 2))])
+    obj = mesh_object(l_mesh, 60.0)
+    assert obj.mesh.position_mm[2] == pytest.approx(10.0 + MARGIN, abs=0.3)
+    assert obj.area == pytest.approx(2000 + 240 + 3.06, abs=0.5)  # grown by the 1 mm margin
+    config = Config().override(objects={"execute_on": "mesh"})
+    with TrialScene(obj, config) as scene:
+        start = scene.world.pose_mm(scene.object.uid)
+        np.testing.assert_allclose(start[0], obj.mesh.position_mm, atol=0.05)
+        scene.world.step(60)  # at rest where it was put
+        moved = scene.world.pose_mm(scene.object.uid)
+        np.testing.assert_allclose(moved[0], start[0], atol=0.2)
+
+
 def test_silhouette_in_two_parts_is_refused(tmp_path):
     apart = write_boxes(tmp_path / "apart.obj", [((-3, -1, -1), (-1, 1, 1)),
                                                    ((1, -1, -1), (3, 1, 1))])

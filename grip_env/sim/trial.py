@@ -24,7 +24,11 @@ from numpy.typing import NDArray
 from grip_env.config import Config
 from grip_env.finger import ContactPosture, finger_reaches, opening_posture, planar_contacts
 from grip_env.objects import PlanarObject
-from grip_env.objects.meshes import executes_on_mesh, execution_height_mm
+from grip_env.objects.meshes import (
+    executes_on_mesh,
+    execution_height_mm,
+    pose_mass_properties,
+)
 from grip_env.sim import pose
 from grip_env.sim.disturbance import RampProbe, robustness
 from grip_env.sim.hand import Hand, palm_to_world
@@ -98,9 +102,10 @@ class TrialScene:
         self.world.add_table()
         if executes_on_mesh(obj, self.config.objects):  # the mesh itself, at rest
             mesh = obj.mesh
+            _, inertia, axes = pose_mass_properties(mesh)
             self.object = self.world.add_mesh(mesh.path(), mesh.scale, np.array(mesh.com_mm),
                                               np.array(mesh.position_mm), mesh.orientation,
-                                              self.mass_kg, self.config.grasp.mu)
+                                              self.mass_kg, self.config.grasp.mu, inertia, axes)
         else:
             self.object = self.world.add_object(obj, self.thickness_mm, self.mass_kg,
                                                 self.config.grasp.mu,

@@ -180,14 +180,17 @@ class World:
     def add_mesh(
         self, path: str | Path, scale: float, com_mm: NDArray[np.float64],
         position_mm: NDArray[np.float64], orientation: tuple[float, float, float, float],
-        mass_kg: float, friction: float,
+        mass_kg: float, friction: float, inertia_per_kg: tuple[float, float, float],
+        axes: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0),
         rgba: tuple[float, float, float, float] = (0.15, 0.15, 0.15, 1.0),
     ) -> Body:
         """A mesh file as one dynamic body: one convex hull per object (``o``/``g``) of the
         OBJ file (PyBullet's own convex decomposition of a VHACD file), its vertices scaled by
         ``scale`` (mm per mesh unit), its centre of mass ``com_mm`` (mesh frame, mm) placed at
-        ``position_mm`` with ``orientation`` (x, y, z, w). ``top_mm``: the top of its bounding box
+        ``position_mm`` and the mesh frame turned by ``orientation`` (x, y, z, w); principal
+        inertia per kg (m²) about ``axes`` (mesh frame). ``top_mm``: the top of its bounding box
         (Bullet grows every hull by its collision margin, ``COLLISION_MARGIN_MM``).
+        ``pose_mm`` then gives the centre of mass and ``orientation`` times ``axes``.
         """
         if mass_kg <= 0 or scale <= 0:
             raise ValueError(f"mesh scale and mass must be positive, got {scale}, {mass_kg}")
@@ -196,13 +199,14 @@ class World:
         shape = c.createCollisionShape(pybullet.GEOM_MESH, fileName=str(path), meshScale=size)
         visual = c.createVisualShape(pybullet.GEOM_MESH, fileName=str(path), meshScale=size,
                                      rgbaColor=list(rgba))
-        uid = c.createMultiBody(mass_kg, shape, visual,
-                                basePosition=(np.asarray(position_mm) * MM).tolist(),
+        rotation = np.asarray(c.getMatrixFromQuaternion(list(orientation))).reshape(3, 3)
+        origin = np.asarray(position_mm, float) - rotation @ np.asarray(com_mm, float)
+        uid = c.createMultiBody(mass_kg, shape, visual, basePosition=(origin * MM).tolist(),
                                 baseOrientation=list(orientation),
-                                baseInertialFramePosition=(np.asarray(com_mm) * MM).tolist())
-        inertia = tuple(float(i) / mass_kg for i in c.getDynamicsInfo(uid, -1)[2])
+                                baseInertialFramePosition=(np.asarray(com_mm) * MM).tolist(),
+                                baseInertialFrameOrientation=list(axes))
         top = c.getAABB(uid)[1][2] / MM
-        body = Body(uid, float(top), (-1,), inertia)  # type: ignore[arg-type]
+        body = Body(uid, float(top), (-1,), tuple(map(float, inertia_per_kg)))  # type: ignore[arg-type]
         self.set_dynamics(body, mass_kg, friction)
         return body
 
