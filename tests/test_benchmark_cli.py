@@ -76,7 +76,7 @@ def test_entry_point_round_trip(data: Path, methods: Path) -> None:
     for key in ("success", "robustness", "regret", "ndcg5", "success_at_3"):
         assert mine[key] == ref[key]  # scoring by -Q_C is the best-Q_C pick
     assert mine["verdict"] == "not distinguishable from best_qc"
-    assert found["split"]["name"] == "grip-select-standard" and found["split"]["version"] == 1
+    assert found["split"]["name"] == "grip-select-standard" and found["split"]["version"] == 2
     assert sorted(found["objects"] + found["degenerate_objects"]) == sorted(STANDARD_TEST_OBJECTS)
     assert "| by_qc |" in (out / "leaderboard.md").read_text()
     assert (out / "performance_profile.png").stat().st_size > 0
@@ -104,6 +104,25 @@ def test_bad_functions_are_refused_and_nothing_written(
 ) -> None:
     out = methods / "never"
     assert_refused(*cli("benchmark", method, "--data", data, "--out", out), fragment)
+    assert not out.exists()
+
+
+def test_each_version_pins_the_split_of_its_default_objects() -> None:
+    from classifiers.benchmark.split import DEFAULT_OBJECTS, STANDARD_SPLITS
+    from grip_env.dataset.split import split_objects
+
+    assert set(DEFAULT_OBJECTS) == set(STANDARD_SPLITS)
+    for version, split in STANDARD_SPLITS.items():
+        _, test = split_objects(DEFAULT_OBJECTS[version], split.test_fraction, split.split_seed)
+        assert test == split.test_objects and split.version == version
+
+
+def test_other_split_versions(data: Path, methods: Path) -> None:
+    out = methods / "never"
+    assert_refused(*cli("benchmark", "my_methods:by_qc", "--data", data, "--out", out,
+                        "--split-version", 1), "v1", "--split-version")  # fmt: skip
+    assert_refused(*cli("benchmark", "my_methods:by_qc", "--data", data, "--out", out,
+                        "--split-version", 9), "unknown standard split version 9")  # fmt: skip
     assert not out.exists()
 
 

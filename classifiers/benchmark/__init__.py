@@ -39,6 +39,7 @@ def method_kind(spec: str) -> str:
 
 def benchmark_method(
     table: pd.DataFrame, specs: Sequence[str], name: str, config: Config, reps: int = 2000,
+    split_version: int | None = None,
 ) -> dict[str, Any]:
     """The leaderboard of one user method (``specs``: its runs, e.g. one zip per seed) against
     the baselines, on the standard split. Raises ValueError on any bad input, before any file
@@ -50,10 +51,10 @@ def benchmark_method(
         skops_scores,
     )
     from classifiers.benchmark.split import (
-        STANDARD_SPLIT,
         candidate_sets,
         candidate_table,
         check_standard_objects,
+        standard_split,
     )
     from classifiers.persistence import dataset_checksum
 
@@ -61,12 +62,12 @@ def benchmark_method(
         raise ValueError("give at least one method")
     if name in ("best_qc", "best_qg", "epsilon", "random", "oracle"):
         raise ValueError(f"method name {name!r} is a baseline's; choose another with --name")
-    table = _bare(table)
+    table, split = _bare(table), standard_split(split_version)
     kinds = {method_kind(s) for s in specs}
     if len(kinds) > 1:
         raise ValueError(f"the runs of one method must be of one kind, got {sorted(kinds)}")
-    check_standard_objects(table)
-    sets = candidate_sets(table, config, STANDARD_SPLIT)
+    check_standard_objects(table, split)
+    sets = candidate_sets(table, config, split)
     candidates = candidate_table(sets)
     kind = kinds.pop()
     frames = []
@@ -76,14 +77,14 @@ def benchmark_method(
         elif kind == METHOD_KINDS[1]:
             frames.append(skops_scores(Path(spec), sets, name).assign(seed=run))
         else:
-            offset = len(STANDARD_SPLIT.seeds) * run
-            frames.append(entry_point_scores(spec, sets, STANDARD_SPLIT.seeds, name).assign(
+            offset = len(split.seeds) * run
+            frames.append(entry_point_scores(spec, sets, split.seeds, name).assign(
                 seed=lambda f, o=offset: f["seed"] + o))  # fmt: skip
     # the standard split's baselines do not depend on the user's config (epsilon: default mu)
     scores = pd.concat([baseline_scores(candidates), *frames], ignore_index=True)
-    split = {**STANDARD_SPLIT.describe(), "dataset_sha256": dataset_checksum(table),
-             "method_files": list(specs)}  # fmt: skip
-    return _board(candidates, scores, split, reps, config.learning.seed)
+    info = {**split.describe(), "dataset_sha256": dataset_checksum(table),
+            "method_files": list(specs)}  # fmt: skip
+    return _board(candidates, scores, info, reps, config.learning.seed)
 
 
 def study_benchmark(

@@ -1,19 +1,22 @@
 """The benchmark's standard split: fixed, versioned held-out objects and training seeds.
 
-``grip-select-standard`` v1 is the study's object split of the default dataset
-(``runs/default/dataset``, 52 objects: 7 basic shapes and 45 procedural ones):
-:func:`grip_env.dataset.split.split_objects` with ``test_fraction=0.25`` and seed 0 holds out the
-13 objects of :data:`STANDARD_TEST_OBJECTS`. Pinning the ids (rather than re-deriving them from
-whatever dataset is given) keeps two users' numbers on the same objects; a dataset that lacks
-any of them is refused. A method is trained on the other objects only.
+A version pins the held-out object ids, so two users' numbers are on the same objects; a
+dataset that lacks any of them is refused. Each version's objects are
+:func:`grip_env.dataset.split.split_objects` (``test_fraction=0.25``, seed 0) of the objects with
+grips of the default dataset of its time (``grip-env generate`` with the default config), listed
+in :data:`DEFAULT_OBJECTS` (a test re-derives each version's objects from that list):
 
-Each held-out object shows its ``max_candidates`` (64) best grips by ``Q_C``, lowest first, with
-the twelve features S1..C6 under the signed-log normalisation: exactly the observation of
-``GripSelect-v0`` with its defaults. Stochastic methods are run with the training seeds
-``0..4`` (a run per seed); a deterministic method is one run.
+- v2 (:data:`STANDARD_SPLITS` ``[2]``, the default): 53 objects since the default object set
+  gained meshes (commit 423a072: 18 named, 24 procedural, 18 meshes; 7 get no grip);
+- v1: the 52 objects of ``runs/default/dataset`` (named and procedural shapes) before that;
+  ``grip-env benchmark --split-version 1`` scores a dataset of that time.
 
-A new version (other objects, seeds or candidates) gets a new ``version``; the leaderboard
-records the version and the dataset's checksum.
+A method is trained on the other objects only. Each held-out object shows its
+``max_candidates`` (64) best grips by ``Q_C``, lowest first, with the twelve features S1..C6
+under the signed-log normalisation: exactly the observation of ``GripSelect-v0`` with its
+defaults. Stochastic methods are run with the training seeds ``0..4`` (a run per seed); a
+deterministic method is one run. A change of objects, candidates or seeds is a new version; the
+leaderboard records the version and the dataset's checksum.
 """
 
 from __future__ import annotations
@@ -28,7 +31,30 @@ from grip_env.config import Config
 from grip_env.dataset.split import held_out_objects
 from grip_env.envs.observation import CandidateSet
 
-STANDARD_TEST_OBJECTS: tuple[str, ...] = (
+DEFAULT_OBJECTS_V1: tuple[str, ...] = (
+    "bean", "disc", "ellipse", "hexagon", "l_shape", "parallelogram", "pentagon", "proc_0_00000",
+    "proc_0_00001", "proc_0_00002", "proc_0_00003", "proc_0_00004", "proc_0_00005", "proc_0_00006",
+    "proc_0_00007", "proc_0_00008", "proc_0_00009", "proc_0_00010", "proc_0_00011", "proc_0_00012",
+    "proc_0_00014", "proc_0_00015", "proc_0_00016", "proc_0_00017", "proc_0_00018", "proc_0_00020",
+    "proc_0_00021", "proc_0_00022", "proc_0_00023", "proc_0_00024", "proc_0_00025", "proc_0_00026",
+    "proc_0_00027", "proc_0_00028", "proc_0_00029", "proc_0_00030", "proc_0_00031", "proc_0_00032",
+    "proc_0_00035", "proc_0_00037", "proc_0_00039", "proc_0_00040", "proc_0_00041", "rectangle",
+    "right_triangle", "rounded_rectangle", "square", "star", "t_shape", "trapezoid", "triangle",
+    "u_shape",
+)  # fmt: skip
+
+DEFAULT_OBJECTS_V2: tuple[str, ...] = (
+    "bean", "bunny", "cube", "disc", "domino", "duck", "ellipse", "hexagon", "jenga", "l_shape",
+    "mug", "parallelogram", "pentagon", "proc_0_00000", "proc_0_00001", "proc_0_00002",
+    "proc_0_00003", "proc_0_00004", "proc_0_00005", "proc_0_00006", "proc_0_00007", "proc_0_00008",
+    "proc_0_00009", "proc_0_00010", "proc_0_00011", "proc_0_00012", "proc_0_00014", "proc_0_00015",
+    "proc_0_00016", "proc_0_00017", "proc_0_00018", "proc_0_00020", "proc_0_00021", "proc_0_00022",
+    "proc_0_00023", "rectangle", "right_triangle", "rounded_rectangle", "square", "star",
+    "t_shape", "trapezoid", "triangle", "u_shape", "urdf_162", "urdf_206", "urdf_222", "urdf_264",
+    "urdf_459", "urdf_674", "urdf_683", "urdf_711", "urdf_814",
+)  # fmt: skip
+
+STANDARD_TEST_OBJECTS_V1: tuple[str, ...] = (
     "l_shape", "proc_0_00003", "proc_0_00004", "proc_0_00011", "proc_0_00015", "proc_0_00017",
     "proc_0_00018", "proc_0_00022", "proc_0_00023", "proc_0_00029", "proc_0_00030",
     "proc_0_00031", "proc_0_00035",
@@ -55,7 +81,29 @@ class BenchmarkSplit:
         return {k: list(v) if isinstance(v, tuple) else v for k, v in found.items()}
 
 
-STANDARD_SPLIT = BenchmarkSplit("grip-select-standard", 1, STANDARD_TEST_OBJECTS, (0, 1, 2, 3, 4))
+STANDARD_TEST_OBJECTS: tuple[str, ...] = (
+    "domino", "mug", "parallelogram", "proc_0_00005", "proc_0_00008", "proc_0_00010",
+    "proc_0_00011", "proc_0_00015", "proc_0_00016", "proc_0_00023", "rectangle",
+    "right_triangle", "square",
+)  # fmt: skip
+_SEEDS = (0, 1, 2, 3, 4)
+STANDARD_SPLITS: dict[int, BenchmarkSplit] = {
+    1: BenchmarkSplit("grip-select-standard", 1, STANDARD_TEST_OBJECTS_V1, _SEEDS),
+    2: BenchmarkSplit("grip-select-standard", 2, STANDARD_TEST_OBJECTS, _SEEDS),
+}
+STANDARD_SPLIT = STANDARD_SPLITS[max(STANDARD_SPLITS)]
+#: The objects each version's held-out objects were drawn from.
+DEFAULT_OBJECTS: dict[int, tuple[str, ...]] = {1: DEFAULT_OBJECTS_V1, 2: DEFAULT_OBJECTS_V2}
+
+
+def standard_split(version: int | None = None) -> BenchmarkSplit:
+    """The standard split of ``version`` (default: the latest); unknown → ValueError."""
+    if version is None:
+        return STANDARD_SPLIT
+    if version not in STANDARD_SPLITS:
+        raise ValueError(f"unknown standard split version {version!r}; known: "
+                         f"{sorted(STANDARD_SPLITS)}")  # fmt: skip
+    return STANDARD_SPLITS[version]
 
 
 def check_standard_objects(table: pd.DataFrame, split: BenchmarkSplit = STANDARD_SPLIT) -> None:
@@ -66,7 +114,8 @@ def check_standard_objects(table: pd.DataFrame, split: BenchmarkSplit = STANDARD
         raise ValueError(
             f"dataset lacks {len(missing)} of the {len(split.test_objects)} objects of the "
             f"standard split {split.name} v{split.version} (e.g. {missing[:3]}); generate it with "
-            f"the default config (grip-env generate) to benchmark on the standard split"
+            f"the default config (grip-env generate), or give the --split-version of its time "
+            f"(known: {sorted(STANDARD_SPLITS)})"
         )
 
 
@@ -74,10 +123,10 @@ def study_split(table: pd.DataFrame, config: Config, seeds: Sequence[int]) -> Be
     """The standard split when the study's own held-out objects are it, else the study's split."""
     learning = config.learning
     _, test = held_out_objects(table["object_id"].astype(str), learning)
-    standard = (test == STANDARD_TEST_OBJECTS
-                and config.selector.max_candidates == STANDARD_SPLIT.max_candidates)  # fmt: skip
+    found = [v for v, s in STANDARD_SPLITS.items() if s.test_objects == tuple(test)
+             and config.selector.max_candidates == s.max_candidates]  # fmt: skip
     return BenchmarkSplit(
-        STANDARD_SPLIT.name if standard else "study", STANDARD_SPLIT.version if standard else 0,
+        STANDARD_SPLIT.name if found else "study", found[0] if found else 0,
         tuple(test), tuple(int(s) for s in seeds), config.selector.max_candidates,
         test_fraction=learning.test_fraction, split_seed=learning.seed,
     )  # fmt: skip

@@ -26,8 +26,11 @@ def benchmark(
     config: ConfigFile = None,
     reps: Annotated[int, typer.Option(min=100, max=100_000,
                                       help="bootstrap resamples")] = 2000,
+    split_version: Annotated[int | None, typer.Option(
+        help="standard split version [default: the latest]; 1 = datasets generated before the "
+             "default objects gained meshes")] = None,
 ) -> None:
-    """Score METHODS on the standard split (grip-select-standard v1: 13 held-out objects of the
+    """Score METHODS on the standard split (grip-select-standard v2: 13 held-out objects of the
     default dataset, their 64 best candidates by Q_C) against best-Q_C, best-Q_G, epsilon, random
     and the oracle.
 
@@ -51,7 +54,7 @@ def benchmark(
         if GROUP_COLUMN not in table.columns:
             raise ValueError(f"dataset {data} has no {GROUP_COLUMN!r} column")
         label = name or _default_name(methods[0])
-        board = benchmark_method(table, methods, label, cfg, reps)
+        board = benchmark_method(table, methods, label, cfg, reps, split_version)
         _check_out(out)
         written = write_leaderboard(board, out)
     row = board["methods"][label]
