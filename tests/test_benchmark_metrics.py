@@ -161,6 +161,10 @@ def test_leaderboard_verdicts() -> None:
     assert board["methods"]["good"]["probability_of_improvement"]["estimate"] == 1.0
     text = leaderboard_markdown(board)
     assert "Beat the best-Q_C pick" in text and "`good`" in text
+    assert "indicative only" not in text  # 12 objects
+    few = build_leaderboard(pd.DataFrame(rows)[lambda f: f["object_id"].isin(["o1", "o2"])],
+                            {"name": "t", "version": 0}, reps=100)  # fmt: skip
+    assert "Only 2 objects" in leaderboard_markdown(few)
 
 
 def _plain() -> dict[str, float]:

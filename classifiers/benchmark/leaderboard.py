@@ -33,6 +33,8 @@ PLAIN = ("success", "robustness", "regret", "robustness_regret", "ndcg5",
          *(f"success_at_{k}" for k in range(1, MAX_ATTEMPTS + 1)), "attempts")  # fmt: skip
 VERDICTS = ("beats best_qc", "worse than best_qc", "not distinguishable from best_qc")
 TAUS = np.linspace(-1.0, 1.0, 201)
+#: Below this many ranked objects the leaderboard says its intervals are indicative only.
+FEW_OBJECTS = 10
 
 
 class NoRankableObject(ValueError):
@@ -188,7 +190,16 @@ def split_line(board: Mapping[str, Any]) -> str:
             f"({len(board['degenerate_objects'])} where every candidate has the same success "
             f"rate are left out of the normalised score), up to {split.get('max_candidates')} "
             f"candidates each (lowest Q_C first); training seeds {seeds}; dataset sha256 "
-            f"`{str(split.get('dataset_sha256', ''))[:12]}`.")
+            f"`{str(split.get('dataset_sha256', ''))[:12]}`." + _few_objects(board))
+
+
+def _few_objects(board: Mapping[str, Any]) -> str:
+    """A caution when the bootstrap has too few objects to resample."""
+    n = len(board["objects"])
+    if n >= FEW_OBJECTS:
+        return ""
+    return (f" Only {n} objects enter the normalised score: a bootstrap over so few objects "
+            f"understates the uncertainty; read its intervals and verdicts as indicative only.")
 
 
 def _verdict(ci: Sequence[float], is_reference: bool) -> str:
