@@ -288,26 +288,34 @@ def _check(name: str, measured: Any, ci: Any, target: str, passed: bool | None,
             "passed": passed, **extra}  # fmt: skip
 
 
-def friction_ceiling_g(obj: PlanarObject, config: Config) -> float:
-    """The in-plane level (g) three pads can hold by friction alone at the design value
-    ``grasp.mu``.
+def friction_ceiling_g(obj: PlanarObject, config: Config, normal_n: float | None = None) -> float:
+    """The in-plane level (g) the pads hold by friction alone at the design value ``grasp.mu``.
 
     A level of ``a`` g pushes the object along the pads' faces with ``m a g`` while gravity pulls
-    it down with ``m g``; only friction resists both, at most ``mu * sum(N)`` with
-    ``sum(N) = 3 * finger_force_n``, so ``a <= sqrt((mu sum(N) / (m g))**2 - 1)`` (0 when the
-    pads cannot even carry the weight). A grip's weakest direction is one along its faces, so no
-    grip holds more in every direction; the worm gear can raise the normal forces a little
-    under load, so a measured level may sit slightly above it.
+    it down with ``m g``; only friction resists both, at most ``mu * normal_n``, so
+    ``a <= sqrt((mu normal_n / (m g))**2 - 1)`` (0 when the pads cannot carry the weight).
+    ``normal_n`` defaults to the commanded squeeze, ``3 * finger_force_n``: the ceiling of a hand
+    whose normal forces stay at it. A non-backdrivable worm gear lets them rise under load
+    (:func:`gear_ceiling_g`), so a measured level may sit above this one.
     """
     from grip_env.sim.uncertainty import object_mass_kg
 
-    weight_n = object_mass_kg(obj, config) * 9.81
-    ratio = config.grasp.mu * 3 * config.sim.finger_force_n / weight_n
+    normal_n = 3 * config.sim.finger_force_n if normal_n is None else normal_n
+    ratio = config.grasp.mu * normal_n / (object_mass_kg(obj, config) * 9.81)
     return float(np.sqrt(max(ratio**2 - 1.0, 0.0)))
 
 
+def gear_ceiling_g(obj: PlanarObject, config: Config) -> float:
+    """:func:`friction_ceiling_g` with every pad at the most its finger resists before it is
+    pushed back: the motor's force plus the worm gear's stop, ``(1 + HOLD_FACTOR)`` times it."""
+    from grip_env.sim.hand import HOLD_FACTOR
+
+    return friction_ceiling_g(obj, config, 3 * (1 + HOLD_FACTOR) * config.sim.finger_force_n)
+
+
 def friction_for_level(obj: PlanarObject, config: Config, level_g: float) -> float:
-    """The pad friction coefficient whose :func:`friction_ceiling_g` is ``level_g``."""
+    """The pad friction coefficient whose :func:`friction_ceiling_g` (commanded squeeze) is
+    ``level_g``."""
     from grip_env.sim.uncertainty import object_mass_kg
 
     weight_n = object_mass_kg(obj, config) * 9.81
@@ -317,10 +325,13 @@ def friction_for_level(obj: PlanarObject, config: Config, level_g: float) -> flo
 def design_check(trials: pd.DataFrame, reference_g: float,
                  config: Config | None = None) -> dict[str, Any]:
     """Each box's best grip at the design friction: robustness, whether it holds, the box's
-    friction ceiling (``friction_ceiling_g``) and the friction the reference needs.
+    friction ceilings (commanded squeeze, and with the worm gear's stop) and the friction the
+    reference needs at the commanded squeeze.
 
-    ``well_posed`` is False when every ceiling is below the reference: then no faithful grip can
-    pass, and the check's ``reason`` says why (the figure is reported, nothing is tuned).
+    ``well_posed`` is False when the reference is above every box's gear ceiling: then no
+    faithful grip can pass, and ``reason`` says why (the figure is reported, nothing is tuned).
+    ``beyond_squeeze`` is True when the reference is above what the commanded squeeze alone
+    holds at ``grasp.mu``: passing then relies on the normal forces rising under the push.
     """
     config = config or Config()
     rows = trials[trials["part"] == "design"]
@@ -328,22 +339,29 @@ def design_check(trials: pd.DataFrame, reference_g: float,
                                             robustness=("robustness", "mean"),
                                             held=("success", "mean"))  # fmt: skip
     boxes = {box.name: box for box in box_objects()}
-    ceilings = {name: friction_ceiling_g(box, config) for name, box in boxes.items()}
+    squeeze = {name: friction_ceiling_g(box, config) for name, box in boxes.items()}
+    gear = {name: gear_ceiling_g(box, config) for name, box in boxes.items()}
     needed = {name: friction_for_level(box, config, reference_g) for name, box in boxes.items()}
-    per_box["friction_ceiling_g"] = [round(ceilings.get(n, np.nan), 2) for n in per_box.index]
-    per_box["mu_for_reference"] = [round(needed.get(n, np.nan), 3) for n in per_box.index]
+    for column, values, digits in (("friction_ceiling_g", squeeze, 2), ("gear_ceiling_g", gear, 1),
+                                   ("mu_for_reference", needed, 3)):  # fmt: skip
+        per_box[column] = [round(values.get(n, np.nan), digits) for n in per_box.index]
     passed = bool(len(per_box) == len(BOXES_MM) and (per_box["held"] == 1.0).all())
-    well_posed = bool(max(ceilings.values()) >= reference_g)
+    well_posed = bool(max(gear.values()) >= reference_g)
+    mu, force = config.grasp.mu, config.sim.finger_force_n
     reason = None if well_posed else (
-        f"ill-posed at mu = {config.grasp.mu:g}: three {config.sim.finger_force_n:g} N pads hold "
-        f"these boxes by friction against at most {min(ceilings.values()):.1f}–"
-        f"{max(ceilings.values()):.1f} g in the plane (mu x sum N against the weight and the "
-        f"ramp's push), below the {reference_g:g} g reference; holding it needs mu >= "
-        f"{min(needed.values()):.2f}–{max(needed.values()):.2f}")
+        f"ill-posed at mu = {mu:g}: even with the worm gear's stop the pads hold these boxes by "
+        f"friction against at most {min(gear.values()):.1f}–{max(gear.values()):.1f} g in the "
+        f"plane, below the {reference_g:g} g reference")
     return _check("design_hold", per_box["robustness"].round(3).to_dict(), None,
                   f"every box's best-Q_C grip holds {reference_g:g} g", passed,
                   per_object=per_box.reset_index().to_dict(orient="records"),
-                  well_posed=well_posed, reason=reason)
+                  well_posed=well_posed, reason=reason,
+                  beyond_squeeze=bool(min(squeeze.values()) < reference_g),
+                  squeeze_text=(f"three {force:g} N pads squeezing at mu = {mu:g} hold "
+                                f"{min(squeeze.values()):.1f}–{max(squeeze.values()):.1f} g by "
+                                f"friction (mu x sum N against the weight and the ramp's push); "
+                                f"{reference_g:g} g at that squeeze needs mu >= "
+                                f"{min(needed.values()):.2f}–{max(needed.values()):.2f}"))
 
 
 def cone_check(trials: pd.DataFrame) -> dict[str, Any]:

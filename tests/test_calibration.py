@@ -160,7 +160,7 @@ def test_calibrate_quick_writes_a_report_from_real_trials(tmp_path: Path):
     result = CliRunner().invoke(app, ["calibrate", "--quick", "--out", str(out), "--workers", "1",
                                       "--cone-objects", "2", "--cone-trials", "1"])
     assert result.exit_code == 0, result.output
-    assert "design_hold  FAIL" in result.output and "ill-posed" in result.output
+    assert "design_hold" in result.output
     saved = json.loads((out / "calibration.json").read_text())
     assert set(saved["checks"]) == {"design_hold", "cone", "retest", "icc"}
     trials = pd.read_parquet(out / "calibration_trials.parquet")
@@ -202,34 +202,50 @@ def test_friction_ceiling_holds_the_weight_and_the_push_with_mu_times_the_pad_fo
     assert friction_ceiling_g(box, heavy) == 0.0
 
 
-def _design_trials(levels: dict[str, float]) -> pd.DataFrame:
+def _design_trials(levels: dict[str, float], reference: float = 45.0) -> pd.DataFrame:
     return pd.DataFrame([{"object_id": name, "grip": f"{name}/g", "part": "design", "end": "best",
                           "Q_C": 1.0, "Q_G": 1.0, "trial": k, "robustness": level,
-                          "success": level >= 45.0, "friction": 0.4, "mass_kg": 0.07}
+                          "success": level >= reference, "friction": 0.4, "mass_kg": 0.07}
                          for name, level in levels.items() for k in range(2)])  # fmt: skip
 
 
-def test_design_check_says_when_no_faithful_grip_can_pass_and_why():
+def test_gear_ceiling_adds_the_worm_gears_stop_to_the_squeeze():
+    from grip_env.calibration import friction_ceiling_g, gear_ceiling_g
+    from grip_env.sim.hand import HOLD_FACTOR
+
+    box = box_objects()[0]
+    config = Config()
+    ratio = 0.4 * 3 * 15.0 * (1 + HOLD_FACTOR) / (0.090 * 0.055 * 0.030 * 500.0 * 9.81)
+    assert gear_ceiling_g(box, config) == pytest.approx(np.sqrt(ratio**2 - 1))
+    assert gear_ceiling_g(box, config) > 45.0 > friction_ceiling_g(box, config)
+
+
+def test_design_check_says_what_its_verdict_means_physically():
     from classifiers.report.calibration import design_verdict_text, summary_table
     from grip_env.calibration import design_check
 
     names = [b.name for b in box_objects()]
-    trials = _design_trials(dict.fromkeys(names, 26.9))
-    check = design_check(trials, 45.0, Config())
-    assert check["passed"] is False and check["well_posed"] is False
+    # 45 g: above the squeeze's ceiling (about 25 g at mu = 0.4), below the gear's: well-posed
+    check = design_check(_design_trials(dict.fromkeys(names, 45.25)), 45.0, Config())
+    assert check["passed"] and check["well_posed"] and check["beyond_squeeze"]
     rows = {r["object_id"]: r for r in check["per_object"]}
-    assert all(24 < r["friction_ceiling_g"] < 26 and 0.6 < r["mu_for_reference"] < 0.8
-               for r in rows.values())  # fmt: skip
-    reason = check["reason"]
-    assert "ill-posed at mu = 0.4" in reason and "below the 45 g reference" in reason
+    assert all(24 < r["friction_ceiling_g"] < 26 < 45 < r["gear_ceiling_g"]
+               and 0.6 < r["mu_for_reference"] < 0.8 for r in rows.values())  # fmt: skip
     text = design_verdict_text(check, 45.0)
-    assert "box_90x55 26.9 g (ceiling 24.7 g)" in text and "not tuned" in text
-    assert summary_table({"design_hold": check}).loc["design_hold", "verdict"] == "FAIL (ill-posed)"
-    # a reference inside the ceiling is a fair check: no reason given, the figure decides
-    fair = design_check(_design_trials(dict.fromkeys(names, 26.9)), 20.0, Config())
-    assert fair["well_posed"] is True and fair["reason"] is None
-    assert "ill-posed" not in design_verdict_text(fair, 20.0)
-    short = design_check(_design_trials({names[0]: 26.9}), 20.0, Config())
+    assert "box_90x55 45.2 g" in text and "24.7–25.5 g" in text and "worm gear" in text
+    assert summary_table({"design_hold": check}).loc["design_hold", "verdict"] == "pass"
+    # a reference above even the gear's ceiling: no faithful grip can pass, and it says why
+    beyond = design_check(_design_trials(dict.fromkeys(names, 128.0), 200.0), 200.0, Config())
+    assert beyond["passed"] is False and beyond["well_posed"] is False
+    assert "ill-posed at mu = 0.4" in beyond["reason"] and "below the 200 g" in beyond["reason"]
+    assert "not tuned" in design_verdict_text(beyond, 200.0)
+    assert summary_table({"design_hold": beyond}).loc["design_hold", "verdict"] == \
+        "FAIL (ill-posed)"
+    # a reference inside the squeeze's ceiling needs no gear: neither remark
+    fair = design_check(_design_trials(dict.fromkeys(names, 26.9), 20.0), 20.0, Config())
+    assert fair["well_posed"] and not fair["beyond_squeeze"] and fair["reason"] is None
+    assert "worm gear" not in design_verdict_text(fair, 20.0)
+    short = design_check(_design_trials({names[0]: 26.9}, 20.0), 20.0, Config())
     assert short["passed"] is False  # a box without a feasible grip fails the check
 
 

@@ -89,9 +89,11 @@ def _design(report: Report, check: dict[str, Any], reference: float, fig_dir: Pa
     report.table(rows.set_index("object_id"), caption="No pose error, friction = mu, nominal "
                  "mass; robustness is the highest level held (g), held the share of trials "
                  "holding the reference level; friction_ceiling_g = sqrt((mu x 3 x finger force "
-                 "/ (m g))² - 1), the most three pads hold by friction against the weight and an "
-                 "in-plane push along their faces; mu_for_reference, the friction at which that "
-                 "ceiling reaches the reference.")
+                 "/ (m g))² - 1), the most three pads at the commanded squeeze hold by friction "
+                 "against the weight and an in-plane push along their faces; gear_ceiling_g, "
+                 "the same with each pad at the motor plus the worm gear's stop; "
+                 "mu_for_reference, the friction at which the squeeze's ceiling reaches the "
+                 "reference.")
     report.text(design_verdict_text(check, reference))
     fig = Figure(figsize=(5.5, 3.4))
     ax = fig.subplots()
@@ -99,7 +101,7 @@ def _design(report: Report, check: dict[str, Any], reference: float, fig_dir: Pa
     ax.axhline(reference, color="tab:red", linestyle="--", label=f"reference {reference:g} g")
     if "friction_ceiling_g" in rows:
         ax.scatter(rows["object_id"], rows["friction_ceiling_g"], marker="_", s=900,
-                   color="black", label="friction ceiling at mu", zorder=3)  # fmt: skip
+                   color="black", label="squeeze's friction ceiling at mu", zorder=3)  # fmt: skip
     ax.set_ylabel("robustness (g)")
     ax.set_title("Best-Q_C grip at friction mu, no pose error")
     ax.legend(fontsize=8)
@@ -109,19 +111,25 @@ def _design(report: Report, check: dict[str, Any], reference: float, fig_dir: Pa
 
 
 def design_verdict_text(check: dict[str, Any], reference: float) -> str:
-    """The design check in words: the measured levels, the friction ceiling and, when no faithful
-    grip can pass, the physical reason."""
+    """The design check in words: the measured levels against the friction ceilings, and what
+    the verdict means physically (no faithful grip can pass; or passing relies on the gear)."""
     rows = pd.DataFrame(check.get("per_object", []))
-    held = ", ".join(f"{r.object_id} {r.robustness:.1f} g (ceiling {r.friction_ceiling_g:.1f} g)"
-                     for r in rows.itertuples())
+    held = ", ".join(f"{r.object_id} {r.robustness:.1f} g" for r in rows.itertuples())
     text = (f"Measured at the design friction: {held}, against the {reference:g} g reference "
             f"({_verdict(check['passed'])}).")
+    if check.get("squeeze_text"):
+        text += f" At the commanded squeeze, {check['squeeze_text']}."
     if check.get("well_posed") is False:
-        text += (f" The check is {check['reason']}. No grip of a faithful hand can meet it, so "
-                 "its failure measures the reference level, not the labels: the reference is "
-                 "set for the drawn friction (the 30–70 % success target), and the physics is "
-                 "not tuned to pass. What the check can show is that the best grip reaches its "
-                 "box's ceiling.")
+        return text + (f" The check is {check['reason']}. No grip of a faithful hand can meet "
+                       "it, so its failure measures the reference level, not the labels; the "
+                       "physics is not tuned to pass.")
+    if check.get("beyond_squeeze"):
+        gear = rows["gear_ceiling_g"] if "gear_ceiling_g" in rows else pd.Series(dtype=float)
+        bound = f" (at most {gear.min():.0f}–{gear.max():.0f} g)" if len(gear) else ""
+        text += (" The reference is above that: a grip holds it only if its normal forces rise "
+                 "under the push, which the non-backdrivable worm gear allows up to its stop"
+                 f"{bound}. The check is well-posed for this hand, and it tests the gear's hold "
+                 "as well as the squeeze.")
     return text
 
 
