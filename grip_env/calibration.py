@@ -57,8 +57,9 @@ class CalibrationSettings:
     trials_per_set: int = 8  # trials in each of the two disjoint seed sets
     # default, then procedural, objects with grips in and out of the cone, and trials per grip:
     # chosen by measurement (BENCHMARKS, "cone check's power"): the spread of the per-object
-    # difference is between objects (sd 31 g at 4 trials, 30 g at 8), so objects narrow the
-    # interval and trials hardly do; 40 objects give a half-width of about 10 g
+    # difference is between objects (sd 37 g at 2 trials, 33 g at 4; 31 and 30 g at 4 and 8
+    # before the worm-gear floor), so objects narrow the interval and trials hardly do; 40
+    # objects give a half-width of 10-12 g, under half the effect
     cone_objects: int = 40
     cone_trials: int = 4
     design_trials: int = 2
