@@ -32,3 +32,7 @@ DATASET_COLUMNS = CANDIDATE_COLUMNS + OUTCOMES + ROBUSTNESS
 FAMILY = "family"
 MESH_POSE = ("mesh_file", "mesh_scale", "mesh_com_mm", "mesh_position_mm", "mesh_orientation",
              "mesh_height_mm")
+#: Contours of the objects table (``objects.parquet``), each a list of [x, y] mm: the true
+#: object, the body the simulator builds, and the one the grips were planned on when that is
+#: the top-down render's segmented contour (``perception.source: render``; empty otherwise).
+OBJECT_CONTOURS = ("contour", "sim_contour", "perceived_contour")

@@ -435,6 +435,7 @@ def test_missing_shard_is_refused_by_load(tmp_path: Path) -> None:
 
 # ----------------------------------------------------------------------------- the real job
 REAL = Config().override(dataset={"max_grips_per_object": 2, "trials": 2, "seed": 3})
+POLYGON = REAL.override(perception={"source": "polygon"})
 
 
 @pytest.mark.slow
@@ -463,10 +464,44 @@ def test_real_job_same_dataset_from_one_and_two_workers(tmp_path: Path) -> None:
 
 @pytest.mark.slow
 def test_real_job_plans_on_perceived_contour(tmp_path: Path) -> None:
-    config = REAL.override(uncertainty={"perceived_contour": True})
-    grips = load(generate(config, tmp_path / "d", objects="rectangle", workers=1, progress=False))
-    planned = load(generate(REAL, tmp_path / "p", objects="rectangle", workers=1, progress=False))
+    from grip_env.dataset import load_perceived_objects
+    from grip_env.objects import make_shape
+    from grip_env.perception import perceive
+
+    config = REAL.override(perception={"source": "render"})
+    seen_dir = generate(config, tmp_path / "d", objects="rectangle", workers=1, progress=False)
+    true_dir = generate(POLYGON, tmp_path / "p", objects="rectangle", workers=1, progress=False)
+    grips, planned = load(seen_dir), load(true_dir)
     assert len(grips) > 0
     # the perceived rectangle's descriptors differ slightly from the true polygon's
     assert not np.allclose(grips["area"].iloc[0], planned["area"].iloc[0], rtol=0, atol=1e-9)
     assert np.isclose(grips["area"].iloc[0], planned["area"].iloc[0], rtol=0.05)
+    # the objects table keeps the perceived contour beside the true one; it is what was planned on
+    (seen,), (true,) = load_perceived_objects(seen_dir), load_objects(seen_dir)
+    assert load_perceived_objects(true_dir) == [None]
+    np.testing.assert_allclose(true.contour, make_shape("rectangle").contour)
+    entry = grips.attrs["manifest"]["objects"][0]
+    task = ObjectTask(0, entry["object_id"], make_shape("rectangle"), config, entry["seed"])
+    np.testing.assert_allclose(
+        seen.contour, perceive(task.obj, config.perception, seed=task.child_seeds()[0]).contour)
+    assert grips["area"].iloc[0] == pytest.approx(seen.area)
+    assert validate(seen_dir) == [] and validate(true_dir) == []
+
+
+def test_validate_checks_the_perceived_contours(tmp_path: Path) -> None:
+    config = CONFIG.override(perception={"source": "render"})
+    out = generate(config, tmp_path / "d", objects="basic", workers=1, progress=False,
+                   job=toy_job)
+    assert validate(out) == []
+    path = out / "objects.parquet"
+    table = pq.read_table(path)
+    contours = table["perceived_contour"].to_pylist()
+    contours[1] = [[0.0, 0.0], [1.0, 1.0]]
+    index = table.schema.get_field_index("perceived_contour")
+    pq.write_table(table.set_column(index, table.schema.field(index), pa.array(
+        contours, table.schema.field(index).type)), path)
+    manifest = json.loads((out / "manifest.json").read_text())
+    manifest["objects_file"]["sha256"] = sha256_of(path)
+    (out / "manifest.json").write_text(json.dumps(manifest))
+    assert validate(out) == ["objects.parquet: object triangle: perceived_contour is not a "
+                             "contour of >= 3 finite points"]

@@ -7,12 +7,12 @@ within 2 px, and the best grip's Q_C within 10 %.
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 from grip_env.config import Config
 from grip_env.objects import PlanarObject, load_object_set
 from grip_env.perception import Regions, find_regions, perceive
+from grip_env.perception.fidelity import endpoint_errors
 from grip_env.pipeline import candidates
 
 CONFIG = Config()
@@ -37,15 +37,6 @@ def seen() -> dict[str, PlanarObject]:
 
 def _regions(obj: PlanarObject) -> Regions:
     return find_regions(obj, CONFIG.perception, CONFIG.grasp)
-
-
-def endpoint_errors(true: Regions, perceived: Regions) -> np.ndarray:
-    """Distance (mm) of each true region's endpoints to its perceived twin's (nearest by both)."""
-    cost = (np.linalg.norm(perceived.a[None] - true.a[:, None], axis=2)
-            + np.linalg.norm(perceived.b[None] - true.b[:, None], axis=2))
-    twin = cost.argmin(axis=1)
-    return np.concatenate([np.linalg.norm(perceived.a[twin] - true.a, axis=1),
-                           np.linalg.norm(perceived.b[twin] - true.b, axis=1)])
 
 
 @pytest.mark.parametrize("obj", DEFAULT_OBJECTS, ids=lambda o: o.name)

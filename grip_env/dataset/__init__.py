@@ -6,7 +6,7 @@
 """
 
 from grip_env.dataset.backends import BACKENDS, WorkerLost
-from grip_env.dataset.catalog import load_objects, read_objects
+from grip_env.dataset.catalog import load_objects, load_perceived_objects, read_objects
 from grip_env.dataset.generation import DatasetMismatchError, generate
 from grip_env.dataset.jobs import ObjectJob, ObjectTask, simulate_object, with_outcomes
 from grip_env.dataset.loading import dataset_manifest, load
@@ -30,6 +30,7 @@ __all__ = [
     "kept_ranks",
     "load",
     "load_objects",
+    "load_perceived_objects",
     "read_objects",
     "simulate_object",
     "split_objects",

@@ -138,13 +138,18 @@ def _unique_ids(names: list[str]) -> list[str]:
 
 
 def objects_table(
-    entries: list[DatasetObject], tolerance_mm: float = DEFAULT_TOLERANCE_MM
+    entries: list[DatasetObject], tolerance_mm: float = DEFAULT_TOLERANCE_MM,
+    perceived: Sequence[PlanarObject] | None = None,
 ) -> pa.Table:
     """One row per object: id, name, source, contour (list of [x, y] mm) and descriptors, then
     its simulated shape within ``tolerance_mm``: ``sim_*`` columns (vertex and piece counts,
     tolerance, deviation bound, area, whether approximate) and ``sim_contour``; its ``family``
     (``grip_env.objects.family``) and, for a mesh object, the mesh and its resting pose
-    (``mesh_*`` columns, empty otherwise)."""
+    (``mesh_*`` columns, empty otherwise); ``perceived_contour``: the contour the grips were
+    planned on when that is the render's (``perceived``, in entry order), else empty."""
+    if perceived is not None and len(perceived) != len(entries):
+        raise ValueError(f"{len(perceived)} perceived objects for {len(entries)} entries")
+    seen = [None] * len(entries) if perceived is None else [p.contour.tolist() for p in perceived]
     rows = [{
         "object_index": entry.index,
         "object_id": entry.object_id,
@@ -157,8 +162,15 @@ def objects_table(
         "sim_contour": entry.obj.simulated_shape(tolerance_mm).contour.tolist(),
         FAMILY: object_family(entry.obj),
         **_mesh_record(entry.obj),
-    } for entry in entries]
-    return pa.Table.from_pylist(rows)
+        "perceived_contour": contour,
+    } for entry, contour in zip(entries, seen, strict=True)]
+    return pa.Table.from_pylist(rows, schema=_with_contour_type(pa.Table.from_pylist(rows).schema))
+
+
+def _with_contour_type(schema: pa.Schema) -> pa.Schema:
+    """``perceived_contour`` typed as a contour (list of [x, y]) even when every row is empty."""
+    index = schema.get_field_index("perceived_contour")
+    return schema.set(index, pa.field("perceived_contour", pa.list_(pa.list_(pa.float64()))))
 
 
 def _mesh_record(obj: PlanarObject) -> dict[str, object]:
@@ -168,10 +180,11 @@ def _mesh_record(obj: PlanarObject) -> dict[str, object]:
 
 
 def write_objects(
-    directory: Path, entries: list[DatasetObject], tolerance_mm: float = DEFAULT_TOLERANCE_MM
+    directory: Path, entries: list[DatasetObject], tolerance_mm: float = DEFAULT_TOLERANCE_MM,
+    perceived: Sequence[PlanarObject] | None = None,
 ) -> str:
     """Write ``objects.parquet`` atomically; returns its SHA-256."""
-    table = objects_table(entries, tolerance_mm)
+    table = objects_table(entries, tolerance_mm, perceived)
     return write_atomically(directory / OBJECTS_FILE, lambda temp: pq.write_table(table, temp))
 
 
@@ -184,6 +197,20 @@ def read_objects(directory: Path) -> pd.DataFrame:
         return pq.read_table(path).to_pandas()
     except (OSError, pa.ArrowException) as exc:
         raise ValueError(f"{path} is corrupt: {exc}") from None
+
+
+def load_perceived_objects(directory: str | Path) -> list[PlanarObject | None]:
+    """The contours the dataset's grips were planned on when they were the render's
+    (``perceived_contour``), in run order; None for objects planned on their true contour (and
+    for every object of a dataset written before the column existed)."""
+    table = read_objects(Path(directory)).sort_values("object_index")
+    if "perceived_contour" not in table.columns:
+        return [None] * len(table)
+    return [
+        None if contour is None else PlanarObject(np.array([list(p) for p in contour]),
+                                                  name=object_id, source="render")
+        for object_id, contour in zip(table["object_id"], table["perceived_contour"], strict=True)
+    ]
 
 
 def load_objects(directory: str | Path) -> list[PlanarObject]:

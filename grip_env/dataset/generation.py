@@ -24,7 +24,14 @@ from grip_env.dataset.catalog import (
     write_objects,
 )
 from grip_env.dataset.files import check_writable, sha256_of
-from grip_env.dataset.jobs import ObjectJob, ObjectTask, object_seeds, simulate_object
+from grip_env.dataset.jobs import (
+    ObjectJob,
+    ObjectTask,
+    object_seeds,
+    planning_contour,
+    plans_on_render,
+    simulate_object,
+)
 from grip_env.dataset.lock import dataset_lock
 from grip_env.dataset.manifest import (
     FORMAT_VERSION,
@@ -39,6 +46,7 @@ from grip_env.dataset.manifest import (
     write_manifest,
 )
 from grip_env.dataset.shards import GRIPS_DIR, shard_path, write_shard
+from grip_env.objects import PlanarObject
 from grip_env.progress import progress_bar
 from grip_env.shutdown import deferred_signals
 
@@ -99,14 +107,16 @@ def generate(
     entries = resolve_objects(config, objects, config.dataset.seed)
     check_writable(directory)
     with dataset_lock(directory):
-        manifest = _open_run(directory, config, entries, overwrite, own_objects(objects))
+        manifest, perceived = _open_run(directory, config, entries, overwrite,
+                                        own_objects(objects))
         skipped = skipped_objects(config, objects, config.dataset.seed)
         if skipped and manifest.get("skipped_objects") != skipped:
             manifest["skipped_objects"] = skipped  # meshes a set refused, with the reason
             write_manifest(directory, manifest)
         seeds = [record["seed"] for record in manifest["objects"]]
         pending = [
-            ObjectTask(e.index, e.object_id, e.obj, config, seeds[e.index])
+            ObjectTask(e.index, e.object_id, e.obj, config, seeds[e.index],
+                       None if perceived is None else perceived[e.index])
             for e in entries if not _is_done(directory, manifest, e)
         ]
         if backend == "process":  # no more processes than objects left (one: none at all)
@@ -130,12 +140,13 @@ def _effective_config(config: Config, trials: int | None, seed: int | None) -> C
 
 def _open_run(
     directory: Path, config: Config, entries: list[DatasetObject], overwrite: bool, own: bool
-) -> Manifest:
-    """The manifest to continue: the existing one if it is the same run, else a fresh one."""
+) -> tuple[Manifest, list[PlanarObject] | None]:
+    """The manifest to continue: the existing one if it is the same run, else a fresh one; and
+    a fresh run's perceived objects (None when continuing, or planning on the true ones)."""
     if (directory / MANIFEST_FILE).exists():
         old, differences = _compare_with_existing(directory, config, entries, own)
         if old is not None and not differences:
-            return old
+            return old, None
         if not overwrite:
             raise DatasetMismatchError(
                 f"{directory} holds a dataset made with other settings ({'; '.join(differences)}"
@@ -144,11 +155,26 @@ def _open_run(
         _remove_dataset(directory)
     elif overwrite:
         _remove_dataset(directory)
-    objects_sha = write_objects(directory, entries, config.objects.sim_tolerance_mm)
-    manifest = new_manifest(config, entries, object_seeds(config.dataset.seed, len(entries)),
-                            objects_sha, own)
+    seeds = object_seeds(config.dataset.seed, len(entries))
+    perceived = _perceived(config, entries, seeds)
+    objects_sha = write_objects(directory, entries, config.objects.sim_tolerance_mm, perceived)
+    manifest = new_manifest(config, entries, seeds, objects_sha, own)
     write_manifest(directory, manifest)
-    return manifest
+    return manifest, perceived
+
+
+def _perceived(
+    config: Config, entries: list[DatasetObject], seeds: list[int]
+) -> list[PlanarObject] | None:
+    """The contours the grips are planned on, when they are the render's (one PyBullet
+    connection for all); None when grips are planned on the true objects."""
+    if not plans_on_render(config):
+        return None
+    from grip_env.sim.world import World
+
+    with World() as world:
+        return [planning_contour(ObjectTask(e.index, e.object_id, e.obj, config, seeds[e.index]),
+                                 world) for e in entries]
 
 
 def _compare_with_existing(

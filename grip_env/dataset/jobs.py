@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
@@ -16,6 +17,9 @@ from numpy.typing import ArrayLike
 from grip_env.columns import DATASET_COLUMNS, ROBUSTNESS
 from grip_env.config import Config
 from grip_env.objects import PlanarObject
+
+if TYPE_CHECKING:
+    from grip_env.sim.world import World
 
 #: ``success``: the grip held the reference disturbance in at least this share of its trials.
 SUCCESS_THRESHOLD = 0.5
@@ -30,6 +34,8 @@ class ObjectTask:
     obj: PlanarObject
     config: Config
     seed: int
+    planned_on: PlanarObject | None = None
+    """The contour the grips are planned on, when already perceived (see ``plans_on_render``)."""
 
     def child_seeds(self) -> tuple[int, int]:
         """Independent (perception, trials) seeds derived from the object's seed."""
@@ -61,19 +67,31 @@ def simulate_object(task: ObjectTask) -> pd.DataFrame:
     from grip_env.sim import run_trials
 
     config = task.config
-    perception_seed, trials_seed = task.child_seeds()
-    planned_on = task.obj
-    if config.uncertainty.perceived_contour:
-        from grip_env.perception.render import perceive
-
-        planned_on = perceive(
-            task.obj, config.perception, config.objects.thickness_mm, seed=perception_seed
-        )
+    _, trials_seed = task.child_seeds()
+    planned_on = task.planned_on or planning_contour(task)
     height = execution_height_mm(task.obj, config.objects)  # of the true body
     table = candidates(planned_on, config.grasp, config, height_mm=height)
     kept = keep_grips(table, config.dataset, task.sampling_seed())
     outcome = run_trials(task.obj, kept, config, config.dataset.trials, trials_seed)
     return with_outcomes(kept, outcome, task.object_id)
+
+
+def plans_on_render(config: Config) -> bool:
+    """Whether grips are planned on the contour segmented from the top-down render
+    (``perception.source: render``, or the older ``uncertainty.perceived_contour``)."""
+    return config.perception.source == "render" or config.uncertainty.perceived_contour
+
+
+def planning_contour(task: ObjectTask, world: World | None = None) -> PlanarObject:
+    """The object the task's grips are planned on: its rendered and segmented contour (seeded by
+    the task's perception seed) when ``plans_on_render``, else the true object."""
+    if not plans_on_render(task.config):
+        return task.obj
+    from grip_env.perception.render import perceive
+
+    config = task.config
+    return perceive(task.obj, config.perception, config.objects.thickness_mm,
+                    seed=task.child_seeds()[0], world=world)
 
 
 def with_outcomes(

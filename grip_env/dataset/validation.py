@@ -63,7 +63,38 @@ def _objects_file_problems(directory: Path, manifest: Manifest) -> list[str]:
         return [f"{path.name}: missing"]
     if sha256_of(path) != listed.get("sha256"):
         return [f"{path.name}: SHA-256 differs from the manifest (file changed or corrupt)"]
-    return []
+    return _perceived_contour_problems(path, manifest)
+
+
+def _perceived_contour_problems(path: Path, manifest: Manifest) -> list[str]:
+    """A run that planned on the render stores each object's perceived contour (>= 3 finite
+    points); one that planned on the true objects stores none."""
+    config = manifest.get("config", {})
+    on_render = (config.get("perception", {}).get("source") == "render"
+                 or bool(config.get("uncertainty", {}).get("perceived_contour")))
+    try:
+        table = pq.read_table(path)
+    except (OSError, pa.ArrowException) as exc:
+        return [f"{path.name}: unreadable Parquet ({exc})"]
+    if "perceived_contour" not in table.column_names:
+        return [f"{path.name}: no perceived_contour column"] if on_render else []
+    problems = []
+    for object_id, contour in zip(table["object_id"].to_pylist(),
+                                  table["perceived_contour"].to_pylist(), strict=True):
+        if not on_render and contour is not None:
+            problems.append(f"{path.name}: object {object_id} has a perceived contour, but the "
+                            "run planned on the true objects")
+        elif on_render and not _is_contour(contour):
+            problems.append(f"{path.name}: object {object_id}: perceived_contour is not a contour "
+                            "of >= 3 finite points")
+    return problems
+
+
+def _is_contour(contour: list | None) -> bool:
+    if contour is None or len(contour) < 3:
+        return False
+    points = np.asarray(contour, dtype=float)
+    return points.ndim == 2 and points.shape[1] == 2 and bool(np.isfinite(points).all())
 
 
 def _shard_problems(directory: Path, record: ShardRecord) -> tuple[list[str], pd.DataFrame | None]:

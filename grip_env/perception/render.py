@@ -53,8 +53,7 @@ def render_mask(
     n, supersample = config.resolution_px, config.supersample
     low, high = obj.contour.min(axis=0), obj.contour.max(axis=0)
     centre = (low + high) / 2.0
-    needed = float(np.max(high - low)) / (n - 1 - 2 * _MARGIN_PX)
-    mm_per_px = max(config.mm_per_px, needed)
+    mm_per_px = image_scale(obj, config)
     from grip_env.sim.world import World  # pybullet is loaded only when rendering
 
     own_world = world is None
@@ -75,6 +74,14 @@ def render_mask(
         noise = np.random.default_rng(seed).normal(0.0, 255.0 * config.pixel_noise, grey.shape)
         grey = grey + noise
     return np.clip(grey, 0, 255).round().astype(np.uint8), mm_per_px, centre
+
+
+def image_scale(obj: PlanarObject, config: PerceptionConfig) -> float:
+    """The scale (mm/px) ``obj`` is rendered at: ``config.mm_per_px``, or larger if it must be
+    to fit the object with the margin."""
+    low, high = obj.contour.min(axis=0), obj.contour.max(axis=0)
+    needed = float(np.max(high - low)) / (config.resolution_px - 1 - 2 * _MARGIN_PX)
+    return max(config.mm_per_px, needed)
 
 
 def perceive(
