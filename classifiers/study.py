@@ -43,6 +43,8 @@ STAGE_INPUTS: dict[str, tuple[str, ...]] = {
     "benchmark": ("learning", "selector", "sim", "grasp.mu"),
     "calibration": ("grasp", "objects", "perception", "synthesis", "sim", "uncertainty",
                     "dataset.seed"),
+    "perception": ("grasp", "objects", "perception", "synthesis", "sim", "uncertainty",
+                   "dataset", "learning.seed"),
 }
 
 
@@ -86,6 +88,7 @@ def run_study(
 
     from classifiers.ablation import run_ablation
     from classifiers.benchmark import study_benchmark
+    from classifiers.perception_effect import run_perception_effect
     from classifiers.persistence import dataset_checksum
     from classifiers.selector.seeds import run_selectors
     from classifiers.training import train_and_save
@@ -128,6 +131,8 @@ def run_study(
           lambda: study_benchmark(table, out, config))
     stage("calibration", out / "calibration" / "calibration.json",
           lambda: run_calibration(config, out / "calibration", table, quick, log))
+    stage("perception", out / "perception" / "perception.json",
+          lambda: run_perception_effect(config, data_dir, out / "perception"))
     _merge_timings(out / "timings.json", timings)
     log("[study] report ...")
     from classifiers.report.study_report import write_report

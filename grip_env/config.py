@@ -89,7 +89,9 @@ class ObjectsConfig(_Section):
 class PerceptionConfig(_Section):
     """Top-down rendering, segmentation, curvature and region cutting."""
 
-    source: Literal["polygon", "render"] = Field("polygon", description="contour the grips plan on")
+    source: Literal["polygon", "render"] = Field(
+        "render", description="contour the grips plan on: the render's, or the true polygon"
+    )
     resolution_px: int = Field(256, ge=32, le=4096, description="rendered image side (pixels)")
     supersample: int = Field(
         4, ge=1, le=16, description="anti-aliasing: light samples per pixel side (1: point-sampled)"

@@ -46,7 +46,8 @@ def _pause_seconds() -> float:
 #: Environment that makes Ray workers call :func:`install` (with this folder on PYTHONPATH).
 RAY_HOOK = {
     "__RAY_WORKER_PROCESS_SETUP_HOOK_ENV_VAR": "interrupt_driver.install",
-    "PYTHONPATH": str(Path(__file__).parent),
+    "PYTHONPATH": os.pathsep.join(
+        p for p in (str(Path(__file__).parent), os.environ.get("PYTHONPATH")) if p),
 }
 _installed: list[bool] = []
 

@@ -440,7 +440,7 @@ POLYGON = REAL.override(perception={"source": "polygon"})
 
 @pytest.mark.slow
 def test_real_job_same_dataset_from_one_and_two_workers(tmp_path: Path) -> None:
-    config = REAL.override(dataset={"max_grips_per_object": 3, "trials": 1})
+    config = POLYGON.override(dataset={"max_grips_per_object": 3, "trials": 1})
     serial = generate(config, tmp_path / "one", objects="basic", workers=1, progress=False)
     pooled = generate(config, tmp_path / "two", objects="basic", workers=2, progress=False)
     grips = load(serial)

@@ -227,3 +227,31 @@ def test_readme_results_block_is_the_stored_runs_numbers(tmp_path):
     assert readme.read_text() == once  # rewriting is idempotent
     assert once.startswith("intro\n") and once.endswith(f"{END}\noutro\n")
     assert readme_block(readme) == block.strip()
+
+
+def test_perception_section_states_each_paired_difference_and_the_cost(tmp_path):
+    import json
+
+    from classifiers.report.document import Report
+    from classifiers.report.study_report import _perception_section
+
+    (tmp_path / "perception").mkdir()
+    differences = {"S1": {"true": 0.2, "render": 0.25, "mean": 0.05, "ci": [-0.01, 0.11]},
+                   "Q_C": {"true": 3.0, "render": 3.3, "mean": 0.3, "ci": [0.1, 0.5]}}
+    (tmp_path / "perception" / "perception.json").write_text(json.dumps({
+        "planned_on": "render", "objects": 7, "differences": differences,
+        "timing_s": {"plan_true_s": 4.5, "simulate_true_best_s": 21.0}}))
+    table = pd.DataFrame({"object_id": ["a"]})
+    table.attrs["manifest"] = {"perception_seconds": 12.25}
+    report = Report("t")
+    _perception_section(report, tmp_path, table)
+    md, _ = report.write(tmp_path)
+    text = md.read_text()
+    assert "over the 7 objects" in text
+    assert "| Q_C | 3 | 3.3 | 0.3 [0.1, 0.5] |" in text
+    assert "12.2 s" in text and "4.5 s" in text and "21.0 s" in text
+    (tmp_path / "perception" / "perception.json").write_text(json.dumps(
+        {"planned_on": "polygon", "objects": 0}))
+    report = Report("t")
+    _perception_section(report, tmp_path, table)
+    assert "no rendered plan" in report.write(tmp_path / "p")[0].read_text()

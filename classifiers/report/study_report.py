@@ -39,6 +39,7 @@ def write_report(out: Path, config: Config, table: pd.DataFrame) -> Path:
     _feature_section(report, table, fig_dir)
     _rank_section(report, objects, config)
     _calibration_section(report, out, fig_dir)
+    _perception_section(report, out, table)
     _classifier_section(report, out)
     _regression_section(report, out)
     _ablation_section(report, out)
@@ -216,6 +217,45 @@ def _calibration_section(report: Report, out: Path, fig_dir: Path) -> None:
     trials_path = out / "calibration" / TRIALS_FILE
     trials = pd.read_parquet(trials_path) if trials_path.exists() else None
     calibration_section(report, result, trials, fig_dir, out)
+
+
+def _perception_section(report: Report, out: Path, table: pd.DataFrame) -> None:
+    from classifiers.perception_effect import RESULT_FILE
+
+    report.heading("Planning on the rendered contour against the true one")
+    result = _stage_result(report, out / "perception" / RESULT_FILE)
+    if result is None:
+        return
+    if result["planned_on"] != "render":
+        report.text("The dataset's grips were planned on the true polygons "
+                    "(`perception.source: polygon`): there is no rendered plan to compare.")
+        return
+    manifest = table.attrs.get("manifest", {})
+    timing = result["timing_s"]
+    report.text(
+        "The dataset's grips were planned on the contour segmented from each object's top-down "
+        "render and executed on the true body. Here the same objects are planned a second time "
+        "on their true contours; per object, the best grip by Q_C of each plan is paired (the "
+        "true plan's simulated on the true body with the dataset's trials), and the table gives "
+        "the mean over objects on each plan and the mean paired difference, rendered − true, "
+        f"with a 95 % bootstrap interval over the {result['objects']} objects."
+    )
+    rows = {name: {"true plan": value["true"], "rendered plan": value["render"],
+                   "difference": {"mean": value["mean"], "ci": value["ci"]}}
+            for name, value in result["differences"].items()}
+    shown = frame_of_intervals({n: {"difference": r["difference"]} for n, r in rows.items()},
+                               ["difference"])
+    shown.insert(0, "rendered plan", [f"{rows[n]['rendered plan']:.4g}" for n in shown.index])
+    shown.insert(0, "true plan", [f"{rows[n]['true plan']:.4g}" for n in shown.index])
+    report.table(shown.rename_axis("best grip's"), caption="Best grip per object planned on the "
+                 "true and on the rendered contour: features, Q_C, success rate and robustness.")
+    render_s = manifest.get("perception_seconds")
+    report.text(
+        "Cost: rendering and segmenting every object "
+        + (f"{render_s:.1f} s" if render_s is not None else "(not recorded)")
+        + f"; planning them again on the true contours {timing['plan_true_s']:.1f} s; "
+        f"simulating the true plans' best grips {timing['simulate_true_best_s']:.1f} s."
+    )
 
 
 _REGRESSION_SHOWN = ["spearman", "spearman_object", "top1_robustness", "r2", "mae"]

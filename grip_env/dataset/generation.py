@@ -156,9 +156,13 @@ def _open_run(
     elif overwrite:
         _remove_dataset(directory)
     seeds = object_seeds(config.dataset.seed, len(entries))
+    start = time.perf_counter()
     perceived = _perceived(config, entries, seeds)
+    perception_s = time.perf_counter() - start
     objects_sha = write_objects(directory, entries, config.objects.sim_tolerance_mm, perceived)
     manifest = new_manifest(config, entries, seeds, objects_sha, own)
+    if perceived is not None:
+        manifest["perception_seconds"] = round(perception_s, 3)  # render + segment, all objects
     write_manifest(directory, manifest)
     return manifest, perceived
 

@@ -51,8 +51,8 @@ def _corner_replacements(
     for k in range(len(regions)):
         j = (k + 1) % len(regions)
         turn = np.arccos(np.clip(direction[k] @ direction[j], -1.0, 1.0))
-        if turn < MIN_CORNER_TURN:
-            continue
+        if not MIN_CORNER_TURN <= turn < np.pi - 1e-6:
+            continue  # a gentle bend, or a spike whose edges are parallel (no corner point)
         corner = _line_intersection(regions.a[k], direction[k], regions.a[j], direction[j])
         first, last = ends[k], starts[j]
         stretch = contour[np.arange(first, first + (last - first) % n + 1) % n]
