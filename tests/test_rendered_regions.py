@@ -68,3 +68,16 @@ def test_point_sampled_render_loses_the_star_regions() -> None:
     star = next(o for o in DEFAULT_OBJECTS if o.name == "star")
     point_sampled = CONFIG.perception.model_copy(update={"supersample": 1})
     assert len(find_regions(perceive(star, point_sampled), point_sampled)) < 10
+
+
+def test_resolution_sweep_rows_and_summary() -> None:
+    from grip_env.perception.fidelity import resolution_sweep, sweep_summary
+
+    rectangle = next(o for o in DEFAULT_OBJECTS if o.name == "rectangle")
+    table = resolution_sweep([rectangle], [128], CONFIG)  # 2 mm/px
+    (row,) = table.to_dict("records")
+    assert row["mm_per_px"] == 2.0 and row["true_regions"] == row["seen_regions"] == 4
+    assert 0 <= row["endpoint_error_px"] <= 2 and row["qc_rel_error"] < 0.1
+    assert row["endpoint_error_mm"] == pytest.approx(2.0 * row["endpoint_error_px"])
+    summary = sweep_summary(table)
+    assert summary.loc[128, "regions_match"] == "1/1" and summary.loc[128, "within_2px"] == "1/1"

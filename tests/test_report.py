@@ -248,7 +248,7 @@ def test_perception_section_states_each_paired_difference_and_the_cost(tmp_path)
     md, _ = report.write(tmp_path)
     text = md.read_text()
     assert "over the 7 objects" in text
-    assert "| Q_C | 3 | 3.3 | 0.3 [0.1, 0.5] |" in text
+    assert "| Q_C | 3 | 3.3 | 0.300 [0.100, 0.500] |" in text
     assert "12.2 s" in text and "4.5 s" in text and "21.0 s" in text
     (tmp_path / "perception" / "perception.json").write_text(json.dumps(
         {"planned_on": "polygon", "objects": 0}))

@@ -234,7 +234,23 @@ def _run(
                 bar.advance(1, info=f"{rows} grips, {rows / _elapsed(started):.1f} grips/s")
         finally:
             manifest["complete"] = len(manifest["shards"]) == total
-            write_manifest(directory, manifest)
+            try:
+                write_manifest(directory, manifest)
+            except OSError:  # disk full: a shard the manifest on disk does not list goes
+                _drop_unlisted_shards(directory)
+                raise
+
+
+def _drop_unlisted_shards(directory: Path) -> None:
+    """Remove the shard files the manifest on disk does not list (a rerun recomputes them), so
+    that every shard is written and listed whole, or not at all."""
+    try:
+        listed = {Path(r.file).name for r in shard_records(read_manifest(directory)).values()}
+    except (OSError, ValueError):
+        return
+    for path in (directory / GRIPS_DIR).glob("*.parquet"):
+        if path.name not in listed:
+            path.unlink(missing_ok=True)
 
 
 def _elapsed(started: float) -> float:
