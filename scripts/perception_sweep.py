@@ -11,7 +11,7 @@ import sys
 import pandas as pd
 
 from grip_env.objects import load_object_set
-from grip_env.perception.fidelity import resolution_sweep, sweep_summary
+from grip_env.perception_fidelity import resolution_sweep, sweep_summary
 
 
 def markdown(frame: pd.DataFrame) -> str:

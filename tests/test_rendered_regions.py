@@ -12,7 +12,7 @@ import pytest
 from grip_env.config import Config
 from grip_env.objects import PlanarObject, load_object_set
 from grip_env.perception import Regions, find_regions, perceive
-from grip_env.perception.fidelity import endpoint_errors
+from grip_env.perception_fidelity import endpoint_errors
 from grip_env.pipeline import candidates
 
 CONFIG = Config()
@@ -71,7 +71,7 @@ def test_point_sampled_render_loses_the_star_regions() -> None:
 
 
 def test_resolution_sweep_rows_and_summary() -> None:
-    from grip_env.perception.fidelity import resolution_sweep, sweep_summary
+    from grip_env.perception_fidelity import resolution_sweep, sweep_summary
 
     rectangle = next(o for o in DEFAULT_OBJECTS if o.name == "rectangle")
     table = resolution_sweep([rectangle], [128], CONFIG)  # 2 mm/px
