@@ -72,6 +72,21 @@ def test_ablation_reports_the_regression_task_on_the_same_sets(grips):
     )  # fmt: skip
 
 
+def test_ablation_runs_the_stronger_learners_on_the_named_sets(grips):
+    sets = {REFERENCE: FEATURES, "without_hand": FEATURES[:6], "without_C1": FEATURES[1:]}
+    learners = ablation_study(grips, CONFIG, model="logreg", sets=sets, importance_repeats=1,
+                              regressor="ridge")["learners"]  # fmt: skip
+    assert set(learners) == {"classifier_hgb", "regressor_hgb", "ranker_lambdarank"}
+    for key, metric in (("classifier_hgb", "roc_auc"), ("regressor_hgb", "spearman_object"),
+                        ("ranker_lambdarank", "spearman_object")):
+        name = key.split("_", 1)[1]
+        found = learners[key]["feature_sets"]
+        assert set(found) == {REFERENCE, "without_hand"}  # leave-one-feature-out sets skipped
+        assert found[REFERENCE]["paired_difference"][name][metric]["mean"] == 0.0
+        # the synthetic outcome follows C1 and C4: every strong learner loses without the hand
+        assert found["without_hand"]["paired_difference"][name][metric]["mean"] < 0
+
+
 @pytest.mark.slow
 def test_run_ablation_writes_json_and_chart(grips, tmp_path):
     result = run_ablation(grips, tmp_path, CONFIG.override(learning={"folds": 2}), model="logreg")
