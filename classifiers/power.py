@@ -149,7 +149,7 @@ def paired_bootstrap(
     return float(difference.mean()), float((high - low) / 2.0)
 
 
-Measure = Callable[[pd.DataFrame], dict[str, tuple[float, float]]]
+Measure = Callable[[pd.DataFrame, Config], dict[str, tuple[float, float]]]
 
 
 def power_curve(
@@ -160,23 +160,22 @@ def power_curve(
 ) -> pd.DataFrame:
     """Half-widths along two axes: ``objects`` (subsamples of ``table``, all its trials) and
     ``trials`` (subsamples of ``trials_table``, default ``table``, all its objects). The
-    classifier quantities are measured on ``replicates`` subsamples per size (one where nothing
-    is drawn); the selector, costlier, on one per size in ``selector_objects`` /
-    ``selector_trials``.
+    classifier quantities are measured ``replicates`` times per size (see :func:`_measure`); the
+    selector, costlier, once per size in ``selector_objects`` / ``selector_trials``.
 
     Returns one row per measurement: ``quantity, axis, objects, trials, replicate, estimate,
     half_width, seconds`` (the wall time of the measurement the row comes from).
     """
     by_trials = table if trials_table is None else trials_table
-    classify: Measure = lambda part: classifier_half_widths(part, config, model)  # noqa: E731
-    select: Measure = lambda part: {"rl_minus_best_qc": selector_half_width(part, config)}  # noqa: E731
+    classify: Measure = lambda part, cfg: classifier_half_widths(part, cfg, model)  # noqa: E731
+    select: Measure = lambda part, cfg: {"rl_minus_best_qc": selector_half_width(part, cfg)}  # noqa: E731
     rows = []
     for measure, n_reps, sizes, kind in ((classify, replicates, objects, "objects"),
                                          (classify, replicates, trials, "trials"),
                                          (select, 1, selector_objects, "objects"),
                                          (select, 1, selector_trials, "trials")):  # fmt: skip
         source = table if kind == "objects" else by_trials
-        rows += _measure(source, kind, sizes, n_reps, seed, measure, log)
+        rows += _measure(source, kind, sizes, n_reps, seed, measure, config, log)
     return pd.DataFrame.from_records(rows, columns=[
         "quantity", "axis", "objects", "trials", "replicate", "estimate", "half_width",
         "seconds"])
@@ -184,18 +183,21 @@ def power_curve(
 
 def _measure(
     table: pd.DataFrame, axis: str, sizes: Sequence[int], replicates: int, seed: int,
-    measure: Measure, log: Callable[[str], None],
+    measure: Measure, config: Config, log: Callable[[str], None],
 ) -> list[dict[str, Any]]:
-    """Measurements at each size along ``axis`` ("objects" or "trials") of ``table``."""
+    """Measurements at each size along ``axis`` ("objects" or "trials") of ``table``; replicate
+    ``r`` draws its own subsample and runs with ``learning.seed + r`` (its own folds, split and
+    bootstrap), so the whole table too has replicates."""
     most = int(table[GROUP].nunique()) if axis == "objects" else int(table["trials"].min())
     rows = []
     for size in sizes:
         drawn = None if size >= most else int(size)
         n_use, t_use = (drawn, None) if axis == "objects" else (None, drawn)
-        for replicate in range(replicates if drawn is not None else 1):
+        for replicate in range(replicates):
             part = subsample(table, n_use, t_use, seed=seed, replicate=replicate)
+            seeded = config.override(learning={"seed": config.learning.seed + replicate})
             start = time.perf_counter()
-            found = measure(part)
+            found = measure(part, seeded)
             seconds = time.perf_counter() - start
             n, t = int(part[GROUP].nunique()), int(part["trials"].min())
             rows += [{"quantity": quantity, "axis": axis, "objects": n, "trials": t,

@@ -81,8 +81,8 @@ def plot_power(summary: dict[str, Any], path: Path) -> Path:
                 axes.axhline(target, color=color, linestyle=":", linewidth=1)
     left.set(xscale="log", yscale="log", xlabel="objects", ylabel="95% interval half-width")
     right.set(yscale="log", xlabel="trials per grip", ylabel="95% interval half-width")
-    left.set_title("vs objects (all trials); line: fitted law", fontsize=9)
-    right.set_title("vs trials per grip (all objects); dotted: targets", fontsize=9)
+    left.set_title("vs objects (trials fixed); lines: fitted law", fontsize=9)
+    right.set_title("vs trials per grip (objects fixed); dotted: targets", fontsize=9)
     left.legend(fontsize=7)
     figure.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -92,16 +92,21 @@ def plot_power(summary: dict[str, Any], path: Path) -> Path:
 
 
 def _axis(axes: Any, rows: pd.DataFrame, axis: str, color: str, label: str, law: Any) -> None:
+    """Subsamples (small dots), their means (large) and the law at each size held fixed."""
     if rows.empty:
         return
     other = "trials" if axis == "objects" else "objects"
     axes.scatter(rows[axis], rows["half_width"], color=color, s=12, alpha=0.6)
-    means = rows.groupby(axis)["half_width"].mean()
-    axes.plot(means.index, means.to_numpy(), "o", color=color, markersize=5, label=label)
-    at = float(rows[other].median())
-    grid = np.geomspace(rows[axis].min(), rows[axis].max() * (3 if axis == "objects" else 1), 50)
-    fitted = [law.half_width(x, at) if axis == "objects" else law.half_width(at, x) for x in grid]
-    axes.plot(grid, fitted, color=color, linewidth=1)
+    means = rows.groupby([other, axis])["half_width"].mean()
+    for k, (held, found) in enumerate(means.groupby(level=0)):
+        found = found.droplevel(0)
+        axes.plot(found.index, found.to_numpy(), "os"[k % 2], color=color, markersize=5,
+                  label=label if k == 0 else None)
+        stretch = 3 if axis == "objects" else 1
+        grid = np.geomspace(found.index.min(), found.index.max() * stretch, 50)
+        fitted = [law.half_width(x, held) if axis == "objects" else law.half_width(held, x)
+                  for x in grid]  # fmt: skip
+        axes.plot(grid, fitted, color=color, linewidth=1, linestyle="-" if k == 0 else "--")
 
 
 def power_section(report: Report, out: Path) -> None:
