@@ -17,6 +17,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
+import matplotlib.ticker as ticker
 import numpy as np
 import pandas as pd
 
@@ -81,6 +82,13 @@ def plot_power(summary: dict[str, Any], path: Path) -> Path:
                 axes.axhline(target, color=color, linestyle=":", linewidth=1)
     left.set(xscale="log", yscale="log", xlabel="objects", ylabel="95% interval half-width")
     right.set(yscale="log", xlabel="trials per grip", ylabel="95% interval half-width")
+    for axes in (left, right):  # plain numbers on the log axes
+        axes.set_yticks([0.01, 0.02, 0.05, 0.1, 0.2, 0.5])
+        axes.set_ylim(*_limits(curve["half_width"], summary["targets"].values()))
+    left.set_xticks([5, 10, 20, 50, 100, 200, 500])
+    for axis in (left.xaxis, left.yaxis, right.yaxis):
+        axis.set_major_formatter(ticker.ScalarFormatter())
+        axis.set_minor_formatter(ticker.NullFormatter())
     left.set_title("vs objects (trials fixed); lines: fitted law", fontsize=9)
     right.set_title("vs trials per grip (objects fixed); dotted: targets", fontsize=9)
     left.legend(fontsize=7)
@@ -89,6 +97,12 @@ def plot_power(summary: dict[str, Any], path: Path) -> Path:
     figure.savefig(path, dpi=110)
     plt.close(figure)
     return path
+
+
+def _limits(half: pd.Series, targets: Any) -> tuple[float, float]:
+    """Y range covering the positive half-widths and the targets."""
+    values = [*half[half > 0], *targets]
+    return min(values) / 1.3, max(values) * 1.3
 
 
 def _axis(axes: Any, rows: pd.DataFrame, axis: str, color: str, label: str, law: Any) -> None:
@@ -151,19 +165,25 @@ def _curve_tables(report: Report, summary: dict[str, Any]) -> None:
             continue
         table = rows.groupby(["quantity", axis])["half_width"].mean().unstack(axis)
         table.index = [LABELS.get(q, q) for q in table.index]
+        table = table.astype(object).where(table.notna(), "–")  # a size not measured
         report.table(table.rename_axis("half-width"), float_format="{:.3f}",
                      caption=f"Measured half-width against {axis} (mean over seeded subsamples; "
                      f"{_held(rows, axis)}).")
     projection = {
-        LABELS.get(q, q): {f"t = {t}": n for t, n in found.items()}
-        | {"target": summary["targets"][q],
-           "exponent": summary["laws"][q]["exponent"]}
+        LABELS.get(q, q): {f"t = {t}": str(n) for t, n in found.items()}
+        | {"target": f"{summary['targets'][q]:g}",
+           "exponent": f"{summary['laws'][q]['exponent']:.2f}"}
         for q, found in summary["projection"].items()
     }
     report.table(pd.DataFrame(projection).T.rename_axis("objects needed"), float_format="{:.2f}",
                  caption="Objects needed for each target at t trials per grip, from the fitted "
                  "law (t = inf: noiseless labels, the floor set by the objects alone); exponent: "
                  "fitted slope of log half-width against log objects (1/sqrt(n): -0.5).")
+    selector = curve[curve["quantity"] == "rl_minus_best_qc"]
+    if (selector["half_width"] == 0).any():
+        report.text("A selector half-width of 0 means the trained policy picked the best-Q_C "
+                    "grip on every held-out object; such fits carry no spread and are left out "
+                    "of the law.")
     source = summary.get("source", {})
     if source:
         report.text("Power curve measured on " + "; ".join(f"{k}: {v}" for k, v in source.items())
