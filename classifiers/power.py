@@ -48,7 +48,6 @@ from grip_env.dataset.jobs import SUCCESS_THRESHOLD
 TARGETS: dict[str, float] = {"roc_auc": 0.05, "hand_difference": 0.02, "rl_minus_best_qc": 0.08}
 QUANTITIES: tuple[str, ...] = tuple(TARGETS)
 CLASSIFIER_QUANTITIES: tuple[str, ...] = ("roc_auc", "hand_difference")
-WITHOUT_HAND: tuple[str, ...] = ("S1", "S2", "S3", "S4", "G1", "G2")
 GROUP = "object_id"
 
 
@@ -107,11 +106,12 @@ def classifier_half_widths(
     table: pd.DataFrame, config: Config, model: str = "svm"
 ) -> dict[str, tuple[float, float]]:
     """``{quantity: (estimate, half-width)}`` of ``roc_auc`` and ``hand_difference``."""
+    from classifiers.ablation import GRASP, SHARED
     from classifiers.evaluation import cross_validate_models, half_width
 
     learning = config.learning
     full = cross_validate_models(table, [model], FEATURES, learning)
-    without = cross_validate_models(table, [model], WITHOUT_HAND, learning)
+    without = cross_validate_models(table, [model], SHARED + GRASP, learning)  # without_hand
     paired = without.merge(full, on=["repeat", "fold"], suffixes=("", "_ref"), validate="1:1")
     difference = (paired["roc_auc"] - paired["roc_auc_ref"]).to_numpy(float)
     auc = full["roc_auc"].to_numpy(float)
