@@ -132,7 +132,10 @@ def rest_pose(
     """
     from grip_env.sim.world import COLLISION_MARGIN_MM, World
 
-    com, inertia, axes = mass_properties([piece * scale for piece in pieces])
+    try:
+        com, inertia, axes = mass_properties([piece * scale for piece in pieces])
+    except ValueError as exc:
+        raise ValueError(f"mesh {name!r}: {exc}") from None
     lowest = min(float((piece * scale - com)[:, 2].min()) for piece in pieces)
     start = np.array([0.0, 0.0, -lowest + RELEASE_GAP_MM])
     steps = max(1, round(SETTLE_WINDOW_S * 240))

@@ -131,6 +131,10 @@ def test_bad_mesh_files_are_refused(tmp_path):
     empty.write_text("v 0 0 0\n")
     with pytest.raises(ValueError, match=r"empty\.obj has no faces"):
         read_obj_pieces(empty)
+    flat = tmp_path / "flat.obj"
+    flat.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n")
+    with pytest.raises(ValueError, match=r"'flat'.*no volume"):
+        mesh_object(flat, 60.0)
     with pytest.raises(ValueError, match="size"):
         mesh_object(write_boxes(tmp_path / "b.obj", [((0, 0, 0), (1, 1, 1))]), -5.0)
 
