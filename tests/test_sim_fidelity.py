@@ -19,7 +19,7 @@ from grip_env.sim import (
     run_trial_outcomes,
     zero_noise,
 )
-from grip_env.sim.disturbance import ramp_levels
+from grip_env.sim.disturbance import ramp_levels, reaches
 from grip_env.sim.hand import FINGER_LINKS, palm_to_world
 from grip_env.sim.world import MM, World, prism_inertia
 
@@ -176,6 +176,13 @@ def test_ramp_levels_are_geometric_within_the_configured_range():
     assert levels[0] == pytest.approx(sim.ramp_levels_g[0])
     assert levels[-1] <= sim.ramp_levels_g[1] * (1 + 1e-9)
     np.testing.assert_allclose(levels[1:] / levels[:-1], sim.ramp_ratio)
+
+
+def test_a_reference_on_a_ramp_level_is_reached_by_that_level():
+    levels = ramp_levels(Config().sim)
+    assert levels[20] != 64.0  # 2 * ratio**20 in floating point
+    assert reaches(levels[20], 64.0) and reaches(levels[18], 45.0)
+    assert not reaches(levels[19], 64.0)
 
 
 @pytest.fixture(scope="module")

@@ -67,6 +67,12 @@ class RampProbe:
     palm_axes: NDArray[np.float64]
 
 
+def reaches(level_g: float, reference_g: float) -> bool:
+    """Whether a held level reaches the reference. A reference on a ramp level (64 g is
+    2 x 2^(20/4)) counts as reached although 2 * ratio**20 computes to 63.99999999999996."""
+    return bool(level_g >= reference_g * (1.0 - 1e-9))
+
+
 def robustness(probe: RampProbe, mass_kg: float, gyration_m: float, config: SimConfig) -> float:
     """The highest level (g) held in every direction (gravity acts throughout)."""
     levels = ramp_levels(config)

@@ -30,7 +30,7 @@ from grip_env.objects.meshes import (
     pose_mass_properties,
 )
 from grip_env.sim import pose
-from grip_env.sim.disturbance import RampProbe, robustness
+from grip_env.sim.disturbance import RampProbe, reaches, robustness
 from grip_env.sim.hand import Hand, palm_to_world
 from grip_env.sim.uncertainty import TrialNoise, object_mass_kg
 from grip_env.sim.world import World
@@ -157,7 +157,7 @@ class TrialScene:
         held = (drift <= sim.hold_tolerance_mm and turn <= sim.hold_rotation_deg
                 and lifted > 0.5 * sim.lift_height_mm)
         level = self._robustness(yaw, noise, counter) if held else 0.0
-        success = held and level >= sim.reference_level_g
+        success = held and reaches(level, sim.reference_level_g)
         return TrialResult(bool(success), level, bool(held), drift, turn, float(lifted),
                            counter.steps, close_steps)
 
