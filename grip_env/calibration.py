@@ -332,7 +332,8 @@ def design_check(trials: pd.DataFrame, reference_g: float,
     ``well_posed`` is False when the reference is above every box's gear ceiling: then no
     faithful grip can pass, and ``reason`` says why (the figure is reported, nothing is tuned).
     ``beyond_squeeze`` is True when the reference is above what the commanded squeeze alone
-    holds at ``grasp.mu``: passing then relies on the normal forces rising under the push.
+    holds at ``grasp.mu``: passing then relies on normal forces above it, which the worm gear
+    allows (it keeps the squeeze reached and resists being pushed back).
     """
     config = config or Config()
     rows = trials[trials["part"] == "design"]

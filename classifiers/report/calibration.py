@@ -126,9 +126,10 @@ def design_verdict_text(check: dict[str, Any], reference: float) -> str:
     if check.get("beyond_squeeze"):
         gear = rows["gear_ceiling_g"] if "gear_ceiling_g" in rows else pd.Series(dtype=float)
         bound = f" (at most {gear.min():.0f}–{gear.max():.0f} g)" if len(gear) else ""
-        text += (" The reference is above that: a grip holds it only if its normal forces rise "
-                 "under the push, which the non-backdrivable worm gear allows up to its stop"
-                 f"{bound}. The check is well-posed for this hand, and it tests the gear's hold "
+        text += (" The reference is above that: a grip holds it only with normal forces above "
+                 "the commanded squeeze, which the non-backdrivable worm gear allows (it keeps "
+                 "the squeeze the fingers reached and resists being pushed back, up to its stop"
+                 f"{bound}). The check is well-posed for this hand, and it tests the gear's hold "
                  "as well as the squeeze.")
     return text
 
