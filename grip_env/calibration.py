@@ -308,7 +308,8 @@ def friction_ceiling_g(obj: PlanarObject, config: Config, normal_n: float | None
 
 def gear_ceiling_g(obj: PlanarObject, config: Config) -> float:
     """:func:`friction_ceiling_g` with every pad at the most its finger resists before it is
-    pushed back: the motor's force plus the worm gear's stop, ``(1 + HOLD_FACTOR)`` times it."""
+    pushed back: the motor's force plus the worm gear's stop, ``(1 + HOLD_FACTOR)`` times it
+    (an estimate: the stop is a joint torque, taken as the same multiple of the pad force)."""
     from grip_env.sim.hand import HOLD_FACTOR
 
     return friction_ceiling_g(obj, config, 3 * (1 + HOLD_FACTOR) * config.sim.finger_force_n)
