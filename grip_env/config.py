@@ -55,7 +55,7 @@ class ObjectsConfig(_Section):
     """Which objects a job runs on."""
 
     set: str = Field("default", description="named object set, or 'procedural'")
-    procedural_count: int = Field(24, ge=0, le=1_000_000, description="extra procedural objects")
+    procedural_count: int = Field(44, ge=0, le=1_000_000, description="extra procedural objects")
     procedural_size_mm: tuple[ObjectSize, ObjectSize] = Field(
         (50.0, 150.0), description="size range across (5..1000 mm)"
     )
@@ -162,7 +162,7 @@ class SimConfig(_Section):
         "planar", description="ramped disturbances: in the grip's plane, or also along its normal"
     )
     reference_level_g: float = Field(
-        45.0, gt=0.0, le=1000.0, description="success: holds this disturbance level"
+        64.0, gt=0.0, le=1000.0, description="success: holds this disturbance level"
     )
     fingertip_clearance_mm: float = Field(
         4.0, ge=0.0, le=100.0, description="lowest finger point above the table while closing"
@@ -207,7 +207,7 @@ class UncertaintyConfig(_Section):
 class DatasetConfig(_Section):
     """Dataset generation."""
 
-    trials: int = Field(4, ge=1, le=1000, description="simulated trials per grip")
+    trials: int = Field(3, ge=1, le=1000, description="simulated trials per grip")
     seed: int = Field(0, ge=0, le=MAX_SEED, description="run seed")
     workers: int = Field(2, ge=1, le=1024, description="parallel workers")
     backend: Literal["process", "ray"] = Field("process", description="parallel backend")
