@@ -12,7 +12,7 @@ import pytest
 import skops.io as sio
 from cli_runs import assert_refused, cli
 
-from classifiers.benchmark.split import STANDARD_TEST_OBJECTS
+from classifiers.benchmark.split import STANDARD_SPLIT, STANDARD_TEST_OBJECTS
 from classifiers.models import make_model
 from classifiers.synthetic import synthetic_grips
 
@@ -44,8 +44,8 @@ METHODS = textwrap.dedent("""
 
 @pytest.fixture(scope="module")
 def data(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """Synthetic grips whose first 13 objects carry the standard split's ids, as a parquet."""
-    table = synthetic_grips(n_objects=20, grips=(6, 12), seed=4)
+    """Synthetic grips whose first objects carry the standard split's ids, as a parquet."""
+    table = synthetic_grips(n_objects=30, grips=(6, 12), seed=4)
     ids = {i: name for i, name in enumerate(STANDARD_TEST_OBJECTS)}
     table["object_id"] = [ids.get(int(i), f"train_{i}") for i in table["object_id"]]
     table["grip_id"] = table["grip_id"].astype(str)
@@ -76,7 +76,7 @@ def test_entry_point_round_trip(data: Path, methods: Path) -> None:
     for key in ("success", "robustness", "regret", "ndcg5", "success_at_3"):
         assert mine[key] == ref[key]  # scoring by -Q_C is the best-Q_C pick
     assert mine["verdict"] == "not distinguishable from best_qc"
-    assert found["split"]["name"] == "grip-select-standard" and found["split"]["version"] == 2
+    assert found["split"]["name"] == "grip-select-standard" and found["split"]["version"] == STANDARD_SPLIT.version
     assert sorted(found["objects"] + found["degenerate_objects"]) == sorted(STANDARD_TEST_OBJECTS)
     assert "| by_qc |" in (out / "leaderboard.md").read_text()
     assert (out / "performance_profile.png").stat().st_size > 0

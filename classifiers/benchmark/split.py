@@ -6,8 +6,10 @@ dataset that lacks any of them is refused. Each version's objects are
 grips of the default dataset of its time (``grip-env generate`` with the default config), listed
 in :data:`DEFAULT_OBJECTS` (a test re-derives each version's objects from that list):
 
-- v2 (:data:`STANDARD_SPLITS` ``[2]``, the default): 53 objects since the default object set
-  gained meshes (commit 423a072: 18 named, 24 procedural, 18 meshes; 7 get no grip);
+- v3 (:data:`STANDARD_SPLITS` ``[3]``, the default): the 69 objects with grips of the default
+  study's dataset at commit fc22e61 (80 objects: 18 named, 44 procedural, 18 meshes; planned on
+  the render; 11 get no grip);
+- v2: 53 objects of the default set at commit 423a072 (18 named, 24 procedural, 18 meshes);
 - v1: the 52 objects of ``runs/default/dataset`` (named and procedural shapes) before that;
   ``grip-env benchmark --split-version 1`` scores a dataset of that time.
 
@@ -54,6 +56,20 @@ DEFAULT_OBJECTS_V2: tuple[str, ...] = (
     "urdf_459", "urdf_674", "urdf_683", "urdf_711", "urdf_814",
 )  # fmt: skip
 
+DEFAULT_OBJECTS_V3: tuple[str, ...] = (
+    "bean", "bunny", "cube", "disc", "domino", "duck", "ellipse", "hexagon", "jenga", "l_shape",
+    "lego", "mug", "parallelogram", "pentagon", "proc_0_00000", "proc_0_00001", "proc_0_00002",
+    "proc_0_00003", "proc_0_00004", "proc_0_00005", "proc_0_00006", "proc_0_00007", "proc_0_00008",
+    "proc_0_00009", "proc_0_00010", "proc_0_00011", "proc_0_00012", "proc_0_00014", "proc_0_00015",
+    "proc_0_00016", "proc_0_00017", "proc_0_00018", "proc_0_00020", "proc_0_00021", "proc_0_00022",
+    "proc_0_00023", "proc_0_00024", "proc_0_00025", "proc_0_00026", "proc_0_00027", "proc_0_00028",
+    "proc_0_00029", "proc_0_00030", "proc_0_00032", "proc_0_00034", "proc_0_00035", "proc_0_00037",
+    "proc_0_00039", "proc_0_00040", "proc_0_00041", "proc_0_00042", "proc_0_00043", "rectangle",
+    "right_triangle", "rounded_rectangle", "square", "star", "t_shape", "trapezoid", "triangle",
+    "u_shape", "urdf_206", "urdf_222", "urdf_264", "urdf_459", "urdf_518", "urdf_683", "urdf_711",
+    "urdf_814",
+)  # fmt: skip
+
 STANDARD_TEST_OBJECTS_V1: tuple[str, ...] = (
     "l_shape", "proc_0_00003", "proc_0_00004", "proc_0_00011", "proc_0_00015", "proc_0_00017",
     "proc_0_00018", "proc_0_00022", "proc_0_00023", "proc_0_00029", "proc_0_00030",
@@ -81,19 +97,27 @@ class BenchmarkSplit:
         return {k: list(v) if isinstance(v, tuple) else v for k, v in found.items()}
 
 
-STANDARD_TEST_OBJECTS: tuple[str, ...] = (
+STANDARD_TEST_OBJECTS_V2: tuple[str, ...] = (
     "domino", "mug", "parallelogram", "proc_0_00005", "proc_0_00008", "proc_0_00010",
     "proc_0_00011", "proc_0_00015", "proc_0_00016", "proc_0_00023", "rectangle",
     "right_triangle", "square",
 )  # fmt: skip
+STANDARD_TEST_OBJECTS: tuple[str, ...] = (
+    "domino", "jenga", "lego", "proc_0_00002", "proc_0_00005", "proc_0_00006", "proc_0_00009",
+    "proc_0_00014", "proc_0_00022", "proc_0_00024", "proc_0_00032", "proc_0_00034", "proc_0_00039",
+    "square", "trapezoid", "urdf_264", "urdf_518",
+)  # fmt: skip
 _SEEDS = (0, 1, 2, 3, 4)
 STANDARD_SPLITS: dict[int, BenchmarkSplit] = {
     1: BenchmarkSplit("grip-select-standard", 1, STANDARD_TEST_OBJECTS_V1, _SEEDS),
-    2: BenchmarkSplit("grip-select-standard", 2, STANDARD_TEST_OBJECTS, _SEEDS),
+    2: BenchmarkSplit("grip-select-standard", 2, STANDARD_TEST_OBJECTS_V2, _SEEDS),
+    3: BenchmarkSplit("grip-select-standard", 3, STANDARD_TEST_OBJECTS, _SEEDS),
 }
 STANDARD_SPLIT = STANDARD_SPLITS[max(STANDARD_SPLITS)]
 #: The objects each version's held-out objects were drawn from.
-DEFAULT_OBJECTS: dict[int, tuple[str, ...]] = {1: DEFAULT_OBJECTS_V1, 2: DEFAULT_OBJECTS_V2}
+DEFAULT_OBJECTS: dict[int, tuple[str, ...]] = {
+    1: DEFAULT_OBJECTS_V1, 2: DEFAULT_OBJECTS_V2, 3: DEFAULT_OBJECTS_V3,
+}
 
 
 def standard_split(version: int | None = None) -> BenchmarkSplit:
