@@ -76,7 +76,8 @@ def test_entry_point_round_trip(data: Path, methods: Path) -> None:
     for key in ("success", "robustness", "regret", "ndcg5", "success_at_3"):
         assert mine[key] == ref[key]  # scoring by -Q_C is the best-Q_C pick
     assert mine["verdict"] == "not distinguishable from best_qc"
-    assert found["split"]["name"] == "grip-select-standard" and found["split"]["version"] == STANDARD_SPLIT.version
+    assert found["split"]["name"] == "grip-select-standard"
+    assert found["split"]["version"] == STANDARD_SPLIT.version
     assert sorted(found["objects"] + found["degenerate_objects"]) == sorted(STANDARD_TEST_OBJECTS)
     assert "| by_qc |" in (out / "leaderboard.md").read_text()
     assert (out / "performance_profile.png").stat().st_size > 0
