@@ -27,8 +27,8 @@ def benchmark(
     reps: Annotated[int, typer.Option(min=100, max=100_000,
                                       help="bootstrap resamples")] = 2000,
     split_version: Annotated[int | None, typer.Option(
-        help="standard split version [default: the latest, 3]; 2 = default datasets of the 60-object "
-             "set with meshes, 1 = before the default objects gained meshes")] = None,
+        help="standard split version [default: the latest, 3]; 2 = default datasets of the "
+             "60-object set with meshes, 1 = before the default objects gained meshes")] = None,
 ) -> None:
     """Score METHODS on the standard split (grip-select-standard v3: 17 held-out objects of the
     default dataset, their 64 best candidates by Q_C) against best-Q_C, best-Q_G, epsilon, random
