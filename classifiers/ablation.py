@@ -40,6 +40,7 @@ from classifiers.evaluation import (
     grouped_folds,
     held_out_metrics,
     interval,
+    paired_metrics,
     summarise,
 )
 from classifiers.models import make_model
@@ -223,14 +224,7 @@ def paired_difference(
     frame: pd.DataFrame, reference: pd.DataFrame, folds: int
 ) -> dict[str, dict[str, Any]]:
     """Mean and interval of (set − reference) per metric, matched on (repeat, fold)."""
-    keys = ["repeat", "fold"]
-    merged = frame.merge(reference, on=keys, suffixes=("", "_ref"), validate="one_to_one")
-    return {
-        metric: interval(
-            (merged[metric] - merged[f"{metric}_ref"]).to_numpy(float), folds, bounds=(-1.0, 1.0)
-        )
-        for metric in METRICS
-    }
+    return paired_metrics(frame, reference, METRICS, folds, default=(-1.0, 1.0))
 
 
 def importance(

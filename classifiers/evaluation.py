@@ -241,14 +241,37 @@ def evaluate_models(
 
 
 def summarise(per_fold: pd.DataFrame, folds: int) -> dict[str, dict[str, dict[str, Any]]]:
-    """Mean and corrected 95% t-interval of each metric, per model."""
+    """Mean and corrected 95% t-interval of each classification metric, per model."""
+    return summarise_metrics(per_fold, METRICS, folds)
+
+
+Bounds = Mapping[str, tuple[float, float]]
+
+
+def summarise_metrics(per_fold: pd.DataFrame, metrics: Sequence[str], folds: int,
+                      bounds: Bounds | None = None,
+                      default: tuple[float, float] = (0.0, 1.0)) -> dict[str, dict[str, Any]]:
+    """Mean and corrected 95% interval of each metric, per model; a metric's interval is
+    clipped to ``bounds[metric]`` (else ``default``)."""
+    bounds = bounds or {}
     return {
-        str(name): {
-            metric: interval(group[metric].to_numpy(float), folds, bounds=(0.0, 1.0))
-            for metric in METRICS
-        }
+        str(name): {m: interval(group[m].to_numpy(float), folds, bounds.get(m, default))
+                    for m in metrics}
         for name, group in per_fold.groupby("model", sort=False)
-    }
+    }  # fmt: skip
+
+
+def paired_metrics(frame: pd.DataFrame, reference: pd.DataFrame, metrics: Sequence[str],
+                   folds: int, bounds: Bounds | None = None,
+                   default: tuple[float, float] = (-np.inf, np.inf)) -> dict[str, Any]:
+    """Mean and corrected 95% interval of (frame − reference) per metric, matched on
+    (repeat, fold); clipped to ``bounds[metric]`` (else ``default``)."""
+    bounds = bounds or {}
+    merged = frame.merge(reference, on=["repeat", "fold"], suffixes=("", "_ref"),
+                         validate="one_to_one")  # fmt: skip
+    return {m: interval((merged[m] - merged[f"{m}_ref"]).to_numpy(float), folds,
+                        bounds.get(m, default))
+            for m in metrics}  # fmt: skip
 
 
 def interval(

@@ -38,7 +38,14 @@ from sklearn.pipeline import Pipeline
 from sklearn.utils.validation import check_is_fitted
 
 from classifiers.baselines import ColumnSelector, RandomRegressor, RankingRegressor
-from classifiers.evaluation import GROUP_COLUMN, LABEL_COLUMN, check_dataset, grouped_cv, interval
+from classifiers.evaluation import (
+    GROUP_COLUMN,
+    LABEL_COLUMN,
+    check_dataset,
+    grouped_cv,
+    paired_metrics,
+    summarise_metrics,
+)
 from classifiers.models import check_features
 from classifiers.regression import TARGET_COLUMN, spearman
 from grip_env.columns import FEATURES
@@ -201,21 +208,14 @@ def cross_validate_rankers(
 
 def summarise_ranking(per_fold: pd.DataFrame, folds: int) -> dict[str, dict[str, Any]]:
     """Mean and corrected 95% interval of each ranking metric, per model."""
-    return {
-        str(name): {m: interval(group[m].to_numpy(float), folds, _BOUNDS.get(m, (0.0, 1.0)))
-                    for m in RANKING_METRICS}
-        for name, group in per_fold.groupby("model", sort=False)
-    }  # fmt: skip
+    return summarise_metrics(per_fold, RANKING_METRICS, folds, _BOUNDS)
 
 
 def paired_ranking_difference(
     frame: pd.DataFrame, reference: pd.DataFrame, folds: int
 ) -> dict[str, dict[str, Any]]:
     """Mean and interval of (frame − reference) per ranking metric, matched on (repeat, fold)."""
-    merged = frame.merge(reference, on=["repeat", "fold"], suffixes=("", "_ref"),
-                         validate="one_to_one")  # fmt: skip
-    return {m: interval((merged[m] - merged[f"{m}_ref"]).to_numpy(float), folds)
-            for m in RANKING_METRICS}  # fmt: skip
+    return paired_metrics(frame, reference, RANKING_METRICS, folds)
 
 
 def evaluate_rankers(

@@ -26,7 +26,13 @@ from scipy.stats import spearmanr
 from sklearn.base import BaseEstimator, clone
 from sklearn.metrics import mean_absolute_error, r2_score
 
-from classifiers.evaluation import GROUP_COLUMN, check_dataset, grouped_cv, interval
+from classifiers.evaluation import (
+    GROUP_COLUMN,
+    check_dataset,
+    grouped_cv,
+    paired_metrics,
+    summarise_metrics,
+)
 from classifiers.models import make_regressor
 from grip_env.columns import FEATURES
 from grip_env.config import LearningConfig
@@ -98,24 +104,14 @@ def cross_validate_regressors(
 
 def summarise_regression(per_fold: pd.DataFrame, folds: int) -> dict[str, dict[str, Any]]:
     """Mean and corrected 95% interval of each metric, per model."""
-    return {
-        str(name): {m: interval(group[m].to_numpy(float), folds, _BOUNDS[m])
-                    for m in REGRESSION_METRICS}
-        for name, group in per_fold.groupby("model", sort=False)
-    }  # fmt: skip
+    return summarise_metrics(per_fold, REGRESSION_METRICS, folds, _BOUNDS)
 
 
 def paired_regression_difference(
     frame: pd.DataFrame, reference: pd.DataFrame, folds: int
 ) -> dict[str, dict[str, Any]]:
     """Mean and interval of (frame − reference) per metric, matched on (repeat, fold)."""
-    merged = frame.merge(reference, on=["repeat", "fold"], suffixes=("", "_ref"),
-                         validate="one_to_one")  # fmt: skip
-    return {
-        m: interval((merged[m] - merged[f"{m}_ref"]).to_numpy(float), folds,
-                    _DIFFERENCE_BOUNDS.get(m, (-np.inf, np.inf)))
-        for m in REGRESSION_METRICS
-    }  # fmt: skip
+    return paired_metrics(frame, reference, REGRESSION_METRICS, folds, _DIFFERENCE_BOUNDS)
 
 
 def evaluate_regressors(
