@@ -13,7 +13,10 @@ given psi the thumb line is fixed; C_C = P3 + c y lies on it, and the lines from
 P2 must be mirror images about the thumb line, so C_C is where the line through P1 and P2's mirror
 image crosses the thumb line. Then theta follows from the direction C_C -> P1 and
 O = C_C + 25 cot(theta) y. When P1 and P2 are already mirror images (any C_C works), C_C is taken
-as the foot of the grasp focus C_G on the thumb line. The psi with the best force-line value C1 =
+as the foot of the grasp focus C_G on the thumb line. One more psi per row is solved (Newton) so
+that C_C lies as far along the thumb line as C_G: near-mirrored contacts, whose C_C swings through
+every value within a sliver of psi, then reach the same grip as exactly mirrored ones (the
+planner stays continuous under sub-micron noise). The psi with the best force-line value C1 =
 (4k/3) sum(delta_i^2) / arctan(mu)^2 among the reachable ones is kept.
 
 Two-finger grasps: theta = 0, fingers on the lines 25 mm beside the thumb line, re-intersected with
@@ -283,7 +286,17 @@ def _three_finger(grasps, index, params, config, offsets, check) -> Configuratio
     grasp, thumb = np.repeat(index, 3), np.tile(np.arange(3), len(index))
     others = np.stack([(thumb + 1) % 3, (thumb + 2) % 3], axis=1)
     p3, n3 = grasps.contacts[grasp, thumb], grasps.normals[grasp, thumb]
-    yaw = np.arctan2(n3[:, 1], n3[:, 0])[:, None] + offsets[None, :]
+    normal_yaw = np.arctan2(n3[:, 1], n3[:, 0])
+    # the grid of thumb directions, and one more column: the direction whose real focus lies as
+    # far along the thumb line as the grasp's (see _focus_depth_yaw)
+    focus_depth = np.sum((grasps.focus[grasp] - p3) * n3, axis=1)
+    extra, solved = _focus_depth_yaw(grasps.contacts[grasp, others[:, 0]] - p3,
+                                     grasps.contacts[grasp, others[:, 1]] - p3, normal_yaw,
+                                     focus_depth)
+    solved &= np.abs(extra - normal_yaw) <= search_half_width(params)
+    extra = np.where(solved, extra, normal_yaw)
+    yaw = np.concatenate([normal_yaw[:, None] + offsets[None, :], extra[:, None]], axis=1)
+    thumb_deviation = yaw - normal_yaw[:, None]
     frame = _HandFrame(yaw)
     ax, ay = frame.coordinates(grasps.contacts[grasp, others[:, 0]] - p3)
     bx, by = frame.coordinates(grasps.contacts[grasp, others[:, 1]] - p3)
@@ -300,6 +313,7 @@ def _three_finger(grasps, index, params, config, offsets, check) -> Configuratio
     mirrored = np.hypot(dx, y1 - y2) <= 1e-9 * (np.abs(x1) + np.abs(x2) + 1.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         c = np.where(mirrored, focus_y, (x1 * y2 + x2 * y1) / dx)
+        c[:, -1] = focus_depth  # the extra column was solved for this focus
         reach = np.hypot(x1, y1 - c)
         sin_t, cos_t = x1 / reach, (y1 - c) / reach
         palm_y = c + SPREAD_AXIS_OFFSET_MM * cos_t / sin_t
@@ -308,10 +322,12 @@ def _three_finger(grasps, index, params, config, offsets, check) -> Configuratio
     offset = SPREAD_AXIS_OFFSET_MM
     reaches = ((x1 - offset) * sin_t + (y1 - palm_y) * cos_t,
                -(x2 + offset) * sin_t + (y2 - palm_y) * cos_t, palm_y)
-    cos_delta = (-sin_t * n1x - cos_t * n1y, sin_t * n2x - cos_t * n2y, np.cos(offsets))
+    cos_delta = (-sin_t * n1x - cos_t * n1y, sin_t * n2x - cos_t * n2y,
+                 np.cos(thumb_deviation))
     feasible = (x1 > 0) & (x2 < 0) & (c > 0) & (sin_t > 0)
     feasible &= cos_t >= np.cos(config.max_spread_rad)
     feasible &= _reachable((e1, e2, palm_y), reaches, cos_delta, config)
+    feasible[:, -1] &= solved
     cost = _force_line_from_cos(cos_delta, params.friction_angle)
 
     def finger_of(rows, cols):
@@ -333,6 +349,38 @@ def _three_finger(grasps, index, params, config, offsets, check) -> Configuratio
         extensions=np.stack([e1[pick], e2[pick], palm_y[pick]], axis=1),
         spread=np.arctan2(sin_t[pick], cos_t[pick]), palm=palm, yaw=_wrapped(yaw[pick]),
         force_line=cost[pick])
+
+
+def _focus_depth_yaw(a: Array, b: Array, yaw: Array, depth: Array,
+                     steps: int = 8) -> tuple[Array, NDArray[np.bool_]]:
+    """Thumb direction near ``yaw`` at which the real focus C_C = P3 + depth y serves both fingers.
+
+    ``a``, ``b`` (K, 2) are the two finger contacts relative to the thumb contact. At yaw psi they
+    have hand coordinates (x_a, y_a), (x_b, y_b); C_C = (0, depth) sends mirror-image finger lines
+    through both when h = x_a y_b + x_b y_a - depth (x_a + x_b) = 0 (P_a and P_b's mirror image
+    collinear with C_C). Newton steps from ``yaw`` (dx/dpsi = y, dy/dpsi = -x) find the root.
+
+    The grid of directions alone cannot do this: near a symmetric grasp the finger lines fix C_C
+    only within a sliver of psi of the width of the asymmetry, so the exact polygon reaches the
+    ideal C_C = C_G (any C_C fits exact mirror images) and an object moved by 1e-6 mm does not.
+    Returns the directions and whether each is a root (|h| within rounding of the scale).
+    """
+    psi = np.asarray(yaw, dtype=float).copy()
+    for _ in range(steps):
+        s, c = np.sin(psi), np.cos(psi)
+        xa, ya = a[:, 0] * s - a[:, 1] * c, a[:, 0] * c + a[:, 1] * s
+        xb, yb = b[:, 0] * s - b[:, 1] * c, b[:, 0] * c + b[:, 1] * s
+        h = xa * yb + xb * ya - depth * (xa + xb)
+        slope = 2.0 * (ya * yb - xa * xb) - depth * (ya + yb)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = np.where(np.abs(slope) > 1e-12, h / slope, 0.0)
+        psi = psi - np.clip(np.nan_to_num(step), -0.5, 0.5)
+    s, c = np.sin(psi), np.cos(psi)
+    xa, ya = a[:, 0] * s - a[:, 1] * c, a[:, 0] * c + a[:, 1] * s
+    xb, yb = b[:, 0] * s - b[:, 1] * c, b[:, 0] * c + b[:, 1] * s
+    scale = np.linalg.norm(a, axis=1) + np.linalg.norm(b, axis=1) + np.abs(depth)
+    solved = np.abs(xa * yb + xb * ya - depth * (xa + xb)) <= 1e-9 * scale**2
+    return psi, solved & np.isfinite(psi)
 
 
 # ------------------------------------------------------------------------------- two fingers

@@ -50,8 +50,11 @@ HALF_FINGER_BASE_MM = SPREAD_AXIS_OFFSET_MM
 #: Grasps on the same regions whose contacts all lie closer than this fraction of their regions'
 #: lengths count as the same grasp.
 DEDUP_FRACTION = 0.01
-_NOISE_FRACTION = 1e-7  # contact fractions closer than this are the same point
 _TOLERANCE_MM = 1e-7  # slack on length limits for rounding noise
+#: Normals whose largest gap is within this of pi do not span the plane: an antiparallel pair moved
+#: by sub-micron noise (1e-6 mm on a 30 mm side turns a normal by ~3e-8 rad) stays one, so a
+#: rectilinear shape keeps the same grasps exact and perturbed.
+_GAP_SLACK_RAD = 1e-6
 _SHORTLIST = 4  # best-ranked candidates examined per grasp kept (repeats come in up to threes)
 
 Array = NDArray[np.float64]
@@ -145,7 +148,7 @@ def _three_finger(regions: Regions, obj: PlanarObject, t: Array, limit: int) -> 
         return Grasps.empty()
     triplets = np.array(list(combinations(range(len(regions)), 3)))
     # the normals must positively span the plane (a property of the regions alone)
-    triplets = triplets[_largest_gap(regions.normal[triplets]) < np.pi - 1e-9]
+    triplets = triplets[_largest_gap(regions.normal[triplets]) < np.pi - _GAP_SLACK_RAD]
     # every region of a triplet takes a turn at being the one solved last (index 2)
     ordered = np.concatenate([np.roll(triplets, shift, axis=1) for shift in range(3)])
     # the first two normals must cross: parallel ones have no focus
@@ -275,19 +278,20 @@ def _deduplicated(grasps: Grasps) -> Grasps:
     """Drop repeated grasps: same regions and contacts within DEDUP_FRACTION of each other.
 
     Contacts are compared by their fraction along their region, which does not depend on where
-    the object lies or on its scale. Exact repeats (up to rounding noise) go first, then grasps
-    next to each other in sorted order that are closer than DEDUP_FRACTION on every contact.
+    the object lies or on its scale. Grasps are taken in order (best ranked first), and one is
+    dropped when it repeats one already kept, so a repeat goes whatever rounding noise does to its
+    fractions (a key rounded to the noise grid splits repeats that straddle a step).
     """
     if len(grasps) == 0:
         return grasps
     span = grasps.region_b - grasps.region_a
     arc = np.sum((grasps.contacts - grasps.region_a) * span, axis=-1) / np.sum(span**2, axis=-1)
-    keys = np.concatenate([grasps.region, np.round(arc / _NOISE_FRACTION)], axis=1)
-    order = np.lexsort(keys.T[::-1])
-    step = np.diff(keys[order], axis=0)
-    repeated = np.all(step[:, :3] == 0, axis=1) & np.all(
-        np.abs(step[:, 3:]) * _NOISE_FRACTION <= DEDUP_FRACTION, axis=1)
-    return grasps.take(np.sort(order[np.concatenate([[True], ~repeated])]))
+    repeats = np.all(grasps.region[:, None] == grasps.region[None], axis=-1)
+    repeats &= np.all(np.abs(arc[:, None] - arc[None]) <= DEDUP_FRACTION, axis=-1)
+    kept = np.zeros(len(grasps), dtype=bool)
+    for i in range(len(grasps)):
+        kept[i] = not np.any(repeats[i, :i] & kept[:i])
+    return grasps.take(np.nonzero(kept)[0])
 
 
 def _cross(u: Array, v: Array) -> Array:

@@ -280,3 +280,21 @@ def test_perceived_object():
     # planned on the perceived contour, close to the true object's grips
     truth = candidates(obj, PARAMS, CONFIG)
     assert abs(table["Q_C"].min() - truth["Q_C"].min()) < 0.5
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_best_grip_is_continuous_under_sub_micron_noise(seed):
+    """Moving every default polygon's vertices by 1e-6 mm moves its best Q_C by under 2 % and its
+    candidate count by at most 1 %: no exact-symmetry branch, straight-angle limit or rounded key
+    decides what the planner finds (the exact hexagon once gave 1.756 and the moved one 2.051,
+    with 114 and 360 candidates)."""
+    config = Config()
+    rng = np.random.default_rng(seed)
+    for obj in load_object_set("default"):
+        vertices = np.asarray(obj.polygon.exterior.coords)[:-1]
+        moved = PlanarObject.from_polygon(vertices + 1e-6 * rng.standard_normal(vertices.shape),
+                                          name=obj.name)
+        exact, noisy = candidates(obj, config=config), candidates(moved, config=config)
+        assert abs(len(noisy) - len(exact)) <= 0.01 * len(exact), obj.name
+        if len(exact):
+            assert noisy["Q_C"].min() == pytest.approx(exact["Q_C"].min(), rel=0.02), obj.name

@@ -19,12 +19,10 @@ CONFIG = Config()
 PIXEL_MM = CONFIG.perception.mm_per_px
 DEFAULT_OBJECTS = load_object_set("default")
 
-#: The best grip's Q_C jumps on these under any change of the regions, the polygon's own included:
-#: moving the hexagon's vertices by 1e-6 mm takes its best Q_C from 1.756 to 2.051 (the thumb
-#: search meets exactly mirrored contacts only on the exact polygon), and on the ellipse and the
-#: bean regions within 0.3 mm of the polygon's give a best grip 14-15 % apart. That is the
-#: planner's discontinuity (grip_env.barrett / grip_env.grasps), not perception's.
-PLANNER_JUMPS = {"hexagon", "ellipse", "bean"}
+#: The best grip's Q_C on the bean comes from two or three feasible grips (C1 about 25-30): regions
+#: within 0.3 mm of the polygon's let a third grip through, 15 % better. The planner is continuous
+#: under sub-micron noise there (tests/test_grasps.py), but not under the render's 0.3 mm.
+PLANNER_JUMPS = {"bean"}
 
 
 @pytest.fixture(scope="module")
