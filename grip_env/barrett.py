@@ -17,7 +17,8 @@ as the foot of the grasp focus C_G on the thumb line. One more psi per row is so
 that C_C lies as far along the thumb line as C_G: near-mirrored contacts, whose C_C swings through
 every value within a sliver of psi, then reach the same grip as exactly mirrored ones (the
 planner stays continuous under sub-micron noise). The psi with the best force-line value C1 =
-(4k/3) sum(delta_i^2) / arctan(mu)^2 among the reachable ones is kept.
+(4k/3) sum(delta_i^2) / arctan(mu)^2 among the reachable ones is kept, and the search is then
+refined over one grid step to either side of it (``REFINE_STEPS``).
 
 Two-finger grasps: theta = 0, fingers on the lines 25 mm beside the thumb line, re-intersected with
 their shared region for every psi. The palm centre's position along the thumb line is then free;
@@ -263,10 +264,31 @@ def configurations(
 
     three = np.nonzero(~grasps.two_finger)[0]
     two = np.nonzero(grasps.two_finger)[0]
+    coarse = _three_finger(grasps, np.repeat(three, 3), np.tile(np.arange(3), len(three)),
+                           params, config, offsets, check)
     return Configurations.concatenate([
-        _three_finger(grasps, three, params, config, offsets, check),
+        _three_finger(grasps, coarse.grasp, coarse.thumb, params, config,
+                      _refined_offsets(grasps, coarse, offsets, params), check),
         _two_finger(grasps, two, params, config, offsets, check),
     ])
+
+
+#: The thumb search is refined around each grid optimum over one grid step to either side with
+#: this many directions per side: the best feasible direction often sits on a limit (spread,
+#: extension, reach, approach) that moves with the object, and a grid-only optimum jumps by a
+#: whole step's C1 when the limit crosses a grid direction.
+REFINE_STEPS = 10
+
+
+def _refined_offsets(grasps: Grasps, coarse: Configurations, offsets: Array,
+                     params: GraspParams) -> Array:
+    """(C, 2 REFINE_STEPS + 1) thumb offsets from the normal around each configuration's yaw."""
+    step = float(offsets[1] - offsets[0]) if len(offsets) > 1 else 0.0
+    normal = grasps.normals[coarse.grasp, coarse.thumb]
+    centre = _wrapped(coarse.yaw - np.arctan2(normal[:, 1], normal[:, 0]))
+    around = np.linspace(-step, step, 2 * REFINE_STEPS + 1)
+    half_width = search_half_width(params)
+    return np.clip(centre[:, None] + around[None, :], -half_width, half_width)
 
 
 def reaches_of(contacts: Array, forces: Array, palm: Array) -> Array:
@@ -280,10 +302,10 @@ def reaches_of(contacts: Array, forces: Array, palm: Array) -> Array:
 
 
 # ----------------------------------------------------------------------------- three fingers
-def _three_finger(grasps, index, params, config, offsets, check) -> Configurations:
+def _three_finger(grasps, grasp, thumb, params, config, offsets, check) -> Configurations:
     # one row per (grasp, thumb choice), one column per thumb direction; hand-frame components.
     # Contacts a, b are the two non-thumb contacts; finger 1 is the one on the hand's +x side.
-    grasp, thumb = np.repeat(index, 3), np.tile(np.arange(3), len(index))
+    # ``offsets`` from the thumb normal: (S,) for every row, or (rows, S).
     others = np.stack([(thumb + 1) % 3, (thumb + 2) % 3], axis=1)
     p3, n3 = grasps.contacts[grasp, thumb], grasps.normals[grasp, thumb]
     normal_yaw = np.arctan2(n3[:, 1], n3[:, 0])
@@ -295,7 +317,8 @@ def _three_finger(grasps, index, params, config, offsets, check) -> Configuratio
                                      focus_depth)
     solved &= np.abs(extra - normal_yaw) <= search_half_width(params)
     extra = np.where(solved, extra, normal_yaw)
-    yaw = np.concatenate([normal_yaw[:, None] + offsets[None, :], extra[:, None]], axis=1)
+    grid = normal_yaw[:, None] + np.broadcast_to(offsets, (len(grasp), np.shape(offsets)[-1]))
+    yaw = np.concatenate([grid, extra[:, None]], axis=1)
     thumb_deviation = yaw - normal_yaw[:, None]
     frame = _HandFrame(yaw)
     ax, ay = frame.coordinates(grasps.contacts[grasp, others[:, 0]] - p3)
