@@ -31,6 +31,17 @@ def _style(name: str, board: Mapping[str, Any]) -> str:
     return "--" if name in ("random", "oracle", board["reference"]) else "-"
 
 
+def _finish(plt: Any, fig: Any, ax: Any, title: str, legend: str, path: str | Path) -> Path:
+    """Grid, legend and title, then the figure saved to ``path`` and closed."""
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, ncol=2, loc=legend)
+    ax.set_title(title)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return Path(path)
+
+
 def plot_profiles(board: Mapping[str, Any], path: str | Path) -> Path:
     """Fraction of (object, run) pairs whose normalised score exceeds tau, per method."""
     plt = _pyplot()
@@ -43,13 +54,7 @@ def plot_profiles(board: Mapping[str, Any], path: str | Path) -> Path:
     ax.set_ylabel("fraction of objects x runs with score > tau")
     ax.set_xlim(taus.min(), taus.max())
     ax.set_ylim(0, 1.02)
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, ncol=2, loc="lower left")
-    ax.set_title("Performance profiles on the held-out objects")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return Path(path)
+    return _finish(plt, fig, ax, "Performance profiles on the held-out objects", "lower left", path)
 
 
 def plot_attempts(board: Mapping[str, Any], path: str | Path) -> Path:
@@ -63,10 +68,5 @@ def plot_attempts(board: Mapping[str, Any], path: str | Path) -> Path:
     ax.set_xticks(ks)
     ax.set_xlabel("attempts allowed")
     ax.set_ylabel("P(one of the top-k picks holds)")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7, ncol=2, loc="lower right")
-    ax.set_title("Success against attempts allowed (independent trials)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-    return Path(path)
+    return _finish(plt, fig, ax, "Success against attempts allowed (independent trials)",
+                   "lower right", path)
