@@ -127,6 +127,10 @@ class SynthesisConfig(_Section):
     finger_width_mm: float = Field(
         FINGER_WIDTH_MM, gt=0.0, le=100.0, description="finger width (the URDF's)"
     )
+    focus_margin_mm: float = Field(
+        1.0, ge=0.0, le=50.0,
+        description="least depth of the force focus in front of every contact (a camera pixel)",
+    )
 
 
 class SimConfig(_Section):

@@ -10,6 +10,11 @@ through C_G by construction. A candidate is kept when P_c lies inside its region
 ends, C_G lies in front of every contact and inside the object, and the normals positively span
 the plane (every gap between consecutive normal directions is below pi). With the lines exactly
 concurrent and the focus in front of all contacts this is planar force closure for any mu > 0.
+"In front" means by at least ``config.focus_margin_mm`` along each contact's normal (default one
+pixel of the camera): a grasp whose focus sits within a pixel of a contact is on the edge of
+that rule, and which side of it the grasp falls on is decided by sub-pixel detail of the contour
+(measured: a 0.3 mm change of the bean's rendered regions moved one focus from 0.25 mm behind its
+contact to 0.60 mm in front, and the best Q_C by 11 %).
 
 Two-finger (virtual) grasps: the thumb on one region, fingers 1 and 2 together on another region
 that is nearly antiparallel to it (angle between N_thumb and -N_fingers at most arctan(mu)) and
@@ -132,7 +137,7 @@ def synthesize_grasps(
     if config.contacts_per_region == 1:
         t = np.array([0.5])
     grasps = Grasps.concatenate([
-        _three_finger(regions, obj, t, _SHORTLIST * config.max_grasps),
+        _three_finger(regions, obj, t, _SHORTLIST * config.max_grasps, config.focus_margin_mm),
         _two_finger(regions, obj, config.contacts_per_region, params),
     ])
     if len(grasps) == 0:
@@ -143,7 +148,8 @@ def synthesize_grasps(
 
 
 # ----------------------------------------------------------------------------- three fingers
-def _three_finger(regions: Regions, obj: PlanarObject, t: Array, limit: int) -> Grasps:
+def _three_finger(regions: Regions, obj: PlanarObject, t: Array, limit: int,
+                  margin: float) -> Grasps:
     if len(regions) < 3:
         return Grasps.empty()
     triplets = np.array(list(combinations(range(len(regions)), 3)))
@@ -162,13 +168,13 @@ def _three_finger(regions: Regions, obj: PlanarObject, t: Array, limit: int) -> 
     na, nb = regions.normal[ia], regions.normal[ib]
     denom = _cross(na, nb)
     sa, sb = _cross(pb - pa, nb) / denom, _cross(pb - pa, na) / denom
-    ahead = (sa > 0) & (sb > 0)  # the focus lies in front of both contacts
+    ahead = (sa > margin) & (sb > margin)  # the focus lies in front of both contacts
     row, pa, pb, focus = row[ahead], pa[ahead], pb[ahead], (pa + sa[:, None] * na)[ahead]
     ic = ordered[row, 2]
     tc = np.sum((focus - regions.a[ic]) * regions.direction[ic], axis=1) / regions.length[ic]
     pc = regions.point(ic, tc)
     keep = (tc >= END_FRACTION - 1e-9) & (tc <= 1.0 - END_FRACTION + 1e-9)
-    keep &= np.sum((focus - pc) * regions.normal[ic], axis=1) > 0
+    keep &= np.sum((focus - pc) * regions.normal[ic], axis=1) > margin
     keep[keep] = obj.contains(focus[keep])
     keep = np.nonzero(keep)[0]
     # only the best ``limit`` candidates can make the final cut

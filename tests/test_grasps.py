@@ -29,12 +29,20 @@ def _cross(u, v):
     return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
 
 
-def _assert_well_formed(grasps: Grasps, regions: Regions, obj: PlanarObject) -> None:
+def _focus_depths(grasps: Grasps) -> np.ndarray:
+    """(G, 3) how far each three-finger grasp's focus lies in front of each contact."""
+    three = ~grasps.two_finger
+    to_focus = grasps.focus[three][:, None, :] - grasps.contacts[three]
+    return np.sum(to_focus * grasps.normals[three], axis=-1)
+
+
+def _assert_well_formed(grasps: Grasps, regions: Regions, obj: PlanarObject,
+                        margin: float = ALL.focus_margin_mm) -> None:
     three = ~grasps.two_finger
     # three-finger: normal lines meet at the focus, in front of every contact, inside the object
     to_focus = grasps.focus[three][:, None, :] - grasps.contacts[three]
     np.testing.assert_allclose(_cross(to_focus, grasps.normals[three]), 0.0, atol=1e-7)
-    assert np.all(np.sum(to_focus * grasps.normals[three], axis=-1) > 0)
+    assert np.all(_focus_depths(grasps) > margin)
     assert obj.contains(grasps.focus[three]).all()
     angles = np.sort(np.arctan2(grasps.normals[three, :, 1], grasps.normals[three, :, 0]), axis=1)
     gaps = np.diff(np.concatenate([angles, angles[:, :1] + 2 * np.pi], axis=1), axis=1)
@@ -65,6 +73,17 @@ def test_equilateral_triangle_has_the_edge_midpoint_grasp():
     np.testing.assert_allclose(grasps.focus[at_midpoints][0], obj.centroid, atol=1e-9)
     # the centred grasp ranks first
     assert at_midpoints[0]
+
+
+def test_the_focus_lies_in_front_of_every_contact_by_the_margin():
+    """The triangle's side grasps include six whose focus sits 0.44 mm in front of a contact."""
+    obj = make_shape("triangle")
+    regions = side_regions(obj)
+    loose = synthesize_grasps(regions, obj, PARAMS, ALL.model_copy(update={"focus_margin_mm": 0.0}))
+    kept = synthesize_grasps(regions, obj, PARAMS, ALL)
+    near = (_focus_depths(loose) <= ALL.focus_margin_mm).any(axis=1)
+    assert near.sum() == 6 and len(kept) == len(loose) - near.sum()
+    _assert_well_formed(kept, regions, obj)
 
 
 def test_rectangle_gives_only_two_finger_grasps_across_its_width():
@@ -142,7 +161,9 @@ def test_three_finger_grasps_scale_with_the_object(scale):
     obj = make_shape("pentagon")
     big = obj.transformed(scale=scale)
     grasps = synthesize_grasps(side_regions(obj, 3.0), obj, PARAMS, ALL)
-    scaled = synthesize_grasps(side_regions(big, 3.0 * scale), big, PARAMS, ALL)
+    # the focus margin is a length too: it scales with the object
+    big_config = ALL.model_copy(update={"focus_margin_mm": ALL.focus_margin_mm * scale})
+    scaled = synthesize_grasps(side_regions(big, 3.0 * scale), big, PARAMS, big_config)
     assert len(scaled) == len(grasps) > 0
     np.testing.assert_allclose(_sorted(scaled.contacts), _sorted(grasps.contacts * scale),
                                atol=1e-6)
