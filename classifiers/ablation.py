@@ -1,6 +1,6 @@
 """The feature-ablation study: do the hand (C) features add to the grasp (S, G) features?
 
-One model (default ``"svm"``) is cross-validated on each feature set with exactly the folds and
+One model (default ``learning.ablation_model``, "hgb") is cross-validated on each feature set with exactly the folds and
 seeds of :mod:`classifiers.evaluation`, so the per-fold metric differences to the reference set
 (all twelve features) are paired; their mean and corrected 95% t-interval are reported. The
 permutation importance of each of the twelve features (drop of ROC-AUC when the feature is
@@ -14,10 +14,11 @@ When the table has the graded outcome, the regression task runs alongside on the
 one regressor (default ``"svr"``) of ``robustness_mean`` per feature set, scored by Spearman
 (pooled and within object, :mod:`classifiers.regression`), with the same paired differences.
 
-``"learners"`` repeats the question for the stronger learners (:data:`STRONGER_LEARNERS`: the
-gradient-boosted classifier and regressor "hgb" and the lambdarank ranker of
-:mod:`classifiers.ranking`) on the named feature sets (not the leave-one-feature-out ones, to
-bound the cost), on the same folds, each paired against its own all-twelve run.
+``"learners"`` repeats the question for the other learners (:data:`OTHER_LEARNERS`: the
+classifiers "hgb" and "svm" other than the study's model, the gradient-boosted regressor "hgb"
+and the lambdarank ranker of :mod:`classifiers.ranking`) on the named feature sets (not the
+leave-one-feature-out ones, to bound the cost), on the same folds, each paired against its own
+all-twelve run.
 """
 
 from __future__ import annotations
@@ -71,9 +72,10 @@ HAND = ("C1", "C2", "C3", "C4", "C5", "C6")
 
 
 _LEAVE_ONE_OUT = frozenset(f"without_{feature}" for feature in FEATURES)
-#: The learners the ablation also runs on the named feature sets: task → model names.
-STRONGER_LEARNERS: dict[str, tuple[str, ...]] = {
-    "classifier": ("hgb",), "regressor": ("hgb",), "ranker": ("lambdarank",),
+#: The learners the ablation also runs on the named feature sets: task → model names (a
+#: classifier that is the study's own model is not run twice).
+OTHER_LEARNERS: dict[str, tuple[str, ...]] = {
+    "classifier": ("hgb", "svm"), "regressor": ("hgb",), "ranker": ("lambdarank",),
 }
 
 
@@ -95,16 +97,18 @@ def feature_sets() -> dict[str, tuple[str, ...]]:
 def ablation_study(
     table: pd.DataFrame,
     config: Config | None = None,
-    model: str = "svm",
+    model: str | None = None,
     sets: dict[str, Sequence[str]] | None = None,
     importance_repeats: int = 5,
     regressor: str = "svr",
 ) -> dict[str, Any]:
-    """Run the study; returns the ``ablation.json`` content (``"regression"``: the graded task,
-    present when the table has ``robustness_mean``)."""
+    """Run the study of ``model`` (default ``learning.ablation_model``); returns the
+    ``ablation.json`` content (``"regression"``: the graded task, present when the table has
+    ``robustness_mean``)."""
+    config = config or Config()
     with single_threaded():
-        return _ablation_study(table, config or Config(), model, sets, importance_repeats,
-                               regressor)
+        return _ablation_study(table, config, model or config.learning.ablation_model, sets,
+                               importance_repeats, regressor)
 
 
 def _ablation_study(table: pd.DataFrame, config: Config, model: str,
@@ -139,13 +143,15 @@ def _ablation_study(table: pd.DataFrame, config: Config, model: str,
     if has_target(table):
         output["regression"] = regression_ablation(table, learning, regressor, sets)
     named = {name: features for name, features in sets.items() if name not in _LEAVE_ONE_OUT}
-    output["learners"] = learner_ablation(table, config, named)
+    others = {task: tuple(n for n in names if not (task == "classifier" and n == model))
+              for task, names in OTHER_LEARNERS.items()}  # fmt: skip
+    output["learners"] = learner_ablation(table, config, named, others)
     return output
 
 
 def learner_ablation(
     table: pd.DataFrame, config: Config, sets: dict[str, Sequence[str]],
-    learners: dict[str, tuple[str, ...]] = STRONGER_LEARNERS,
+    learners: dict[str, tuple[str, ...]] = OTHER_LEARNERS,
 ) -> dict[str, Any]:
     """``{"<task>_<name>": {"metrics", "feature_sets": {set: {"models", "paired_difference"}}}}``
     for each learner of ``learners`` (regressors only with the graded outcome)."""
@@ -251,8 +257,8 @@ def importance(
 
 
 def run_ablation(
-    table: pd.DataFrame, out_dir: str | Path, config: Config | None = None, model: str = "svm",
-    regressor: str = "svr",
+    table: pd.DataFrame, out_dir: str | Path, config: Config | None = None,
+    model: str | None = None, regressor: str = "svr",
 ) -> dict[str, Any]:
     """Run the study; write ``ablation.json``, ``ablation.png`` (ROC-AUC bars) and, with the
     graded outcome, ``ablation_regression.png`` (Spearman bars) to ``out_dir``."""

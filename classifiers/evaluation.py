@@ -207,13 +207,22 @@ def grouped_cv(
     score: Callable[[BaseEstimator, pd.DataFrame], Mapping[str, float]], config: LearningConfig,
 ) -> pd.DataFrame:
     """The repeated grouped folds: ``fresh(seed)`` estimators fitted on each training fold,
-    ``score(model, test)`` on its test fold; one row per (model, repeat, fold)."""
+    ``score(model, test)`` on its test fold; one row per (model, repeat, fold).
+
+    A fold whose training grips all have one class (a boolean ``target``; possible on a few
+    objects) has nothing to learn from and gives no row, for every model alike, so paired
+    differences stay matched on the folds both sides have.
+    """
     records = []
     total = config.repeats * config.folds
+    one_class = target.dtype == bool
     with single_threaded(), progress_bar(total, "cross-validation") as bar:
         for repeat in range(config.repeats):
             seed = config.seed + repeat
             for fold, (train, test) in enumerate(grouped_folds(table, config.folds, seed)):
+                if one_class and np.unique(target[train]).size < 2:
+                    bar.advance()
+                    continue
                 for name, model in fresh(seed).items():
                     model.fit(table.iloc[train], target[train])
                     metrics = score(model, table.iloc[test])

@@ -11,7 +11,7 @@ subsampled.
 On each subsample three half-widths are measured (:data:`QUANTITIES`), each exactly as the study
 computes its interval:
 
-- ``roc_auc``: the model's (default ``svm``) ROC-AUC, corrected resampled t over folds x repeats
+- ``roc_auc``: the model's (default ``learning.ablation_model``, the ablation's) ROC-AUC, corrected resampled t over folds x repeats
   (:func:`classifiers.evaluation.half_width`);
 - ``hand_difference``: the ablation's paired ROC-AUC difference ``without_hand − all_twelve``,
   same folds and seeds, same interval;
@@ -103,13 +103,14 @@ def _keep_trials(rows: pd.DataFrame, trials: int, rng: np.random.Generator) -> p
 
 # ------------------------------------------------------------------------------- measurement
 def classifier_half_widths(
-    table: pd.DataFrame, config: Config, model: str = "svm"
+    table: pd.DataFrame, config: Config, model: str | None = None
 ) -> dict[str, tuple[float, float]]:
     """``{quantity: (estimate, half-width)}`` of ``roc_auc`` and ``hand_difference``."""
     from classifiers.ablation import GRASP, SHARED
     from classifiers.evaluation import cross_validate_models, half_width
 
     learning = config.learning
+    model = model or learning.ablation_model
     full = cross_validate_models(table, [model], FEATURES, learning)
     without = cross_validate_models(table, [model], SHARED + GRASP, learning)  # without_hand
     paired = without.merge(full, on=["repeat", "fold"], suffixes=("", "_ref"), validate="1:1")
@@ -154,7 +155,7 @@ Measure = Callable[[pd.DataFrame, Config], dict[str, tuple[float, float]]]
 
 def power_curve(
     table: pd.DataFrame, config: Config, objects: Sequence[int], trials: Sequence[int],
-    replicates: int = 2, seed: int = 0, model: str = "svm", selector_objects: Sequence[int] = (),
+    replicates: int = 2, seed: int = 0, model: str | None = None, selector_objects: Sequence[int] = (),
     selector_trials: Sequence[int] = (), log: Callable[[str], None] = lambda _: None,
     trials_table: pd.DataFrame | None = None,
 ) -> pd.DataFrame:
@@ -167,6 +168,7 @@ def power_curve(
     half_width, seconds`` (the wall time of the measurement the row comes from).
     """
     by_trials = table if trials_table is None else trials_table
+    model = model or config.learning.ablation_model
     classify: Measure = lambda part, cfg: classifier_half_widths(part, cfg, model)  # noqa: E731
     select: Measure = lambda part, cfg: {"rl_minus_best_qc": selector_half_width(part, cfg)}  # noqa: E731
     rows = []
@@ -341,7 +343,7 @@ def default_trials(max_trials: int) -> tuple[int, ...]:
 def run_power(
     tables: Sequence[pd.DataFrame], out_dir: Any, config: Config,
     objects: Sequence[int] | None = None, trials: Sequence[int] | None = None,
-    replicates: int = 2, seed: int = 0, model: str = "svm", selector_objects: Sequence[int] = (),
+    replicates: int = 2, seed: int = 0, model: str | None = None, selector_objects: Sequence[int] = (),
     selector_trials: Sequence[int] = (), source: dict[str, Any] | None = None,
     log: Callable[[str], None] = lambda _: None,
 ) -> dict[str, Any]:
@@ -357,6 +359,7 @@ def run_power(
 
     if not tables:
         raise ValueError("run_power needs at least one dataset")
+    model = model or config.learning.ablation_model
     pooled = pool(tables, seed=seed) if len(tables) > 1 else tables[0]
     first = tables[0]
     n, t = int(pooled[GROUP].nunique()), int(first["trials"].min())

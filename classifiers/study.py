@@ -38,7 +38,7 @@ STAGE_FILE = "stage.json"
 #: The config fields (a section, or ``section.field``) each stage reads.
 STAGE_INPUTS: dict[str, tuple[str, ...]] = {
     "classifiers": ("learning", "selector.max_candidates", "sim.ramp_levels_g", "sim.ramp_ratio"),
-    "ablation": ("learning.folds", "learning.repeats", "learning.seed"),
+    "ablation": ("learning.ablation_model", "learning.folds", "learning.repeats", "learning.seed"),
     "selector": ("learning.models", "learning.seed", "learning.test_fraction", "selector", "sim"),
     "benchmark": ("learning", "selector", "sim", "grasp.mu"),
     "calibration": ("grasp", "objects", "perception", "synthesis", "sim", "uncertainty",

@@ -248,6 +248,10 @@ class LearningConfig(_Section):
         description="training seeds (seed, seed+1, ...) of every learner scored on the held-out "
         "objects",
     )
+    ablation_model: str = Field(
+        "hgb", min_length=1,
+        description="classifier the feature ablation and the power curve cross-validate",
+    )
     folds: int = Field(5, ge=2, le=100, description="grouped CV folds")
     repeats: int = Field(3, ge=1, le=100, description="CV repeats over seeds")
     seed: int = Field(0, ge=0, le=MAX_SEED, description="learning seed")

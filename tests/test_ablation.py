@@ -72,12 +72,14 @@ def test_ablation_reports_the_regression_task_on_the_same_sets(grips):
     )  # fmt: skip
 
 
-def test_ablation_runs_the_stronger_learners_on_the_named_sets(grips):
+def test_ablation_runs_the_other_learners_on_the_named_sets(grips):
     sets = {REFERENCE: FEATURES, "without_hand": FEATURES[:6], "without_C1": FEATURES[1:]}
     learners = ablation_study(grips, CONFIG, model="logreg", sets=sets, importance_repeats=1,
                               regressor="ridge")["learners"]  # fmt: skip
-    assert set(learners) == {"classifier_hgb", "regressor_hgb", "ranker_lambdarank"}
-    for key, metric in (("classifier_hgb", "roc_auc"), ("regressor_hgb", "spearman_object"),
+    assert set(learners) == {"classifier_hgb", "classifier_svm", "regressor_hgb",
+                             "ranker_lambdarank"}
+    for key, metric in (("classifier_hgb", "roc_auc"), ("classifier_svm", "roc_auc"),
+                        ("regressor_hgb", "spearman_object"),
                         ("ranker_lambdarank", "spearman_object")):
         name = key.split("_", 1)[1]
         found = learners[key]["feature_sets"]
@@ -85,6 +87,16 @@ def test_ablation_runs_the_stronger_learners_on_the_named_sets(grips):
         assert found[REFERENCE]["paired_difference"][name][metric]["mean"] == 0.0
         # the synthetic outcome follows C1 and C4: every strong learner loses without the hand
         assert found["without_hand"]["paired_difference"][name][metric]["mean"] < 0
+
+
+def test_ablation_runs_the_configured_model_and_not_twice(grips):
+    """The default model is ``learning.ablation_model``; it is not repeated among the learners."""
+    sets = {REFERENCE: FEATURES, "without_hand": FEATURES[:6]}
+    config = CONFIG.override(learning={"ablation_model": "svm"})
+    result = ablation_study(grips, config, sets=sets, importance_repeats=1, regressor="ridge")
+    assert result["model"] == "svm"
+    assert set(result["feature_sets"][REFERENCE]["models"]) == {"svm"}
+    assert set(result["learners"]) == {"classifier_hgb", "regressor_hgb", "ranker_lambdarank"}
 
 
 @pytest.mark.slow

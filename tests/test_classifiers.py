@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
-from classifiers.evaluation import evaluate_models, grouped_folds, top1
+from classifiers.evaluation import cross_validate_models, evaluate_models, grouped_folds, top1
 from classifiers.models import MODEL_NAMES, REGRESSOR_NAMES, make_model, make_regressor
 from classifiers.persistence import load_model, save_model
 from classifiers.regression import evaluate_regressors, regression_fold_metrics, spearman
@@ -83,6 +83,18 @@ def test_grouped_folds_never_share_an_object(synthetic_grips_table):
         assert not set(groups[train]) & set(groups[test])
         seen.append(test)
     assert np.array_equal(np.sort(np.concatenate(seen)), np.arange(len(table)))
+
+
+def test_a_fold_with_one_training_class_is_left_out_for_every_model():
+    """Only one object fails: the fold that tests it trains on successes alone, and gives no
+    row instead of a crash inside the solver."""
+    table = synthetic_grips(n_objects=6, grips=(8, 12), seed=1)
+    first = table["object_id"] == table["object_id"].iloc[0]
+    table = table.assign(success=~first)
+    config = LearningConfig(folds=3, repeats=2)
+    per_fold = cross_validate_models(table, ["logreg", "random"], config=config)
+    assert len(per_fold) == 2 * (3 - 1) * 2  # one fold a repeat left out, two models
+    assert set(per_fold.groupby(["repeat", "fold"]).size()) == {2}
 
 
 def test_rank_baselines_are_computed_from_the_columns(synthetic_grips_table):

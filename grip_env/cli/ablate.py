@@ -18,17 +18,20 @@ def ablate(
     out: OutputDir,
     config: ConfigFile = None,
     model: Annotated[
-        str, typer.Option(help=f"model cross-validated on every feature set: {MODEL_NAMES_HELP}")
-    ] = "svm",
+        str | None,
+        typer.Option(help=f"model cross-validated on every feature set: {MODEL_NAMES_HELP} "
+                     "[default: the config's learning.ablation_model]"),
+    ] = None,
 ) -> None:
     """Write OUT/ablation.json (metrics, paired differences, importances) and OUT/ablation.png."""
     with stop_on_signals(f"rerun the same command to redo {out}"), user_errors(), shown():
         from grip_env.cli.train import check_model_names
         from grip_env.config import load_config
 
+        settings = load_config(config)
+        model = model or settings.learning.ablation_model
         check_model_names((model,))
         output_dir(out)
-        settings = load_config(config)
         from classifiers.ablation import run_ablation
         from grip_env.dataset import load
 

@@ -40,7 +40,11 @@ def power(
     ] = "",
     replicates: Annotated[int, typer.Option(help="seeded subsamples per size")] = 2,
     seed: Annotated[int, typer.Option(help="subsampling seed")] = 0,
-    model: Annotated[str, typer.Option(help=f"the classifier: {MODEL_NAMES_HELP}")] = "svm",
+    model: Annotated[
+        str | None,
+        typer.Option(help=f"the classifier: {MODEL_NAMES_HELP} [default: the config's "
+                     "learning.ablation_model]"),
+    ] = None,
     partial: Annotated[
         bool, typer.Option(help="use the finished objects of an unfinished dataset")
     ] = False,
@@ -53,12 +57,13 @@ def power(
         from grip_env.cli.train import check_model_names
         from grip_env.config import load_config
 
+        settings = load_config(config)
+        model = model or settings.learning.ablation_model
         check_model_names((model,))
         sizes = {name: parse_sizes(text, option) for name, text, option in (
             ("objects", objects, "--objects"), ("trials", trials, "--trials"),
             ("selector_objects", selector_objects, "--selector-objects"),
             ("selector_trials", selector_trials, "--selector-trials"))}  # fmt: skip
-        settings = load_config(config)
         output_dir(out)
         from classifiers.power import run_power
         from grip_env.dataset import load
