@@ -11,8 +11,8 @@ subsampled.
 On each subsample three half-widths are measured (:data:`QUANTITIES`), each exactly as the study
 computes its interval:
 
-- ``roc_auc``: the model's (default ``learning.ablation_model``, the ablation's) ROC-AUC, corrected resampled t over folds x repeats
-  (:func:`classifiers.evaluation.half_width`);
+- ``roc_auc``: the model's (default ``learning.ablation_model``, the ablation's) ROC-AUC,
+  corrected resampled t over folds x repeats (:func:`classifiers.evaluation.half_width`);
 - ``hand_difference``: the ablation's paired ROC-AUC difference ``without_hand − all_twelve``,
   same folds and seeds, same interval;
 - ``rl_minus_best_qc``: first-pick success of the RL selector minus the best-Q_C pick on the
@@ -155,9 +155,9 @@ Measure = Callable[[pd.DataFrame, Config], dict[str, tuple[float, float]]]
 
 def power_curve(
     table: pd.DataFrame, config: Config, objects: Sequence[int], trials: Sequence[int],
-    replicates: int = 2, seed: int = 0, model: str | None = None, selector_objects: Sequence[int] = (),
-    selector_trials: Sequence[int] = (), log: Callable[[str], None] = lambda _: None,
-    trials_table: pd.DataFrame | None = None,
+    replicates: int = 2, seed: int = 0, model: str | None = None,
+    selector_objects: Sequence[int] = (), selector_trials: Sequence[int] = (),
+    log: Callable[[str], None] = lambda _: None, trials_table: pd.DataFrame | None = None,
 ) -> pd.DataFrame:
     """Half-widths along two axes: ``objects`` (subsamples of ``table``, all its trials) and
     ``trials`` (subsamples of ``trials_table``, default ``table``, all its objects). The
@@ -343,9 +343,9 @@ def default_trials(max_trials: int) -> tuple[int, ...]:
 def run_power(
     tables: Sequence[pd.DataFrame], out_dir: Any, config: Config,
     objects: Sequence[int] | None = None, trials: Sequence[int] | None = None,
-    replicates: int = 2, seed: int = 0, model: str | None = None, selector_objects: Sequence[int] = (),
-    selector_trials: Sequence[int] = (), source: dict[str, Any] | None = None,
-    log: Callable[[str], None] = lambda _: None,
+    replicates: int = 2, seed: int = 0, model: str | None = None,
+    selector_objects: Sequence[int] = (), selector_trials: Sequence[int] = (),
+    source: dict[str, Any] | None = None, log: Callable[[str], None] = lambda _: None,
 ) -> dict[str, Any]:
     """Measure the curve, fit it, write ``power.json`` and ``power.png`` to ``out_dir``; returns
     the summary. The objects axis runs on the tables pooled (:func:`pool`), the trials axis on
