@@ -5,9 +5,10 @@ with exactly the folds and seeds of :mod:`classifiers.evaluation`, so the per-fo
 differences to the reference set (all twelve features) are paired; their mean and corrected 95%
 t-interval are reported. The permutation importance of each of the twelve features (drop of
 ROC-AUC when the feature is shuffled in the held-out fold,
-``sklearn.inspection.permutation_importance``) is summarised the same way. ``held_out`` scores the model of each feature set, fitted on the training objects of
-the study's split, on its held-out objects (the RL selector's test objects; one split, so no
-interval; not the leave-one-feature-out sets). ``eps`` is the Ferrari–Canny ε of
+``sklearn.inspection.permutation_importance``) is summarised the same way. ``held_out`` scores
+the model of each feature set, fitted on the training objects of the study's split, on its
+held-out objects (the RL selector's test objects; one split, so no interval; not the
+leave-one-feature-out sets). ``eps`` is the Ferrari–Canny ε of
 :mod:`grip_env.epsilon`, added when missing.
 
 When the table has the graded outcome, the regression task runs alongside on the same folds:
