@@ -1,6 +1,7 @@
 """Measurements behind BENCHMARKS.md's "Simulator" section (run by hand, they take minutes).
 
     python -m tests.benchmarks.sim_fidelity convergence
+    python -m tests.benchmarks.sim_fidelity decomposition
     python -m tests.benchmarks.sim_fidelity cost
     python -m tests.benchmarks.sim_fidelity paired --b sim.solver_iterations=300 --trials 1200
     python -m tests.benchmarks.sim_fidelity chaos
@@ -9,6 +10,9 @@
 * ``convergence``: a symmetric grip closes on a pinned 90 x 55 mm box; for each solver
   iteration count, each finger's joint-2 motor torque against its command and its fingertip
   normal force against ``sim.finger_force_n``.
+* ``decomposition``: the same close; each finger's torque balance about joint 2 (normal
+  forces, friction, motor, and the floor's share), at 100, 200 and 300 iterations, with the
+  worm gear's floors and without them.
 * ``cost``: time per physics step and per trial of the same grips at 50, 100 and 200 iterations.
 * ``paired``: the same (grip, trial) pairs under config A (the default) and config B (dotted
   overrides); the paired difference in success and in robustness with 95 % intervals, and the
@@ -21,8 +25,10 @@ Grips: every default object's candidates, a stratified sample of ``--per-object`
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import time
+from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
 
@@ -40,33 +46,90 @@ from grip_env.sim.uncertainty import sample_noise, trial_rng
 
 def convergence(iterations: tuple[int, ...] = (50, 100, 150, 200, 300)) -> list[dict]:
     """Motor torque / command and fingertip normal force per finger on a pinned box."""
-    box = make_shape("rectangle")
-    grip = pd.DataFrame([{"hand_x": 0.0, "hand_y": 0.0, "hand_yaw": np.pi / 2, "spread": 0.0,
-                          "p1_x": 25.0, "p1_y": 27.5, "p2_x": -25.0, "p2_y": 27.5,
-                          "p3_x": 0.0, "p3_y": -27.5}])
-    plan = grip_plans(grip)[0]
     rows = []
     for n in iterations:
-        config = Config().override(sim={"solver_iterations": n})
-        with TrialScene(box, config) as scene:
-            c = scene.world.client
-            noise = sample_noise(trial_rng(0, 0, 0), config)
-            noise = replace(noise, offset_mm=(0.0, 0.0), yaw_error=0.0)
-            palm, yaw, z = scene._place(plan, noise)
-            c.createConstraint(scene.object.uid, -1, -1, -1, c.JOINT_FIXED, [0, 0, 0],
-                               [0, 0, 0], [0, 0, 0.015])
-            for height in np.linspace(z + APPROACH_MM, z, APPROACH_STEPS + 1)[1:]:
-                scene.hand.move(np.array([*palm, height]), yaw)
-                scene.world.step()
-            for _ in range(120):
-                scene.hand.drive_fingers(scene.hand.touching(scene.object.uid))
-                scene.world.step()
+        with _pinned_box(Config().override(sim={"solver_iterations": n})) as scene:
             torques = scene.hand.motor_torques()[:, 0]
             commands = np.array([f.tau2 for f in scene.hand.fingers])
             normals = _finger_normal_forces(scene)
         rows.append({"iterations": n, "torque_ratio": (torques / commands).round(3).tolist(),
                      "normal_force_n": normals.round(2).tolist()})
     return rows
+
+
+@contextlib.contextmanager
+def _pinned_box(config: Config, floors: bool = True) -> Iterator[TrialScene]:
+    """The symmetric grip closed for 120 steps on the 90 x 55 mm box pinned to the world;
+    ``floors=False`` leaves the worm gear's floors at the URDF's limits (motors only)."""
+    box = make_shape("rectangle")
+    grip = pd.DataFrame([{"hand_x": 0.0, "hand_y": 0.0, "hand_yaw": np.pi / 2, "spread": 0.0,
+                          "p1_x": 25.0, "p1_y": 27.5, "p2_x": -25.0, "p2_y": 27.5,
+                          "p3_x": 0.0, "p3_y": -27.5}])
+    plan = grip_plans(grip)[0]
+    with TrialScene(box, config) as scene:
+        if not floors:
+            scene.hand._raise_floors = lambda which: None  # type: ignore[method-assign]
+        c = scene.world.client
+        noise = sample_noise(trial_rng(0, 0, 0), config)
+        noise = replace(noise, offset_mm=(0.0, 0.0), yaw_error=0.0)
+        palm, yaw, z = scene._place(plan, noise)
+        c.createConstraint(scene.object.uid, -1, -1, -1, c.JOINT_FIXED, [0, 0, 0],
+                           [0, 0, 0], [0, 0, 0.015])
+        for height in np.linspace(z + APPROACH_MM, z, APPROACH_STEPS + 1)[1:]:
+            scene.hand.move(np.array([*palm, height]), yaw)
+            scene.world.step()
+        for _ in range(120):
+            scene.hand.drive_fingers(scene.hand.touching(scene.object.uid))
+            scene.world.step()
+        yield scene
+
+
+def decomposition(iterations: tuple[int, ...] = (100, 200, 300)) -> list[dict]:
+    """Where each pad's normal force on the pinned box comes from: the torque balance of the
+    finger (both links) about joint 2, with and without the worm gear's floors.
+
+    The normal forces open the finger about joint 2 with ``normal_nm``; the motor (``motor_nm``)
+    and the pads' friction (``friction_nm``, positive when it closes the finger) hold it; what
+    balances the rest (``floor_nm``) can only come from the joint's lower limit (gravity on the
+    links is below 0.01 N·m: it is the whole remainder with the floors off). PyBullet reports
+    a contact's friction as the force on the body of the lower id, whichever body is asked
+    first (measured: a box pushed by 3 N along x on a plane reads +3 N in either order), while
+    the normal is turned towards ``bodyA``; the object (id 1) is loaded before the hand (id 2),
+    so the friction on the hand is minus the reported one. ``normal_n`` is the pad force,
+    ``lever_mm`` the normal torque over it.
+    """
+    rows = []
+    for n in iterations:
+        for floors in (True, False):
+            config = Config().override(sim={"solver_iterations": n})
+            with _pinned_box(config, floors) as scene:
+                rows.append({"iterations": n, "floors": floors,
+                             "fingers": _joint2_balance(scene)})
+    return rows
+
+
+def _joint2_balance(scene: TrialScene) -> list[dict]:
+    c, hand, obj = scene.world.client, scene.hand, scene.object.uid
+    sign = -1.0 if obj < hand.uid else 1.0  # friction reported on the lower id (docstring)
+    points = c.getContactPoints(bodyA=hand.uid, bodyB=obj)
+    out = []
+    for finger, motor in zip(hand.fingers, hand.motor_torques()[:, 0], strict=True):
+        joint = finger.joints[0]
+        state = c.getLinkState(hand.uid, joint, computeForwardKinematics=1)
+        axis = (np.asarray(c.getMatrixFromQuaternion(state[5])).reshape(3, 3)
+                @ np.asarray(c.getJointInfo(hand.uid, joint)[13]))
+        normal_nm = friction_nm = normal_n = 0.0
+        for p in (p for p in points if p[3] in finger.links):
+            arm = np.asarray(p[5]) - np.asarray(state[4])
+            friction = sign * (p[10] * np.asarray(p[11]) + p[12] * np.asarray(p[13]))
+            normal_nm -= float(np.cross(arm, p[9] * np.asarray(p[7])) @ axis)
+            friction_nm += float(np.cross(arm, friction) @ axis)
+            normal_n += p[9]
+        out.append({"normal_n": round(normal_n, 2), "motor_nm": round(float(motor), 3),
+                    "normal_nm": round(normal_nm, 3), "friction_nm": round(friction_nm, 3),
+                    "floor_nm": round(normal_nm - friction_nm - float(motor), 3),
+                    "lever_mm": round(1e3 * normal_nm / normal_n, 1) if normal_n else None})
+    return out
 
 
 def cost(iterations: tuple[int, ...] = (50, 100, 200), repeats: int = 3) -> list[dict]:
@@ -193,7 +256,8 @@ def _overrides(items: list[str]) -> Config:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", choices=("convergence", "cost", "paired", "chaos"))
+    parser.add_argument("what", choices=("convergence", "decomposition", "cost", "paired",
+                                           "chaos"))
     parser.add_argument("--a", nargs="*", default=[], help="overrides of config A")
     parser.add_argument("--b", nargs="*", default=[], help="overrides of config B")
     parser.add_argument("--per-object", type=int, default=20)
@@ -205,6 +269,8 @@ def main() -> None:
     started = time.perf_counter()
     if args.what == "convergence":
         result: object = convergence()
+    elif args.what == "decomposition":
+        result = decomposition()
     elif args.what == "cost":
         result = cost()
     else:
