@@ -78,7 +78,12 @@ def describe_quick(config: Config) -> str:
 def run_study(
     config: Config, out: str | Path, quick: bool = False, log: Callable[[str], None] = print
 ) -> Path:
-    """Run every stage into ``out`` and return the path of ``report.md``."""
+    """Run every stage into ``out`` and return the path of ``report.md``.
+
+    Learner names of ``config.learning`` are checked first: an unknown one is a ``ValueError``
+    naming its key before the dataset stage spends minutes.
+    """
+    check_learner_names(config)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     if quick:
@@ -138,6 +143,22 @@ def run_study(
     from classifiers.report.study_report import write_report
 
     return write_report(out, config, table)
+
+
+def check_learner_names(config: Config) -> None:
+    """ValueError naming the ``learning`` key whose model name no registry knows."""
+    from classifiers.models import MODEL_NAMES, REGRESSOR_NAMES
+    from classifiers.ranking import RANKER_NAMES
+
+    learning = config.learning
+    for key, names, known in (("models", learning.models, MODEL_NAMES),
+                              ("ablation_model", (learning.ablation_model,), MODEL_NAMES),
+                              ("regressors", learning.regressors, REGRESSOR_NAMES),
+                              ("rankers", learning.rankers, RANKER_NAMES)):  # fmt: skip
+        unknown = [name for name in names if name not in known]
+        if unknown:
+            raise ValueError(f"learning.{key}: unknown model {unknown[0]!r}; choose from "
+                             f"{', '.join(known)}")
 
 
 def stage_record(

@@ -23,6 +23,19 @@ QUICK_MODELS = ["logreg", "knn", "rank_qc", "random"]
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("key, value", [("ablation_model", "forest"), ("models", ("svm", "nope")),
+                                        ("regressors", ("svr2",)), ("rankers", ("ndcg",))])
+def test_an_unknown_learner_is_refused_before_the_dataset(tmp_path, key, value):
+    from classifiers.study import run_study
+    from grip_env.config import Config
+
+    config = Config().override(learning={key: value})
+    bad = value if isinstance(value, str) else value[-1]
+    with pytest.raises(ValueError, match=rf"^learning\.{key}: unknown model '{bad}'"):
+        run_study(config, tmp_path / "run", log=lambda _: None)
+    assert not (tmp_path / "run").exists()
+
+
 def test_quick_study_reports_and_a_rerun_recomputes_only_what_changed(tmp_path):
     _register_commands()
     out = tmp_path / "study"
