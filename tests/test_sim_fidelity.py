@@ -98,6 +98,22 @@ def test_teleport_puts_the_palm_base_where_asked_and_the_palm_tracks_its_target(
     assert max(errors) <= 1.0
 
 
+def test_the_palm_stays_at_its_grip_height_while_the_fingers_close():
+    """The approach stops where the plan puts the palm; the pivot's lead does not carry it on
+    (it did, by 5 mm: the pads then closed below their planned plane)."""
+    with TrialScene(BOX, Config()) as scene:
+        hand = scene.hand
+        plan = grip_plans(pd.DataFrame([OPPOSED]))[0]
+        palm, yaw, grip_z = scene._place(plan, zero_noise())
+        scene._approach(palm, yaw, grip_z)
+        errors = []
+        for _ in range(90):
+            hand.drive_fingers(hand.touching(scene.object.uid))
+            scene.world.step()
+            errors.append(np.abs(hand.palm_pose_mm()[0] - [*palm, grip_z]).max())
+    assert max(errors) <= 0.2
+
+
 def test_executor_refuses_an_unreachable_plan_instead_of_clipping():
     far = {**OPPOSED, "p1_y": 400.0, "p2_y": 400.0}
     with TrialScene(BOX, Config()) as scene, pytest.raises(ValueError, match="reach"):

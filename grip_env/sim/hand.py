@@ -154,6 +154,14 @@ class Hand:
         com, orn = self._com_target(position + lead, yaw)
         self.world.drive_hold(self.constraint, com, orn, self.max_palm_force_n)
 
+    def stop_palm(self) -> None:
+        """The palm's target has stopped: the pivot stops leading it.
+
+        Without this the palm runs on to the last lead (4 steps of the last motion: 5 mm below
+        the grip height after the approach, measured), and the fingers close off their plane.
+        """
+        self.move(np.asarray(self._target[0]), self._target[1])
+
     def palm_pose_mm(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Palm base position (mm) and quaternion."""
         com, orn = self.world.pose_mm(self.uid)

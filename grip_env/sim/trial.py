@@ -140,9 +140,7 @@ class TrialScene:
         palm, yaw, grip_z = self._place(plan, noise)
         counter = _StepCounter(self.world, self.hand)
         notify = on_phase or (lambda name, scene: None)
-        for z in np.linspace(grip_z + APPROACH_MM, grip_z, APPROACH_STEPS + 1)[1:]:
-            self.hand.move(np.array([*palm, z]), yaw)
-            counter.step()
+        self._approach(palm, yaw, grip_z, counter)
         notify("approach", self)
         close_steps = self._close(counter)
         counter.step(SETTLE_STEPS)
@@ -191,6 +189,15 @@ class TrialScene:
         self.hand.preshape(plan.spread, q2_open, q3_open)
         self.hand.set_finger_torques(posture.q2, posture.q3)
         return palm, yaw, grip_z
+
+    def _approach(self, palm: NDArray, yaw: float, grip_z: float,
+                  counter: _StepCounter | None = None) -> None:
+        """Lower the pre-shaped hand onto its grip height and stop it there."""
+        step = counter.step if counter is not None else self.world.step
+        for z in np.linspace(grip_z + APPROACH_MM, grip_z, APPROACH_STEPS + 1)[1:]:
+            self.hand.move(np.array([*palm, z]), yaw)
+            step()
+        self.hand.stop_palm()
 
     def _close(self, counter: _StepCounter) -> int:
         """Close all fingers until every one has stopped (or the step cap); returns steps used."""

@@ -40,7 +40,6 @@ from grip_env.objects import load_object_set, make_shape
 from grip_env.pipeline import candidates
 from grip_env.sim import TrialScene, grip_plans
 from grip_env.sim.execution import grip_keys
-from grip_env.sim.trial import APPROACH_MM, APPROACH_STEPS
 from grip_env.sim.uncertainty import sample_noise, trial_rng
 
 
@@ -75,9 +74,7 @@ def _pinned_box(config: Config, floors: bool = True) -> Iterator[TrialScene]:
         palm, yaw, z = scene._place(plan, noise)
         c.createConstraint(scene.object.uid, -1, -1, -1, c.JOINT_FIXED, [0, 0, 0],
                            [0, 0, 0], [0, 0, 0.015])
-        for height in np.linspace(z + APPROACH_MM, z, APPROACH_STEPS + 1)[1:]:
-            scene.hand.move(np.array([*palm, height]), yaw)
-            scene.world.step()
+        scene._approach(palm, yaw, z)
         for _ in range(120):
             scene.hand.drive_fingers(scene.hand.touching(scene.object.uid))
             scene.world.step()
@@ -179,7 +176,7 @@ def sample_grips(per_object: int, config: Config) -> list[tuple[object, pd.DataF
 
 
 #: Fixes that can be undone one at a time, to measure what each changes (config B runs them).
-VARIANTS = ("none", "first-piece-friction", "no-palm-lead")
+VARIANTS = ("none", "first-piece-friction", "no-palm-lead", "no-palm-stop")
 
 
 def _apply(variant: str) -> None:
@@ -198,6 +195,10 @@ def _apply(variant: str) -> None:
         from grip_env.sim import hand
 
         hand.PALM_LEAD_STEPS = 0
+    elif variant == "no-palm-stop":
+        from grip_env.sim import hand
+
+        hand.Hand.stop_palm = lambda self: None  # the palm runs on by its last lead
 
 
 def _run(args: tuple) -> list[tuple]:
