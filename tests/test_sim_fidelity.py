@@ -214,18 +214,30 @@ def test_each_motor_delivers_its_command_on_a_pinned_box(pinned_box):
     np.testing.assert_allclose(pinned_box["torque_ratio"], 1.0, atol=0.05)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 19, open: the worm gear's floor is a hard stop in "
-                   "the closed loop palm-fingers-pinned box and keeps the squeeze that the loop's "
-                   "position corrections pump into it, more with more solver iterations (thumb's "
-                   "floor 0.27, 0.60, 0.96 N m at 100, 200, 300; none without floors: "
-                   "sim_fidelity decomposition): the thumb presses 19.2 N (+28 %) with its motor "
-                   "at exactly its command (16.2, 17.4 N fingers)")
-def test_each_finger_presses_its_commanded_force_on_a_pinned_box(pinned_box):
-    """Every pad presses about ``finger_force_n`` (15 %)."""
-    np.testing.assert_allclose(pinned_box["normal_force_n"], Config().sim.finger_force_n,
-                               rtol=0.15)
+_SERVO_PUMP = ("issue 19, open: joint 3's gear train is a position servo whose target, a third of "
+               "joint 2's peak, runs ahead of a distal link the object has stopped; its position "
+               "correction pushes the link into the object against the locked joint 2, and the "
+               "joint floors' own position correction (Bullet's erp) keeps what it pumps in")
 
 
+@pytest.mark.xfail(strict=True, reason=_SERVO_PUMP + ": a lone finger on the pinned box presses "
+                   "20.8, 17.5, 19.4 N for 15 N at 100 iterations, 30.2, 21.1, 25.4 N at 200 "
+                   "(sim_fidelity convergence)")
+@pytest.mark.parametrize("finger", [0, 1, 2])
+def test_each_finger_presses_its_commanded_force_on_a_pinned_box(finger):
+    """Every pad, closing alone on the pinned box, presses about ``finger_force_n`` (15 %)."""
+    from tests.benchmarks.sim_fidelity import _finger_normal_forces, _pinned_box
+
+    config = Config()
+    with _pinned_box(config, alone=finger) as scene:
+        force = _finger_normal_forces(scene)[finger]
+    assert force == pytest.approx(config.sim.finger_force_n, rel=0.15)
+
+
+@pytest.mark.xfail(strict=True, reason=_SERVO_PUMP + ": since the palm stays at its planned "
+                   "height, 5 of 47 best-grip closes (parallelogram, T shape) roll on, the "
+                   "proximal joint slipping back through its floor while the servo drives the "
+                   "distal one (42 / 47 settle, 89.4 %)")
 @pytest.mark.slow
 def test_the_close_settles_before_the_cap_on_the_best_grips():
     """No chatter: the worm gear's floor holds every joint where it closed, so the closes of the

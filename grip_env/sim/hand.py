@@ -12,9 +12,11 @@ same angle (mirrored axes in the URDF). Each finger is one finite-torque motor b
   the contacts, while the motor keeps pushing forward with its own torque: a stalled finger
   keeps its squeeze and cannot be pushed back (measured: 0.02 mrad under 40 N, about 3x the
   motor), with no switching between modes. The floor sits exactly at the peak, with no
-  backlash: PyBullet's joint limit is a velocity-level stop, active only for a joint at or past
-  it when a step starts and without position correction, so a floor even 0.2 mrad below the
-  joint let a 40 N push carry the thumb 47 mrad back in one step (and hold it there).
+  backlash: PyBullet's joint limit is active only for a joint at or past it when a step starts,
+  so a floor even 0.2 mrad below the joint let a 40 N push carry the thumb 47 mrad back in one
+  step. The stop also corrects position (Bullet's ``erp``): a joint the solver let slip below
+  its floor is driven back up by a fifth of the gap per step (measured), which keeps squeeze
+  pumped into a finger the object has stopped (issue 19, open; BENCHMARKS.md).
 * once the proximal link is stopped by the object, joint 3 is released from the coupling and
   closes on its own with torque limit ``tau3`` (breakaway), locked behind by its own worm gear.
 

@@ -337,7 +337,9 @@ class World:
 
         A joint limit is a unilateral constraint solved together with the contacts and motors
         (measured: a thumb at its floor, pushed back by 40 N, about 3x its motor, gives 0.02
-        mrad; a stop weaker than the load yields). ``saveState`` does not keep limits.
+        mrad; a stop weaker than the load yields). A joint below its limit is driven back up to
+        it by Bullet's ``erp`` (a fifth of the gap per step). ``saveState`` does not keep
+        limits.
         """
         change = self._change_dynamics
         for joint, low, high, hold in zip(joints, lowers, uppers, holds, strict=True):

@@ -44,22 +44,45 @@ from grip_env.sim.uncertainty import sample_noise, trial_rng
 
 
 def convergence(iterations: tuple[int, ...] = (50, 100, 150, 200, 300)) -> list[dict]:
-    """Motor torque / command and fingertip normal force per finger on a pinned box."""
+    """Motor torque / command and fingertip normal force per finger on a pinned box: all three
+    closing together, and each closing alone (``alone_normal_force_n``, the others idle)."""
     rows = []
     for n in iterations:
-        with _pinned_box(Config().override(sim={"solver_iterations": n})) as scene:
+        config = Config().override(sim={"solver_iterations": n})
+        with _pinned_box(config) as scene:
             torques = scene.hand.motor_torques()[:, 0]
             commands = np.array([f.tau2 for f in scene.hand.fingers])
             normals = _finger_normal_forces(scene)
         rows.append({"iterations": n, "torque_ratio": (torques / commands).round(3).tolist(),
-                     "normal_force_n": normals.round(2).tolist()})
+                     "normal_force_n": normals.round(2).tolist(),
+                     "alone_normal_force_n": pinned_alone(config).round(2).tolist()})
     return rows
 
 
+def pinned_alone(config: Config) -> np.ndarray:
+    """Each finger's normal force on the pinned box when it closes alone (3,), N."""
+    forces = np.zeros(3)
+    for i in range(3):
+        with _pinned_box(config, alone=i) as scene:
+            forces[i] = _finger_normal_forces(scene)[i]
+    return forces
+
+
+#: The torque of an idle finger's motors (N·m): it stays open, touching with under 0.1 N.
+IDLE_TORQUE = 1e-3
+
+
 @contextlib.contextmanager
-def _pinned_box(config: Config, floors: bool = True) -> Iterator[TrialScene]:
+def _pinned_box(config: Config, floors: bool = True,
+                alone: int | None = None) -> Iterator[TrialScene]:
     """The symmetric grip closed for 120 steps on the 90 x 55 mm box pinned to the world;
-    ``floors=False`` leaves the worm gear's floors at the URDF's limits (motors only)."""
+    ``floors=False`` leaves the worm gear's floors at the URDF's limits (motors only); with
+    ``alone`` only that finger closes.
+
+    Why each finger alone: with all three on an immovable box the two fingers' 30 N against the
+    thumb's 15 N leave 15 N that the hand's hold and the locked thumb share, in a proportion
+    only their compliances set (rigid bodies leave it undetermined), so the thumb presses more
+    than its motor whatever the finger model."""
     box = make_shape("rectangle")
     grip = pd.DataFrame([{"hand_x": 0.0, "hand_y": 0.0, "hand_yaw": np.pi / 2, "spread": 0.0,
                           "p1_x": 25.0, "p1_y": 27.5, "p2_x": -25.0, "p2_y": 27.5,
@@ -72,6 +95,12 @@ def _pinned_box(config: Config, floors: bool = True) -> Iterator[TrialScene]:
         noise = sample_noise(trial_rng(0, 0, 0), config)
         noise = replace(noise, offset_mm=(0.0, 0.0), yaw_error=0.0)
         palm, yaw, z = scene._place(plan, noise)
+        if alone is not None:
+            for i, finger in enumerate(scene.hand.fingers):
+                if i != alone:
+                    finger.tau2 = finger.tau3 = IDLE_TORQUE
+            scene.hand._command_motors()
+            scene.hand._raise_floors(range(6))
         c.createConstraint(scene.object.uid, -1, -1, -1, c.JOINT_FIXED, [0, 0, 0],
                            [0, 0, 0], [0, 0, 0.015])
         scene._approach(palm, yaw, z)
