@@ -2,6 +2,7 @@
 
     python -m tests.benchmarks.sim_fidelity convergence
     python -m tests.benchmarks.sim_fidelity decomposition
+    python -m tests.benchmarks.sim_fidelity slip
     python -m tests.benchmarks.sim_fidelity cost
     python -m tests.benchmarks.sim_fidelity paired --b sim.solver_iterations=300 --trials 1200
     python -m tests.benchmarks.sim_fidelity chaos
@@ -13,6 +14,8 @@
 * ``decomposition``: the same close; each finger's torque balance about joint 2 (normal
   forces, friction, motor, and the floor's share), at 100, 200 and 300 iterations, with the
   worm gear's floors and without them.
+* ``slip``: how far the loaded worm-gear stops let joints slip below their floors in the best
+  grips' trials, and the share of closes that settle, at 100, 150, 200 and 300 iterations.
 * ``cost``: time per physics step and per trial of the same grips at 50, 100 and 200 iterations.
 * ``paired``: the same (grip, trial) pairs under config A (the default) and config B (dotted
   overrides); the paired difference in success and in robustness with 95 % intervals, and the
@@ -40,7 +43,7 @@ from grip_env.objects import load_object_set, make_shape
 from grip_env.pipeline import candidates
 from grip_env.sim import TrialScene, grip_plans
 from grip_env.sim.execution import grip_keys
-from grip_env.sim.uncertainty import sample_noise, trial_rng
+from grip_env.sim.uncertainty import sample_noise, trial_rng, zero_noise
 
 
 def convergence(iterations: tuple[int, ...] = (50, 100, 150, 200, 300)) -> list[dict]:
@@ -156,6 +159,40 @@ def _joint2_balance(scene: TrialScene) -> list[dict]:
                     "floor_nm": round(normal_nm - friction_nm - float(motor), 3),
                     "lever_mm": round(1e3 * normal_nm / normal_n, 1) if normal_n else None})
     return out
+
+
+def floor_slip(iterations: tuple[int, ...] = (100, 150, 200, 300)) -> list[dict]:
+    """How far the loaded worm-gear stops let their joints slip below their floors in trials:
+    the best 3 grips of every default object at zero noise, the largest slip of any flexion
+    joint after the close and after the lift (mrad), and the share of closes that settle."""
+    rows = []
+    for n in iterations:
+        config = Config().override(sim={"solver_iterations": n})
+        slips: dict[str, list[float]] = {"closed": [], "held": []}
+        settled = []
+        for obj in load_object_set("default"):
+            table = candidates(obj, config=config)
+            if not len(table):
+                continue
+            with TrialScene(obj, config) as scene:
+                for plan in grip_plans(table.head(3)):
+                    def on_phase(name: str, sc: TrialScene) -> None:
+                        if name in slips:
+                            q, _ = sc.hand.joint_states()
+                            below = np.reshape(sc.hand.state().peak, (3, 2)) - q
+                            slips[name].append(1e3 * float(below.max()))
+                    result = scene.run(plan, zero_noise(config), on_phase)
+                    settled.append(result.close_steps < config.sim.max_close_steps)
+        row: dict = {"iterations": n, "closes": len(settled),
+                     "settled": round(float(np.mean(settled)), 3)}
+        for phase, values in slips.items():
+            v = np.asarray(values)
+            row[phase] = {"median_mrad": round(float(np.median(v)), 2),
+                          "p90_mrad": round(float(np.percentile(v, 90)), 2),
+                          "max_mrad": round(float(v.max()), 2),
+                          "over_1_mrad": round(float((v > 1).mean()), 3)}
+        rows.append(row)
+    return rows
 
 
 def cost(iterations: tuple[int, ...] = (50, 100, 200), repeats: int = 3) -> list[dict]:
@@ -286,8 +323,8 @@ def _overrides(items: list[str]) -> Config:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("what", choices=("convergence", "decomposition", "cost", "paired",
-                                           "chaos"))
+    parser.add_argument("what", choices=("convergence", "decomposition", "slip", "cost",
+                                           "paired", "chaos"))
     parser.add_argument("--a", nargs="*", default=[], help="overrides of config A")
     parser.add_argument("--b", nargs="*", default=[], help="overrides of config B")
     parser.add_argument("--per-object", type=int, default=20)
@@ -301,6 +338,8 @@ def main() -> None:
         result: object = convergence()
     elif args.what == "decomposition":
         result = decomposition()
+    elif args.what == "slip":
+        result = floor_slip()
     elif args.what == "cost":
         result = cost()
     else:
