@@ -31,7 +31,7 @@ import argparse
 import contextlib
 import json
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
 
@@ -176,12 +176,7 @@ def floor_slip(iterations: tuple[int, ...] = (100, 150, 200, 300)) -> list[dict]
                 continue
             with TrialScene(obj, config) as scene:
                 for plan in grip_plans(table.head(3)):
-                    def on_phase(name: str, sc: TrialScene) -> None:
-                        if name in slips:
-                            q, _ = sc.hand.joint_states()
-                            below = np.reshape(sc.hand.state().peak, (3, 2)) - q
-                            slips[name].append(1e3 * float(below.max()))
-                    result = scene.run(plan, zero_noise(config), on_phase)
+                    result = scene.run(plan, zero_noise(config), _slip_recorder(slips))
                     settled.append(result.close_steps < config.sim.max_close_steps)
         row: dict = {"iterations": n, "closes": len(settled),
                      "settled": round(float(np.mean(settled)), 3)}
@@ -193,6 +188,17 @@ def floor_slip(iterations: tuple[int, ...] = (100, 150, 200, 300)) -> list[dict]
                           "over_1_mrad": round(float((v > 1).mean()), 3)}
         rows.append(row)
     return rows
+
+
+def _slip_recorder(slips: dict[str, list[float]]) -> Callable[[str, TrialScene], None]:
+    """An ``on_phase`` callback appending, at each phase named in ``slips``, the largest slip
+    of any flexion joint below its floor (mrad)."""
+    def on_phase(name: str, scene: TrialScene) -> None:
+        if name in slips:
+            q, _ = scene.hand.joint_states()
+            below = np.reshape(scene.hand.state().peak, (3, 2)) - q
+            slips[name].append(1e3 * float(below.max()))
+    return on_phase
 
 
 def cost(iterations: tuple[int, ...] = (50, 100, 200), repeats: int = 3) -> list[dict]:
