@@ -243,16 +243,8 @@ def test_each_finger_presses_its_commanded_force_on_a_pinned_box(finger):
 def test_the_close_settles_before_the_cap_on_the_best_grips():
     """No chatter: the worm gear's floor holds every joint where it closed, so the closes of the
     best grips settle (>= 95 % of zero-noise trials of every default object's best three)."""
-    from grip_env.objects import load_object_set
+    from tests.benchmarks.sim_fidelity import best_grip_trials
 
     config = Config()
-    settled = []
-    for obj in load_object_set("default"):
-        table = candidates(obj, config=config)
-        if not len(table):
-            continue
-        with TrialScene(obj, config) as scene:
-            for plan in grip_plans(table.head(3)):
-                result = scene.run(plan, zero_noise(config))
-                settled.append(result.close_steps < config.sim.max_close_steps)
+    settled = [r.close_steps < config.sim.max_close_steps for r in best_grip_trials(config)]
     assert len(settled) >= 40 and np.mean(settled) >= 0.95

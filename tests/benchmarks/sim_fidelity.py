@@ -41,7 +41,7 @@ import pandas as pd
 from grip_env.config import Config
 from grip_env.objects import load_object_set, make_shape
 from grip_env.pipeline import candidates
-from grip_env.sim import TrialScene, grip_plans
+from grip_env.sim import TrialResult, TrialScene, grip_plans
 from grip_env.sim.execution import grip_keys
 from grip_env.sim.uncertainty import sample_noise, trial_rng, zero_noise
 
@@ -169,15 +169,8 @@ def floor_slip(iterations: tuple[int, ...] = (100, 150, 200, 300)) -> list[dict]
     for n in iterations:
         config = Config().override(sim={"solver_iterations": n})
         slips: dict[str, list[float]] = {"closed": [], "held": []}
-        settled = []
-        for obj in load_object_set("default"):
-            table = candidates(obj, config=config)
-            if not len(table):
-                continue
-            with TrialScene(obj, config) as scene:
-                for plan in grip_plans(table.head(3)):
-                    result = scene.run(plan, zero_noise(config), _slip_recorder(slips))
-                    settled.append(result.close_steps < config.sim.max_close_steps)
+        settled = [r.close_steps < config.sim.max_close_steps
+                   for r in best_grip_trials(config, _slip_recorder(slips))]
         row: dict = {"iterations": n, "closes": len(settled),
                      "settled": round(float(np.mean(settled)), 3)}
         for phase, values in slips.items():
@@ -188,6 +181,21 @@ def floor_slip(iterations: tuple[int, ...] = (100, 150, 200, 300)) -> list[dict]
                           "over_1_mrad": round(float((v > 1).mean()), 3)}
         rows.append(row)
     return rows
+
+
+def best_grip_trials(config: Config,
+                     on_phase: Callable[[str, TrialScene], None] | None = None,
+                     per_object: int = 3) -> list[TrialResult]:
+    """One zero-noise trial of each default object's best ``per_object`` grips by Q_C."""
+    results = []
+    for obj in load_object_set("default"):
+        table = candidates(obj, config=config)
+        if not len(table):
+            continue
+        with TrialScene(obj, config) as scene:
+            for plan in grip_plans(table.head(per_object)):
+                results.append(scene.run(plan, zero_noise(config), on_phase))
+    return results
 
 
 def _slip_recorder(slips: dict[str, list[float]]) -> Callable[[str, TrialScene], None]:
