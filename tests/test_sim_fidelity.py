@@ -234,11 +234,6 @@ def test_each_finger_presses_its_commanded_force_on_a_pinned_box(finger):
     assert force == pytest.approx(config.sim.finger_force_n, rel=0.15)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 19, open: since the palm stays at its planned "
-                   "height, 5 of 47 best-grip closes (parallelogram, T shape) have not settled "
-                   "at the cap (42 / 47, 89.4 %): the object still turns at 2-9 deg/s and the "
-                   "thumb, loaded by both fingers, sits 5-10 mrad (joint 2) and 10-14 mrad "
-                   "(joint 3) below its floors, which the solver lets leak under that load")
 @pytest.mark.xfail(strict=True, reason="issue 19, open: under the load of a grip in contact the "
                    "solver lets the worm gear's stops leak (largest slip below a floor after "
                    "the lift: median 4.3, max 26.5 mrad at 100 iterations; 1.3 and 2.4 at 300: "
@@ -254,6 +249,11 @@ def test_loaded_fingers_hold_where_they_closed_in_the_best_grips():
     assert len(slips["held"]) >= 40 and max(slips["held"]) <= 1.0
 
 
+@pytest.mark.xfail(strict=True, reason="issue 19, open: since the palm stays at its planned "
+                   "height, 5 of 47 best-grip closes (parallelogram, T shape) have not settled "
+                   "at the cap (42 / 47, 89.4 %): the object still turns at 2-9 deg/s and the "
+                   "thumb, loaded by both fingers, sits 5-10 mrad (joint 2) and 10-14 mrad "
+                   "(joint 3) below its floors, which the solver lets leak under that load")
 @pytest.mark.slow
 def test_the_close_settles_before_the_cap_on_the_best_grips():
     """No chatter: the worm gear's floor holds every joint where it closed, so the closes of the
