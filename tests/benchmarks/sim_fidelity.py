@@ -10,7 +10,7 @@
 
 * ``convergence``: a symmetric grip closes on a pinned 90 x 55 mm box; for each solver
   iteration count, each finger's joint-2 motor torque against its command and its fingertip
-  normal force against ``sim.finger_force_n``.
+  normal force against ``sim.finger_force_n``, all three closing together and each alone.
 * ``decomposition``: the same close; each finger's torque balance about joint 2 (normal
   forces, friction, motor, and the floor's share), at 100, 200 and 300 iterations, with the
   worm gear's floors and without them.
