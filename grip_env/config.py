@@ -138,7 +138,7 @@ class SimConfig(_Section):
 
     timestep: float = Field(1.0 / 240.0, ge=1e-4, le=0.02, description="physics step (s)")
     solver_iterations: int = Field(
-        100, ge=1, le=1000, description="constraint solver iterations (chosen by convergence)"
+        150, ge=1, le=1000, description="constraint solver iterations (chosen by convergence)"
     )
     finger_force_n: float = Field(15.0, gt=0.0, le=200.0, description="fingertip force")
     finger_friction: float = Field(1.0, gt=0.0, le=3.0, description="finger pad lateral friction")

@@ -82,6 +82,30 @@ def test_worm_gear_holds_a_finger_pushed_back_harder_than_its_motor():
     assert np.min(back) >= -1e-3
 
 
+def test_joint3_follows_a_third_of_joint2_until_the_object_stops_the_finger():
+    """The Barrett clutch: closing in free air joint 3 turns a third of joint 2 and no finger
+    breaks away; on the pinned box every finger, stopped at its distal pad, breaks away."""
+    from tests.benchmarks.sim_fidelity import _pinned_box
+
+    with TrialScene(BOX, Config()) as scene:
+        hand = scene.hand
+        hand.teleport(np.array([0.0, 0.0, 300.0]), 0.0)
+        hand.preshape(0.0, np.array([0.3, 0.3, 0.3]))
+        hand.set_finger_torques(np.array([1.0, 1.0, 1.0]))
+        start, _ = hand.joint_states()
+        for _ in range(40):
+            hand.drive_fingers(np.zeros((3, 2), bool))
+            scene.world.step()
+        q, _ = hand.joint_states()
+        assert not any(f.broken_away for f in hand.fingers)
+    closed = q - start
+    assert (closed[:, 0] > 0.2).all()  # 40 steps at 1.5 rad/s
+    np.testing.assert_allclose(closed[:, 1], closed[:, 0] / 3, atol=0.006)  # servo lag 4 mrad
+    with _pinned_box(Config()) as scene:
+        assert all(f.broken_away for f in scene.hand.fingers)
+        assert not scene.hand.touching(scene.object.uid)[:, 0].any()  # by the distal pads
+
+
 def test_teleport_puts_the_palm_base_where_asked_and_the_palm_tracks_its_target():
     with TrialScene(BOX, Config()) as scene:
         hand = scene.hand
@@ -211,30 +235,25 @@ def test_each_motor_delivers_its_command_on_a_pinned_box():
     np.testing.assert_allclose(torques / commands, 1.0, atol=0.05)
 
 
-_SERVO_PUMP = ("issue 19, open: joint 3's gear train is a position servo whose target, a third of "
-               "joint 2's peak, runs ahead of a distal link the object has stopped; its position "
-               "correction pushes the link into the object against the locked joint 2, and the "
-               "joint floors' own position correction (Bullet's erp) keeps what it pumps in")
-
-
-@pytest.mark.xfail(strict=True, reason=_SERVO_PUMP + ": a lone finger on the pinned box presses "
-                   "20.8, 17.5, 19.4 N for 15 N at 100 iterations, 30.2, 21.1, 25.4 N at 200 "
-                   "(sim_fidelity convergence)")
+@pytest.mark.parametrize("iterations", [1, 2], ids=["N", "2N"])
 @pytest.mark.parametrize("finger", [0, 1, 2])
-def test_each_finger_presses_its_commanded_force_on_a_pinned_box(finger):
-    """Every pad, closing alone on the pinned box, presses about ``finger_force_n`` (15 %)."""
+def test_each_finger_presses_its_commanded_force_on_a_pinned_box(finger, iterations):
+    """Every pad, closing alone on the pinned box, presses about ``finger_force_n`` (15 %),
+    at the default solver iterations N and at 2N (the force has converged in them)."""
     from tests.benchmarks.sim_fidelity import _finger_normal_forces, _pinned_box
 
     config = Config()
+    config = config.override(sim={"solver_iterations": iterations * config.sim.solver_iterations})
     with _pinned_box(config, alone=finger) as scene:
         force = _finger_normal_forces(scene)[finger]
     assert force == pytest.approx(config.sim.finger_force_n, rel=0.15)
 
 
 @pytest.mark.xfail(strict=True, reason="issue 19, open: under the load of a grip in contact the "
-                   "solver lets the worm gear's stops leak (largest slip below a floor after "
-                   "the lift: median 4.3, max 26.5 mrad at 100 iterations; 1.3 and 2.4 at 300: "
-                   "sim_fidelity slip), where a 40 N push in free space leaks 0.02 mrad")
+                   "solver lets the worm gear's stops leak, mostly while the lift hands the "
+                   "object's weight to the pads (largest slip below a floor after the lift: "
+                   "median 1.4, max 6.1 mrad at 150 iterations; sim_fidelity slip), where a 40 N "
+                   "push in free space leaks 0.02 mrad")
 @pytest.mark.slow
 def test_loaded_fingers_hold_where_they_closed_in_the_best_grips():
     """The worm gear in contact: after the lift no flexion joint of the best grips' zero-noise
@@ -246,11 +265,6 @@ def test_loaded_fingers_hold_where_they_closed_in_the_best_grips():
     assert len(slips["held"]) >= 40 and max(slips["held"]) <= 1.0
 
 
-@pytest.mark.xfail(strict=True, reason="issue 19, open: since the palm stays at its planned "
-                   "height, 5 of 47 best-grip closes (parallelogram, T shape) have not settled "
-                   "at the cap (42 / 47, 89.4 %): the object still turns at 2-9 deg/s and the "
-                   "thumb, loaded by both fingers, sits 5-10 mrad (joint 2) and 10-14 mrad "
-                   "(joint 3) below its floors, which the solver lets leak under that load")
 @pytest.mark.slow
 def test_the_close_settles_before_the_cap_on_the_best_grips():
     """No chatter: the worm gear's floor holds every joint where it closed, so the closes of the

@@ -17,8 +17,11 @@ same angle (mirrored axes in the URDF). Each finger is one finite-torque motor b
   step. The stop also corrects position (Bullet's ``erp``): a joint the solver let slip below
   its floor is driven back up by a fifth of the gap per step (measured), which keeps squeeze
   pumped into a finger the object has stopped (issue 19, open; BENCHMARKS.md).
-* once the proximal link is stopped by the object, joint 3 is released from the coupling and
-  closes on its own with torque limit ``tau3`` (breakaway), locked behind by its own worm gear.
+* once joint 2 is stopped while the finger touches the object, by either link, joint 3 is
+  released from the coupling and closes on its own with torque limit ``tau3`` (breakaway),
+  locked behind by its own worm gear. A fingertip grip thus stalls on its two motors, whose
+  torques give exactly ``finger_force_n`` at the pad, not on a gear-train servo whose target
+  the object blocks.
 
 The torques of each finger are chosen from its planned contact posture so that the fingertip
 presses horizontally with ``SimConfig.finger_force_n`` (tau_k = F times the height of the
@@ -58,6 +61,7 @@ GEAR_GAIN = 0.5  # position gain of the gear train (stiff, still stable at 240 H
 PALM_LEAD_STEPS = 4
 GEAR_UPDATE_RAD = 1e-3  # joint 3's geared target follows joint 2 in steps this small
 HOLD_FACTOR = 5.0  # worm-gear holding torque relative to the motor torque
+BREAKAWAY_SPEED = 0.1  # joint 2 slower than this share of the closing speed has stopped
 
 # URDF joint indices, listed in planar finger order (planar 1 = URDF finger 2, see module doc).
 SPREAD_JOINTS = (3, 0)
@@ -238,17 +242,32 @@ class Hand:
         gear: it can be driven forward by its motor, never back by a load). Motors are
         re-commanded only when something changed.
         ``touching`` ((3, 2) proximal/distal contacts) triggers the breakaway of a finger whose
-        proximal link is stopped by contact; joint 3 then closes on its own motor.
+        joint 2 is stopped while it touches the object, by either link (``_break_away``).
         """
         q, dq = self.world.joint_positions_velocities(self.uid, self._flex)
         advanced = self._follow(q)
-        if touching is not None:
-            for i, finger in enumerate(self.fingers):
-                if touching[i, 0] and dq[2 * i] < 0.1 * self.close_speed_rad_s:
-                    finger.broken_away = True
-        if advanced or touching is not None:
+        broke = touching is not None and self._break_away(touching, dq)
+        if advanced or broke:
             self._command_motors()
         return np.array(dq).reshape(3, 2)
+
+    def _break_away(self, touching: NDArray[np.bool_], dq: list[float]) -> bool:
+        """Release joint 3 from the gear train of each finger whose joint 2 has stopped while
+        the finger touches the object; whether any finger broke away now.
+
+        The Barrett clutch disengages when the proximal link cannot move on, whether the object
+        stops it directly or through the distal link: the distal link then closes on its own
+        torque ``tau3`` (and its worm gear). A finger stopped by its distal pad therefore presses
+        with its two motors' torques, which ``set_finger_torques`` chose to give exactly
+        ``finger_force_n`` there, not with a gear-train servo chasing a target the object blocks
+        (on a pinned box that servo had added up to 5 N, growing with the solver's iterations).
+        """
+        broke = False
+        for i, finger in enumerate(self.fingers):
+            stopped = dq[2 * i] < BREAKAWAY_SPEED * self.close_speed_rad_s
+            if not finger.broken_away and stopped and (touching[i, 0] or touching[i, 1]):
+                finger.broken_away = broke = True
+        return broke
 
     def hold_fingers(self) -> None:
         """``drive_fingers()`` without contacts, returning nothing: the per-step update while
