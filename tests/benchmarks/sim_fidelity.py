@@ -7,6 +7,7 @@
     python -m tests.benchmarks.sim_fidelity paired --b sim.solver_iterations=300 --trials 1200
     python -m tests.benchmarks.sim_fidelity chaos
     python -m tests.benchmarks.sim_fidelity paired --variant first-piece-friction
+    python -m tests.benchmarks.sim_fidelity paired --variant proximal-clutch
 
 * ``convergence``: a symmetric grip closes on a pinned 90 x 55 mm box; for each solver
   iteration count, each finger's joint-2 motor torque against its command and its fingertip
@@ -256,7 +257,8 @@ def sample_grips(per_object: int, config: Config) -> list[tuple[object, pd.DataF
 
 
 #: Fixes that can be undone one at a time, to measure what each changes (config B runs them).
-VARIANTS = ("none", "first-piece-friction", "no-palm-lead", "no-palm-stop")
+VARIANTS = ("none", "first-piece-friction", "no-palm-lead", "no-palm-stop",
+            "proximal-clutch")
 
 
 def _apply(variant: str) -> None:
@@ -279,6 +281,21 @@ def _apply(variant: str) -> None:
         from grip_env.sim import hand
 
         hand.Hand.stop_palm = lambda self: None  # the palm runs on by its last lead
+    elif variant == "proximal-clutch":
+        from grip_env.sim import hand
+
+        def drive_fingers(self, touching=None):  # 6e85518's: only the proximal link breaks away
+            q, dq = self.world.joint_positions_velocities(self.uid, self._flex)
+            advanced = self._follow(q)
+            if touching is not None:
+                for i, finger in enumerate(self.fingers):
+                    if touching[i, 0] and dq[2 * i] < 0.1 * self.close_speed_rad_s:
+                        finger.broken_away = True
+            if advanced or touching is not None:
+                self._command_motors()
+            return np.array(dq).reshape(3, 2)
+
+        hand.Hand.drive_fingers = drive_fingers
 
 
 def _run(args: tuple) -> list[tuple]:
