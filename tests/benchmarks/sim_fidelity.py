@@ -4,6 +4,7 @@
     python -m tests.benchmarks.sim_fidelity decomposition
     python -m tests.benchmarks.sim_fidelity slip
     python -m tests.benchmarks.sim_fidelity cost
+    python -m tests.benchmarks.sim_fidelity curve --trials 3
     python -m tests.benchmarks.sim_fidelity paired --b sim.solver_iterations=300 --trials 1200
     python -m tests.benchmarks.sim_fidelity chaos
     python -m tests.benchmarks.sim_fidelity paired --variant first-piece-friction
@@ -17,6 +18,8 @@
   worm gear's floors and without them.
 * ``slip``: how far the loaded worm-gear stops let joints slip below their floors in the best
   grips' trials, and the share of closes that settle, at 100, 150, 200 and 300 iterations.
+* ``curve``: success and robustness of the same (grip, trial) draws at 100, 200 and 400 solver
+  iterations, each count paired with the first.
 * ``cost``: time per physics step and per trial of the same grips at 50, 100 and 200 iterations.
 * ``paired``: the same (grip, trial) pairs under config A (the default) and config B (dotted
   overrides); the paired difference in success and in robustness with 95 % intervals, and the
@@ -325,6 +328,24 @@ def outcomes(config: Config, per_object: int, trials: int, shift_mm: float = 0.0
                                        "held", "steps"])
 
 
+def label_curve(iterations: tuple[int, ...] = (100, 200, 400), per_object: int = 20,
+                trials: int = 3, workers: int = 2) -> list[dict]:
+    """Success and robustness of the same draws at each solver iteration count; every count
+    after the first is also paired with the first (``paired_difference``)."""
+    rows, first = [], None
+    for n in iterations:
+        out = outcomes(Config().override(sim={"solver_iterations": n}), per_object, trials,
+                       workers=workers)
+        row: dict = {"iterations": n, "success": round(float(out.success.mean()), 4),
+                     "robustness_g": round(float(out.robustness.mean()), 2)}
+        if first is None:
+            first = out
+        else:
+            row["against_first"] = paired_difference(first, out)
+        rows.append(row)
+    return rows
+
+
 def paired_difference(a: pd.DataFrame, b: pd.DataFrame) -> dict:
     """B minus A over the same trials: success (pp) and robustness (g) with 95 % intervals."""
     m = a.merge(b, on=["object", "grip", "trial"], suffixes=("_a", "_b"))
@@ -355,7 +376,7 @@ def _overrides(items: list[str]) -> Config:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("what", choices=("convergence", "decomposition", "slip", "cost",
-                                           "paired", "chaos"))
+                                           "curve", "paired", "chaos"))
     parser.add_argument("--a", nargs="*", default=[], help="overrides of config A")
     parser.add_argument("--b", nargs="*", default=[], help="overrides of config B")
     parser.add_argument("--per-object", type=int, default=20)
@@ -373,6 +394,9 @@ def main() -> None:
         result = floor_slip()
     elif args.what == "cost":
         result = cost()
+    elif args.what == "curve":
+        result = label_curve(per_object=args.per_object, trials=args.trials,
+                             workers=args.workers)
     else:
         a = outcomes(_overrides(args.a), args.per_object, args.trials, workers=args.workers)
         b = outcomes(_overrides(args.b if args.what == "paired" else args.a), args.per_object,
