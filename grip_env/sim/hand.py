@@ -16,7 +16,8 @@ same angle (mirrored axes in the URDF). Each finger is one finite-torque motor b
   so a floor even 0.2 mrad below the joint let a 40 N push carry the thumb 47 mrad back in one
   step. The stop also corrects position (Bullet's ``erp``): a joint the solver let slip below
   its floor is driven back up by a fifth of the gap per step (measured), which keeps squeeze
-  pumped into a finger the object has stopped (issue 19, open; BENCHMARKS.md).
+  pumped into a finger the object has stopped, a slow residue since the clutch breaks away
+  at the pad (issue 19, open; BENCHMARKS.md).
 * once joint 2 is stopped while the finger touches the object, by either link, joint 3 is
   released from the coupling and closes on its own with torque limit ``tau3`` (breakaway),
   locked behind by its own worm gear. A fingertip grip thus stalls on its two motors, whose
