@@ -20,7 +20,7 @@
   grips' trials, and the share of closes that settle, at 100, 150, 200 and 300 iterations.
 * ``curve``: success and robustness of the same (grip, trial) draws at 100, 200 and 400 solver
   iterations, each count paired with the first.
-* ``cost``: time per physics step and per trial of the same grips at 50, 100 and 200 iterations.
+* ``cost``: time per physics step and per trial of the same grips at 100, 150 and 200 iterations.
 * ``paired``: the same (grip, trial) pairs under config A (the default) and config B (dotted
   overrides); the paired difference in success and in robustness with 95 % intervals, and the
   share of trials whose success flips.
@@ -213,7 +213,7 @@ def _slip_recorder(slips: dict[str, list[float]]) -> Callable[[str, TrialScene],
     return on_phase
 
 
-def cost(iterations: tuple[int, ...] = (50, 100, 200), repeats: int = 3) -> list[dict]:
+def cost(iterations: tuple[int, ...] = (100, 150, 200), repeats: int = 3) -> list[dict]:
     """Time per step and per trial of the same 8 pentagon grips at each solver setting.
 
     The settings alternate within each repeat, so machine load hits them alike; the fastest
