@@ -10,6 +10,7 @@ import resource
 import signal
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -35,7 +36,12 @@ from grip_env.dataset.shards import shard_path
 
 
 def _pid_in(marker: Path) -> int:
-    return int(marker.read_text())
+    """The pid a paused process wrote to ``marker`` (the file can exist a moment before its
+    text is written: read until it is there)."""
+    deadline = time.monotonic() + 10.0
+    while not (text := marker.read_text().strip()) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return int(text)
 
 
 # ----------------------------------------------------------------------------- a lost worker
