@@ -1,8 +1,10 @@
 """``Hand``: the Barrett BH8-280 URDF in a ``World``, held by its palm, driven like the real hand.
 
-The palm hangs from a fixed constraint to the world that is moved with ``changeConstraint``
-(never teleported while in contact). The two spread joints are both position-controlled to the
-same angle (mirrored axes in the URDF). Each finger is one finite-torque motor behind a worm gear:
+The palm is carried by an idealised arm in the same articulation (``grip_env.sim.gantry``):
+prismatic x, y, z and a yaw wrist, each position-controlled to its target within one step and
+within the arm's force (never teleported while in contact). The two spread joints are both
+position-controlled to the same angle (mirrored axes in the URDF). Each finger is one
+finite-torque motor behind a worm gear:
 
 * joint 2 is velocity-controlled towards closing with torque limit ``tau2``; joint 3 follows
   ``q3_0 + (q2 - q2_0) / 3`` through the gear train (the Barrett clutch before breakaway);
@@ -14,10 +16,9 @@ same angle (mirrored axes in the URDF). Each finger is one finite-torque motor b
   motor), with no switching between modes. The floor sits exactly at the peak, with no
   backlash: PyBullet's joint limit is active only for a joint at or past it when a step starts,
   so a floor even 0.2 mrad below the joint let a 40 N push carry the thumb 47 mrad back in one
-  step. The stop also corrects position (Bullet's ``erp``): a joint the solver let slip below
-  its floor is driven back up by a fifth of the gap per step (measured), which keeps squeeze
-  pumped into a finger the object has stopped, a slow residue since the clutch breaks away
-  at the pad (issue 19, open; BENCHMARKS.md).
+  step. The stop does not correct position (the world's ``erp`` is 0): a joint the solver let
+  slip below its floor stays there. A correction towards the floor pumped squeeze into fingers
+  the object had stopped, more at every added solver iteration (BENCHMARKS.md).
 * once joint 2 is stopped while the finger touches the object, by either link, joint 3 is
   released from the coupling and closes on its own with torque limit ``tau3`` (breakaway),
   locked behind by its own worm gear. A fingertip grip thus stalls on its two motors, whose
@@ -34,7 +35,6 @@ with the palm facing down the hand frame is mirrored, so planar finger 1 is URDF
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from importlib.resources import files
@@ -51,6 +51,7 @@ from grip_env.finger import (
     PROXIMAL_MM,
     fingertip_in_plane,
 )
+from grip_env.sim.gantry import ARM_JOINTS, MOUNT_JOINTS, PALM_LINK
 from grip_env.sim.world import MM, World
 
 #: The hand's URDF, package data (a file on disk in a wheel or an editable install alike).
@@ -59,15 +60,25 @@ HAND_URDF = Path(str(files("grip_env") / "assets" / "barrett_bh8_280.urdf"))
 # The finger's geometry is grip_env.hand_geometry's (as in the URDF), through grip_env.finger.
 GEAR_FACTOR = 5.0  # joint 3's gear-train torque before breakaway, relative to tau3
 GEAR_GAIN = 0.5  # position gain of the gear train (stiff, still stable at 240 Hz)
-PALM_LEAD_STEPS = 4
+ARM_GAIN = 1.0  # the arm's joints reach their targets in one step (within their force)
+ARM_LEVER_M = 0.1  # the wrist's torque limit is the arm's force at this lever
 GEAR_UPDATE_RAD = 1e-3  # joint 3's geared target follows joint 2 in steps this small
 HOLD_FACTOR = 5.0  # worm-gear holding torque relative to the motor torque
 BREAKAWAY_SPEED = 0.1  # joint 2 slower than this share of the closing speed has stopped
+#: The finger motor's rotor inertia (kg m^2; Barrett's BHand motor, as listed by the University of
+#: Waterloo's WAM specification) and the motor-to-joint motion ratios (Barrett: 125:1 to joint 2,
+#: 93.75:1 to joint 3). Seen from a joint, the rotor weighs ratio^2 times its own inertia.
+ROTOR_INERTIA_KG_M2 = 1.41e-7
+MOTION_RATIOS = (125.0, 93.75)
+FLEX_AXIS = 1  # the flexion joints turn about their links' local y axis (URDF axis 0 -1 0)
 
-# URDF joint indices, listed in planar finger order (planar 1 = URDF finger 2, see module doc).
-SPREAD_JOINTS = (3, 0)
-FLEX_JOINTS = ((4, 5), (1, 2), (6, 7))
-FINGER_LINKS = ((3, 4, 5), (0, 1, 2), (6, 7))
+# Joint indices of the mounted hand, listed in planar finger order (planar 1 = URDF finger 2, see
+# module doc): the bare URDF's, after the arm's ``MOUNT_JOINTS``.
+SPREAD_JOINTS = tuple(MOUNT_JOINTS + j for j in (3, 0))
+FLEX_JOINTS = tuple(tuple(MOUNT_JOINTS + j for j in pair) for pair in ((4, 5), (1, 2), (6, 7)))
+FINGER_LINKS = tuple(tuple(MOUNT_JOINTS + j for j in links)
+                     for links in ((3, 4, 5), (0, 1, 2), (6, 7)))
+ARM = list(range(len(ARM_JOINTS)))
 
 
 def palm_quaternion(yaw: float) -> tuple[float, float, float, float]:
@@ -109,7 +120,10 @@ class HandState:
 
 @dataclass
 class Hand:
-    """The hand loaded into ``world``; positions in mm, the palm frame at the palm base centre."""
+    """The hand on its arm in ``world``; positions in mm, the palm frame at the palm base centre.
+
+    ``max_palm_force_n`` bounds each of the arm's prismatic joints (and, at ``ARM_LEVER_M``, the
+    wrist's torque)."""
 
     world: World
     config: SimConfig = field(default_factory=SimConfig)
@@ -119,7 +133,6 @@ class Hand:
     def __post_init__(self) -> None:
         world = self.world
         self.uid = world.load_robot(HAND_URDF)
-        self._com_offset = world.com_offset_mm(self.uid)
         pairs = zip(FLEX_JOINTS, FINGER_LINKS, strict=True)
         self.fingers = [_Finger(joints, links) for joints, links in pairs]
         self._flex = [j for f in self.fingers for j in f.joints]
@@ -127,63 +140,58 @@ class Hand:
         for link in range(world.link_count(self.uid)):
             world.set_pad_friction(self.uid, link, self.config.finger_friction,
                                    self.config.pad_torsion_mm)
-        self.constraint = world.hold(self.uid)
+        self._add_rotor_inertia()
         self.spread = 0.0
         self._peaks = [0.0] * 6  # running peak of each flexion joint, in ``_flex`` order
         self._origin = np.zeros((3, 2))
         self._target: tuple[tuple[float, ...], float] = ((0.0, 0.0, 0.0), 0.0)
 
+    def _add_rotor_inertia(self) -> None:
+        """Give each flexion joint its motor's reflected rotor inertia (armature): ratio^2 times
+        the rotor's, 2.2e-3 kg m^2 at joint 2 and 1.2e-3 at joint 3, 10-100x the links' own.
+
+        PyBullet has no armature, so it is added to the links' inertia about axes parallel to
+        their joints: joint 3's to the distal link, the rest of joint 2's to the proximal link
+        (the distal link turns with joint 2 too). Each joint's own inertia is then exact; the
+        coupling of the two joints gains joint 3's share, which a geared rotor does not have.
+        """
+        joint2, joint3 = (ROTOR_INERTIA_KG_M2 * r**2 for r in MOTION_RATIOS)
+        for finger in self.fingers:
+            proximal, distal = finger.links[-2:]
+            self.world.add_axis_inertia(self.uid, proximal, FLEX_AXIS, joint2 - joint3)
+            self.world.add_axis_inertia(self.uid, distal, FLEX_AXIS, joint3)
+
     # ------------------------------------------------------------------ palm
-    def _com_target(self, position_mm: NDArray, yaw: float) -> tuple[NDArray, tuple]:
-        com = np.asarray(position_mm, float) + palm_to_world(yaw, self._com_offset)
-        return com, palm_quaternion(yaw)
+    @staticmethod
+    def _arm_targets(position_mm: NDArray, yaw: float) -> list[float]:
+        x, y, z = (float(v) * MM for v in position_mm)
+        return [x, y, z, float(yaw)]
 
     def teleport(self, position_mm: NDArray, yaw: float) -> None:
-        """Put the palm base at ``position_mm`` (world) with ``yaw``; only when not in contact.
-
-        PyBullet places a body by its centre of mass, so the base is shifted by the hand's
-        centre-of-mass offset to land exactly at ``position_mm``.
-        """
-        self.world.place(self.uid, *self._com_target(position_mm, yaw))
-        self._target = (tuple(float(v) for v in position_mm), float(yaw))
+        """Put the palm base at ``position_mm`` (world) with ``yaw``, at rest; only when not in
+        contact."""
+        for joint, value in zip(ARM, self._arm_targets(position_mm, yaw), strict=True):
+            self.world.set_joint(self.uid, joint, value)
         self.move(position_mm, yaw)
 
     def move(self, position_mm: NDArray, yaw: float) -> None:
-        """Drive the palm constraint towards a new pose (the solver moves it within its force).
-
-        The constraint's pivot reaches the body ``PALM_LEAD_STEPS`` steps late (measured: a
-        pure delay, whatever its erp), so the pivot leads the target by that many steps of the
-        target's own motion: the palm then follows the commanded path (within 0.1 mm on the lift).
-        """
-        position = np.asarray(position_mm, float)
-        lead = PALM_LEAD_STEPS * (position - np.asarray(self._target[0]))
-        self._target = (tuple(float(v) for v in position), float(yaw))
-        com, orn = self._com_target(position + lead, yaw)
-        self.world.drive_hold(self.constraint, com, orn, self.max_palm_force_n)
-
-    def stop_palm(self) -> None:
-        """The palm's target has stopped: the pivot stops leading it.
-
-        Without this the palm runs on to the last lead (4 steps of the last motion: 5 mm below
-        the grip height after the approach, measured), and the fingers close off their plane.
-        """
-        self.move(np.asarray(self._target[0]), self._target[1])
+        """Drive the palm towards a new pose: the arm's joints reach it in the next step unless
+        that takes more than their force."""
+        self._target = (tuple(float(v) for v in position_mm), float(yaw))
+        force = self.max_palm_force_n
+        self.world.position_motors(self.uid, ARM, self._arm_targets(position_mm, yaw),
+                                   [force, force, force, force * ARM_LEVER_M], ARM_GAIN)
 
     def palm_pose_mm(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Palm base position (mm) and quaternion."""
-        com, orn = self.world.pose_mm(self.uid)
-        yaw = self._target[1]
-        return com - palm_to_world(yaw, self._com_offset), orn
+        position, orientation = self.palm_pose_floats()
+        return np.asarray(position), np.asarray(orientation)
 
     def palm_pose_floats(
         self,
     ) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
         """``palm_pose_mm`` as plain tuples (for per-step checks)."""
-        (x, y, z), orn = self.world.pose_floats_mm(self.uid)
-        yaw = self._target[1]
-        c, s = math.cos(yaw), math.sin(yaw)
-        ox, oy, oz = self._com_offset
-        return (x - (-s * ox + c * oy), y - (c * ox + s * oy), z + oz), orn
+        return self.world.link_pose_floats_mm(self.uid, PALM_LINK)
 
     def palm_target_mm(self) -> NDArray[np.float64]:
         """Where the palm base is being driven to (mm)."""

@@ -192,12 +192,11 @@ class TrialScene:
 
     def _approach(self, palm: NDArray, yaw: float, grip_z: float,
                   counter: _StepCounter | None = None) -> None:
-        """Lower the pre-shaped hand onto its grip height and stop it there."""
+        """Lower the pre-shaped hand onto its grip height (the arm stops it there)."""
         step = counter.step if counter is not None else self.world.step
         for z in np.linspace(grip_z + APPROACH_MM, grip_z, APPROACH_STEPS + 1)[1:]:
             self.hand.move(np.array([*palm, z]), yaw)
             step()
-        self.hand.stop_palm()
 
     def _close(self, counter: _StepCounter) -> int:
         """Close all fingers until every one has stopped (or the step cap); returns steps used."""

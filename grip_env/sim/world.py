@@ -20,6 +20,7 @@ from grip_env.objects import PlanarObject
 from grip_env.objects.decomposition import MAX_PIECES
 from grip_env.objects.simulated import DEFAULT_TOLERANCE_MM
 from grip_env.shutdown import deferred_signals
+from grip_env.sim.gantry import mounted_urdf
 
 
 @contextlib.contextmanager
@@ -87,6 +88,7 @@ class World:
         self._get_joint_states = c.getJointStates
         self._change_dynamics = c.changeDynamics
         self._base_pose = c.getBasePositionAndOrientation
+        self._link_state = c.getLinkState
         self._motor_array = c.setJointMotorControlArray
         self._external_force = c.applyExternalForce
         self._external_torque = c.applyExternalTorque
@@ -99,9 +101,13 @@ class World:
         c.setGravity(0, 0, -9.81)
         # Deterministic overlapping pairs: contacts are solved in an order that does not depend
         # on the history of the broadphase, so a restored state replays exactly (trial order).
+        # No position correction on joint limits and constraints (erp 0): the worm gear's stops
+        # (joint floors) must hold a finger, never push it forward; a correction towards a floor
+        # pumped squeeze into the grip that grew with the iteration count (BENCHMARKS.md). The
+        # arm's motors keep their own gains; contacts keep their own correction (contactERP).
         c.setPhysicsEngineParameter(
             fixedTimeStep=self.timestep, numSolverIterations=self.solver_iterations,
-            deterministicOverlappingPairs=1,
+            deterministicOverlappingPairs=1, erp=0.0,
         )
 
     def close(self) -> None:
@@ -277,42 +283,37 @@ class World:
 
     # ------------------------------------------------------------------ robots
     def load_robot(self, urdf: str | Path) -> int:
-        """A URDF with its own inertia and self-collision (between links that are not ancestors)."""
+        """A URDF mounted on the gantry arm (``grip_env.sim.gantry``), fixed to the world, with its
+        own inertia and self-collision (between links that are not ancestors)."""
         flags = (pybullet.URDF_USE_INERTIA_FROM_FILE | pybullet.URDF_USE_SELF_COLLISION
                  | pybullet.URDF_USE_SELF_COLLISION_EXCLUDE_ALL_PARENTS)
-        return self.client.loadURDF(str(urdf), basePosition=[0, 0, 1], flags=flags)
+        return self.client.loadURDF(str(mounted_urdf(urdf)), useFixedBase=True, flags=flags)
 
     def link_count(self, body: int) -> int:
         """Number of links (= joints) of ``body``, the base not counted."""
         return self.client.getNumJoints(body)
 
-    def com_offset_mm(self, body: int) -> NDArray[np.float64]:
-        """The base's centre of mass in its link frame (mm)."""
-        return np.asarray(self.client.getDynamicsInfo(body, -1)[3]) / MM
+    def link_pose_floats_mm(
+        self, body: int, link: int
+    ) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
+        """Position (mm) and quaternion of a link's frame (its URDF frame, not its centre of
+        mass), computed from the current joint positions."""
+        state = self._link_state(body, link, computeForwardKinematics=1)
+        x, y, z = state[4]
+        return (x / MM, y / MM, z / MM), state[5]
+
+    def add_axis_inertia(self, body: int, link: int, axis: int, inertia_kg_m2: float) -> None:
+        """Add ``inertia_kg_m2`` to a link's principal inertia about its local ``axis`` (0, 1, 2):
+        a joint's reflected rotor inertia when that axis is parallel to the joint's."""
+        diagonal = list(self.client.getDynamicsInfo(body, link)[2])
+        diagonal[axis] += inertia_kg_m2
+        self.client.changeDynamics(body, link, localInertiaDiagonal=diagonal)
 
     def set_pad_friction(self, body: int, link: int, lateral: float, torsion_mm: float) -> None:
         """Friction of one link: lateral coefficient, torsional friction (torque per normal
         force, mm), with a friction anchor so resting contacts do not drift."""
         self.client.changeDynamics(body, link, lateralFriction=lateral,
                                    spinningFriction=torsion_mm * MM, frictionAnchor=1)
-
-    def hold(self, body: int) -> int:
-        """A fixed constraint from the world to ``body``'s base; returns its id."""
-        return self.client.createConstraint(body, -1, -1, -1, pybullet.JOINT_FIXED, [0, 0, 0],
-                                            [0, 0, 0], [0, 0, 1])
-
-    def drive_hold(self, constraint: int, com_mm: NDArray, orientation: tuple,
-                   max_force_n: float) -> None:
-        """Move a ``hold`` constraint's target: the held base's centre of mass (mm) and pose."""
-        self.client.changeConstraint(constraint, jointChildPivot=(np.asarray(com_mm) * MM).tolist(),
-                                     jointChildFrameOrientation=orientation,
-                                     maxForce=max_force_n)
-
-    def place(self, body: int, com_mm: NDArray, orientation: tuple) -> None:
-        """Teleport ``body`` (its centre of mass, mm) and stop it; only when not in contact."""
-        c = self.client
-        c.resetBasePositionAndOrientation(body, (np.asarray(com_mm) * MM).tolist(), orientation)
-        c.resetBaseVelocity(body, [0, 0, 0], [0, 0, 0])
 
     def set_joint(self, body: int, joint: int, position: float) -> None:
         """Teleport one joint (rad), at rest."""
@@ -337,9 +338,9 @@ class World:
 
         A joint limit is a unilateral constraint solved together with the contacts and motors
         (measured: a thumb at its floor, pushed back by 40 N, about 3x its motor, gives 0.02
-        mrad; a stop weaker than the load yields). A joint below its limit is driven back up to
-        it by Bullet's ``erp`` (a fifth of the gap per step). ``saveState`` does not keep
-        limits.
+        mrad; a stop weaker than the load yields). With ``erp`` 0 (``reset``) a joint the solver
+        let slip below its limit stays there: the stop resists, it never pushes the joint
+        forward. ``saveState`` does not keep limits.
         """
         change = self._change_dynamics
         for joint, low, high, hold in zip(joints, lowers, uppers, holds, strict=True):

@@ -9,6 +9,7 @@
     python -m tests.benchmarks.sim_fidelity chaos
     python -m tests.benchmarks.sim_fidelity paired --variant first-piece-friction
     python -m tests.benchmarks.sim_fidelity paired --variant proximal-clutch
+    python -m tests.benchmarks.sim_fidelity paired --variant floor-erp
 
 * ``convergence``: a symmetric grip closes on a pinned 90 x 55 mm box; for each solver
   iteration count, each finger's joint-2 motor torque against its command and its fingertip
@@ -260,8 +261,11 @@ def sample_grips(per_object: int, config: Config) -> list[tuple[object, pd.DataF
 
 
 #: Fixes that can be undone one at a time, to measure what each changes (config B runs them).
-VARIANTS = ("none", "first-piece-friction", "no-palm-lead", "no-palm-stop",
-            "proximal-clutch")
+VARIANTS = ("none", "first-piece-friction", "proximal-clutch", "floor-erp")
+
+
+#: Bullet's non-contact erp before the arm (measured then: a fifth of a joint's gap per step).
+FLOOR_ERP_BEFORE = 0.2
 
 
 def _apply(variant: str) -> None:
@@ -276,14 +280,16 @@ def _apply(variant: str) -> None:
                                        spinningFriction=spinning_friction)
 
         world.World.set_dynamics = base_only
-    elif variant == "no-palm-lead":
-        from grip_env.sim import hand
+    elif variant == "floor-erp":  # 4518833's: joint limits corrected towards their floors
+        from grip_env.sim import world
 
-        hand.PALM_LEAD_STEPS = 0
-    elif variant == "no-palm-stop":
-        from grip_env.sim import hand
+        reset = world.World.reset
 
-        hand.Hand.stop_palm = lambda self: None  # the palm runs on by its last lead
+        def with_erp(self):
+            reset(self)
+            self.client.setPhysicsEngineParameter(erp=FLOOR_ERP_BEFORE)
+
+        world.World.reset = with_erp
     elif variant == "proximal-clutch":
         from grip_env.sim import hand
 
