@@ -5,7 +5,8 @@ vertical, then a fixed mount that turns the palm to face down. Being one articul
 fingers, the arm's joints are exact (Featherstone's reduced coordinates, not a constraint the
 solver iterates on) and its motors track their targets with their own gains, so the solver's
 global position correction (``erp``) can be switched off: the worm gear's stops then never push a
-finger forward (``grip_env.sim.hand``; BENCHMARKS.md, "The worm gear's stops no longer pump").
+finger forward (``grip_env.sim.hand``; BENCHMARKS.md, "The arm, stops that do not push, the
+rotor's inertia").
 
 ``mounted_urdf`` writes the hand's URDF with that arm as its root and returns the file's path.
 Link and joint indices of the hand are those of the bare URDF shifted by ``MOUNT_JOINTS``.
@@ -33,13 +34,12 @@ CARRIAGE_KG = 1.0
 MOUNT_RPY = (math.pi, 0.0, math.pi / 2)
 
 
-def _link(robot: ET.Element, name: str, mass_kg: float) -> None:
-    link = ET.SubElement(robot, "link", name=name)
-    if mass_kg:
-        inertial = ET.SubElement(link, "inertial")
-        ET.SubElement(inertial, "mass", value=str(mass_kg))
-        ET.SubElement(inertial, "inertia", ixx="1e-3", iyy="1e-3", izz="1e-3",
-                      ixy="0", ixz="0", iyz="0")
+def _link(robot: ET.Element, name: str) -> None:
+    """A carriage of ``CARRIAGE_KG`` (the base's mass never acts: it is fixed to the world)."""
+    inertial = ET.SubElement(ET.SubElement(robot, "link", name=name), "inertial")
+    ET.SubElement(inertial, "mass", value=str(CARRIAGE_KG))
+    ET.SubElement(inertial, "inertia", ixx="1e-3", iyy="1e-3", izz="1e-3",
+                  ixy="0", ixz="0", iyz="0")
 
 
 def _joint(robot: ET.Element, name: str, kind: str, parent: str, child: str,
@@ -59,11 +59,11 @@ def mounted_tree(hand_urdf: str | Path) -> ET.ElementTree:
     tree = ET.parse(hand_urdf)
     hand = tree.getroot()
     robot = ET.Element("robot", name=f"{hand.get('name')}_on_gantry")
-    _link(robot, "gantry_base", CARRIAGE_KG)  # fixed to the world: its mass never acts
+    _link(robot, "gantry_base")
     parent = "gantry_base"
     for name, axis in zip(ARM_JOINTS, ("1 0 0", "0 1 0", "0 0 1", "0 0 1"), strict=True):
         child = f"{name}_carriage"
-        _link(robot, child, CARRIAGE_KG)
+        _link(robot, child)
         _joint(robot, name, "continuous" if name == "wrist_yaw" else "prismatic", parent, child,
                axis)
         parent = child
