@@ -28,11 +28,12 @@ e3 = (25^2 + d^2) / (2 d), moved as little as needed to keep every extension >= 
 Reach is physical: finger i's contact lies on its force line at the reach r_i = (S_i - P_i) . F_i
 from its line origin S_i (its spread axis; O for the thumb, so r3 = e3), and r_i must lie within
 the fingertip reaches of the URDF finger's coupled closing (``FINGER_REACH_MM``,
-``THUMB_REACH_MM``: joint 3 = joint 2 / 3 over ``CLOSING_JOINT2_RAD``, where the pad corner makes
-the contact). The check runs inside the thumb search, so a grasp whose C1-best direction is out
-of reach can still give a configuration at another direction; so does an optional further test
-of the reaches (``executable``, e.g. the executor's). Two-finger grasps move the palm along the
-thumb line, as little as needed, into the interval where all three reaches are within range.
+``THUMB_REACH_MM``: joint 3 = joint 2 / 3 over ``CLOSING_JOINT2_RAD``, where the pad, a sphere
+on the tip's pad corner, makes the contact). The check runs inside the thumb search, so a grasp
+whose C1-best direction is out of reach can still give a configuration at another direction;
+so does an optional further test of the reaches (``executable``, e.g. the executor's).
+Two-finger grasps move the palm along the thumb line, as little as needed, into the interval
+where all three reaches are within range.
 e_i = |P_i - O| stays what the features (C3, C6) use.
 
 Rejected: theta outside [0, max_spread_rad]; any e_i outside [min_extension_mm, max_extension_mm];
@@ -68,7 +69,7 @@ from grip_env.hand_geometry import (
     PROXIMAL_LINK_MM,
     SPREAD_AXIS_OFFSET_MM,
     THUMB_KNUCKLE_MM,
-    fingertip_in_plane,
+    pad_contact_in_plane,
 )
 from grip_env.params import DEFAULT_PARAMS, GraspParams
 
@@ -78,10 +79,10 @@ if TYPE_CHECKING:
 
 
 def fingertip_reach(joint2: NDArray, knuckle_mm: float = KNUCKLE_RADIAL_MM) -> NDArray:
-    """Reach (mm) of the fingertip pad corner from the finger's line origin, coupled closing
-    (joint 3 = joint 2 / 3; :func:`grip_env.hand_geometry.fingertip_in_plane`)."""
+    """Reach (mm) of the fingertip pad's contact from the finger's line origin, coupled closing
+    (joint 3 = joint 2 / 3; :func:`grip_env.hand_geometry.pad_contact_in_plane`)."""
     q2 = np.asarray(joint2, dtype=float)
-    return fingertip_in_plane(q2, JOINT_COUPLING * q2, knuckle_mm)[0]
+    return pad_contact_in_plane(q2, JOINT_COUPLING * q2, knuckle_mm)[0]
 
 
 #: Joint 2 over which the coupled closing touches with its pad: PAD_ANGLE_RANGE_RAD at
@@ -104,7 +105,7 @@ _CLOSING_GRID = np.linspace(*CLOSING_JOINT2_RAD, 2001)
 
 
 def closing_joint2(reach_mm: NDArray, knuckle_mm: float = KNUCKLE_RADIAL_MM) -> NDArray:
-    """Joint 2 (rad) of the coupled closing whose pad corner reaches ``reach_mm`` (inverse of
+    """Joint 2 (rad) of the coupled closing whose pad's contact reaches ``reach_mm`` (inverse of
     :func:`fingertip_reach`, to well below a micrometre).
 
     Raises:

@@ -146,6 +146,18 @@ class SimConfig(_Section):
         3.0, ge=0.0, le=50.0,
         description="pad torsional arm: a contact resists mu * N * this of twist",
     )
+    pad_stiffness_n_per_m: float = Field(
+        22_600.0, gt=0.0, le=1e7,
+        description="rubber pad's contact stiffness (Hertz, 3 MPa rubber, 8 mm tip, at 15 N)",
+    )
+    pad_damping_n_s_per_m: float = Field(
+        8.5, ge=0.0, le=1e5,
+        description="rubber pad's contact damping (loss factor 0.2 with an 80 g object)",
+    )
+    close_speed_rad_s: float = Field(
+        1.0, gt=0.0, le=10.0,
+        description="finger closing speed: the worm gear keeps the impact's extra squeeze",
+    )
     lift_height_mm: float = Field(60.0, gt=0.0, le=1000.0, description="lift distance")
     lift_time_s: float = Field(0.25, gt=0.0, le=10.0, description="lift duration")
     hold_time_s: float = Field(0.15, ge=0.0, le=10.0, description="hold after the lift")

@@ -18,13 +18,14 @@ from numpy.typing import NDArray
 
 from grip_env import barrett
 from grip_env import hand_geometry as hg
-from grip_env.hand_geometry import fingertip_in_plane
+from grip_env.hand_geometry import fingertip_in_plane, pad_contact_in_plane
 
 KNUCKLE_RADIUS_MM = hg.KNUCKLE_RADIAL_MM  # knuckle from the finger's line origin (S_i or O)
 KNUCKLE_HEIGHT_MM = hg.KNUCKLE_HEIGHT_MM
 PROXIMAL_MM = hg.PROXIMAL_LINK_MM
 DISTAL_MM = hg.DISTAL_LINK_MM
 DISTAL_PAD_MM = hg.DISTAL_PAD_MM
+PAD_RADIUS_MM = hg.PAD_RADIUS_MM
 DISTAL_BEND_RAD = hg.DISTAL_BEND_RAD
 COUPLING = hg.JOINT_COUPLING
 JOINT2_MAX = hg.JOINT2_RANGE_RAD[1]
@@ -38,10 +39,11 @@ _OPENING_BISECTIONS = 17
 
 
 def fingertip_depth(q2: NDArray, q3: NDArray) -> NDArray:
-    """How far the distal link reaches along the palm normal (mm): its deeper tip corner."""
+    """How far the distal link reaches along the palm normal (mm): its deeper tip corner, or
+    the bottom of its pad sphere."""
     a = np.asarray(q2, float) + DISTAL_BEND_RAD + np.asarray(q3, float)
     _, pad_h = fingertip_in_plane(q2, q3)
-    return pad_h + np.maximum(0.0, -2 * DISTAL_PAD_MM * np.cos(a))
+    return pad_h + np.maximum(PAD_RADIUS_MM, -2 * DISTAL_PAD_MM * np.cos(a))
 
 
 @dataclass(frozen=True)
@@ -64,8 +66,9 @@ _PAD_LINK_ANGLE = float(np.arctan2(DISTAL_PAD_MM, DISTAL_MM))
 
 
 def _pad_ik(reach: NDArray, height: NDArray) -> tuple[NDArray, NDArray]:
-    """Joints putting the pad corner at (reach, height), tip first; NaN where impossible."""
-    x, y = reach - KNUCKLE_RADIUS_MM, height - KNUCKLE_HEIGHT_MM
+    """Joints putting the pad's contact at (reach, height), tip first (the pad corner
+    ``PAD_RADIUS_MM`` further out, ``pad_contact_in_plane``); NaN where impossible."""
+    x, y = reach + PAD_RADIUS_MM - KNUCKLE_RADIUS_MM, height - KNUCKLE_HEIGHT_MM
     cos_bend = (x * x + y * y - PROXIMAL_MM**2 - _PAD_LINK_MM**2) / (2 * PROXIMAL_MM * _PAD_LINK_MM)
     bend = np.arccos(np.clip(cos_bend, -1.0, 1.0))
     best_q2 = np.full(np.broadcast(x, y).shape, np.nan)
@@ -137,7 +140,7 @@ def opening_posture(q2: NDArray, q3: NDArray, gap_mm: float) -> tuple[NDArray, N
     bisection to 0.01 mrad, the first opening whose reach is ``gap_mm`` beyond the contact's.
     """
     q2, q3 = np.asarray(q2, float), np.asarray(q3, float)
-    target = fingertip_in_plane(q2, q3)[0] + gap_mm
+    target = pad_contact_in_plane(q2, q3)[0] + gap_mm
 
     def along(s: NDArray) -> tuple[NDArray, NDArray]:
         return np.maximum(q2 - s, 0.0), np.maximum(q3 - COUPLING * s, 0.0)
@@ -145,7 +148,7 @@ def opening_posture(q2: NDArray, q3: NDArray, gap_mm: float) -> tuple[NDArray, N
     low, high = np.zeros_like(q2), np.minimum(q2, _MAX_OPENING_RAD)
     for _ in range(_OPENING_BISECTIONS):
         mid = (low + high) / 2
-        short = fingertip_in_plane(*along(mid))[0] < target
+        short = pad_contact_in_plane(*along(mid))[0] < target
         low, high = np.where(short, mid, low), np.where(short, high, mid)
     return along(high)
 

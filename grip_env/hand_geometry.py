@@ -20,6 +20,11 @@ KNUCKLE_HEIGHT_MM = 75.4  #: joint 2 along the palm normal from the palm base (4
 PROXIMAL_LINK_MM = 70.0  #: joint 2 to joint 3 (manufacturer)
 DISTAL_LINK_MM = 50.0  #: joint 3 to fingertip (manufacturer's A3)
 DISTAL_PAD_MM = 8.0  #: half thickness of the distal link: its pad face is this far off its axis
+#: The rubber pad: a sphere of this radius centred on the pad corner, so that a fingertip touches
+#: an object's side at one point (a box edge gives the contact solver one, two or four points, and
+#: a compliant contact counts each). It touches a side facing the finger this far inside the
+#: corner's reach, at the corner's height.
+PAD_RADIUS_MM = 3.0
 DISTAL_BEND_RAD = math.radians(42.0)  #: distal link bent towards the palm at joint 3 = 0
 FINGER_WIDTH_MM = 25.0  #: finger (and pad) width, as the URDF's links
 PALM_HEIGHT_MM = 84.0  #: palm base to finger plane (manufacturer's Dw)
@@ -29,8 +34,8 @@ JOINT2_RANGE_RAD = (0.0, 2.44)
 JOINT3_RANGE_RAD = (0.0, 0.84)
 JOINT_COUPLING = 1.0 / 3.0  #: joint 3 follows joint 2 / 3 until breakaway (the Barrett clutch)
 #: Direction of the distal link in its closing plane (from the palm plane outwards) at which its
-#: pad corner is what touches an object's side: 5 degrees past vertical (the link leans inwards
-#: below the corner), up to pointing straight back at the finger's axis.
+#: pad, on its corner, is what touches an object's side: 5 degrees past vertical (the link leans
+#: inwards below the corner), up to pointing straight back at the finger's axis.
 PAD_ANGLE_RANGE_RAD = (math.radians(95.0), math.pi)
 
 
@@ -51,3 +56,17 @@ def fingertip_in_plane(
     h = (KNUCKLE_HEIGHT_MM + PROXIMAL_LINK_MM * np.sin(q2) + DISTAL_LINK_MM * np.sin(a)
          + DISTAL_PAD_MM * np.cos(a))
     return r, h
+
+
+def pad_contact_in_plane(
+    q2: ArrayLike, q3: ArrayLike, knuckle_mm: float = KNUCKLE_RADIAL_MM
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Where the fingertip's pad touches a side that faces the finger, in its closing plane:
+    (reach r, height h) in mm, ``PAD_RADIUS_MM`` inside the pad corner (the pad sphere's centre,
+    :func:`fingertip_in_plane`) at its height.
+
+    Exact for a side square to the finger's force line; a side at an angle d to it is touched
+    ``PAD_RADIUS_MM * sin(d)`` beside the line and ``PAD_RADIUS_MM * (1 - cos(d))`` further out.
+    """
+    r, h = fingertip_in_plane(q2, q3, knuckle_mm)
+    return r - PAD_RADIUS_MM, h

@@ -156,8 +156,10 @@ def test_two_finger_palm_respects_minimum_extension():
     assert len(confs) == 1
     lateral = math.sqrt(28**2 - 25**2)
     np.testing.assert_allclose(confs.extensions[0], [28, 28, 40 + lateral], rtol=1e-12)
-    # at 30 mm the fingers would have to reach 16.6 mm past their axes: beyond the finger
-    assert len(configurations(grasp, obj, PARAMS, SYNTHESIS)) == 0
+    # 2 mm further past their axes than the fingers' shortest reach: beyond the finger
+    lateral = 2.0 - FINGER_REACH_MM[0]
+    beyond = SYNTHESIS.model_copy(update={"min_extension_mm": math.hypot(25.0, lateral)})
+    assert len(configurations(grasp, obj, PARAMS, beyond)) == 0
 
 
 def test_two_finger_palm_moves_into_the_fingers_reach():
@@ -197,13 +199,13 @@ def _exact_grasp(yaw, spread, palm, reach):
 
 
 def test_reach_is_checked_inside_the_thumb_search():
-    """The C1-best direction puts finger 1 18 mm past its axis, beyond the finger: the search
+    """The C1-best direction puts finger 1 21 mm past its axis, beyond the finger: the search
     keeps the best direction the hand can reach instead of dropping the grasp."""
     config = SYNTHESIS.model_copy(update={"min_extension_mm": 5.0})
     inside = configurations(*_exact_grasp(np.pi / 2, 1.2, (0, 0), (-10, 20, 70)), PARAMS, config)
     assert inside.force_line[inside.thumb == 2] == pytest.approx([0.0], abs=1e-12)
-    grasp, obj = _exact_grasp(np.pi / 2, 1.2, (0, 0), (-18, 20, 70))
-    assert FINGER_REACH_MM[0] > -18
+    grasp, obj = _exact_grasp(np.pi / 2, 1.2, (0, 0), (-21, 20, 70))
+    assert FINGER_REACH_MM[0] > -21
     confs = configurations(grasp, obj, PARAMS, config)
     i = np.nonzero(confs.thumb == 2)[0]
     assert len(i) == 1
@@ -225,7 +227,7 @@ def test_approach_through_the_object_is_detected():
     yaw=st.floats(-math.pi, math.pi),
     spread=st.floats(0.35, 1.3),
     palm=st.tuples(st.floats(-200, 200), st.floats(-200, 200)),
-    reach=st.tuples(st.floats(10, 60), st.floats(10, 60), st.floats(35, 90)),
+    reach=st.tuples(st.floats(10, 60), st.floats(10, 60), st.floats(35, THUMB_REACH_MM[1])),
 )
 def test_configuration_of_an_exact_barrett_grasp_is_recovered(yaw, spread, palm, reach):
     """Contacts on the hand's own force lines, normals = forces: the search finds the hand."""

@@ -13,6 +13,7 @@ from grip_env.finger import (
     closing_sweep_depth,
     fingertip_in_plane,
     opening_posture,
+    pad_contact_in_plane,
     planar_contacts,
     sweep_depth,
 )
@@ -44,7 +45,7 @@ def test_planar_contacts_put_every_pad_in_one_plane():
     reaches = np.array([[30.0, 30.0, 40.0], [60.0, 55.0, 70.0], [500.0, 30.0, 30.0]])
     posture, found = planar_contacts(reaches, 30.0, 8.0, 4.0, 5.0, 12.0)
     assert found.tolist() == [True, True, False]  # no finger reaches half a metre
-    reach, height = fingertip_in_plane(posture.q2[:2], posture.q3[:2])
+    reach, height = pad_contact_in_plane(posture.q2[:2], posture.q3[:2])
     np.testing.assert_allclose(reach, reaches[:2], atol=1e-6)
     pad_z = (posture.plane_z_mm + posture.height_mm)[:2, None] - height
     np.testing.assert_allclose(pad_z, np.repeat(posture.plane_z_mm[:2, None], 3, axis=1), atol=1e-6)

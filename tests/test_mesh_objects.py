@@ -193,7 +193,8 @@ def test_a_centred_grip_on_the_mesh_body_runs_as_on_its_extrusion(box):
         table = candidates(obj, config=config)
         centred = table.loc[[np.hypot(table["hand_x"], table["hand_y"]).idxmin()]]
         assert np.hypot(centred["hand_x"], centred["hand_y"]).iloc[0] < 10.0
-        results[body] = run_trials(obj, centred, config, trials=2, seed=0)
+        # 8 trials: single trials differ by a ramp level (19 %) on a 1 nm change of the pose
+        results[body] = run_trials(obj, centred, config, trials=8, seed=0)
     held = {body: float(r["robustness_mean"].iloc[0]) for body, r in results.items()}
     assert held["mesh"] > 10.0, held
     assert held["mesh"] == pytest.approx(held["extrusion"], rel=0.2)

@@ -3,18 +3,21 @@
 The planner (``grip_env.barrett``) bounds each finger's reach from its own line origin (spread axis;
 O for the thumb) by the coupled closing of the URDF finger. These tests close the URDF in PyBullet
 (``World`` + ``Hand``, joints set with ``resetJointState``, the distal link read back with
-``getLinkState``) and compare its pad corner with the planned contacts of the default objects.
+``getLinkState``) and compare where its pad (the sphere on the pad corner, read from the URDF)
+touches with the planned contacts of the default objects.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+import pybullet
 import pytest
 
 from grip_env import barrett
 from grip_env.barrett import configurations
 from grip_env.config import Config
+from grip_env.finger import PAD_RADIUS_MM, pad_contact_in_plane
 from grip_env.grasps import synthesize_grasps
 from grip_env.objects import load_object_set
 from grip_env.perception.regions import find_regions
@@ -67,21 +70,30 @@ def _postures(reaches: np.ndarray) -> np.ndarray:
     return np.stack([barrett.closing_joint2(reaches[:, i], k) for i, k in enumerate(knuckles)], 1)
 
 
+def _pad_sphere(client, uid: int, link: int) -> tuple[np.ndarray, float]:
+    """The distal link's pad sphere from the URDF: its centre (world mm) and radius (mm)."""
+    (sphere,) = [s for s in client.getCollisionShapeData(uid, link) if s[2] == pybullet.GEOM_SPHERE]
+    com, orientation = client.getLinkState(uid, link, computeForwardKinematics=True)[:2]
+    rotation = np.array(client.getMatrixFromQuaternion(orientation)).reshape(3, 3)
+    return (np.asarray(com) + rotation @ np.asarray(sphere[5])) * 1000, sphere[3][0] * 1000
+
+
 def _urdf_pads(hand: Hand, row: pd.Series, joint2: np.ndarray) -> np.ndarray:
-    """(3, 2) pad corners (world mm, planar finger order) of the URDF closed to ``joint2``."""
+    """(3, 2) where the pads of the URDF closed to ``joint2`` touch a side square to their force
+    lines (world mm, planar finger order): each pad sphere's point furthest along F_i."""
     client, uid = hand.world.client, hand.uid
     hand.teleport(np.array([row["hand_x"], row["hand_y"], 300.0]), float(row["hand_yaw"]))
     for joint in sim_hand.SPREAD_JOINTS:
         client.resetJointState(uid, joint, float(row["spread"]))
+    forces = barrett.finger_forces(float(row["hand_yaw"]), float(row["spread"]))
     pads = []
-    for joints, links, q2 in zip(sim_hand.FLEX_JOINTS, sim_hand.FINGER_LINKS, joint2, strict=True):
+    for joints, links, q2, force in zip(sim_hand.FLEX_JOINTS, sim_hand.FINGER_LINKS, joint2,
+                                        forces, strict=True):
         client.resetJointState(uid, joints[0], float(q2))
         client.resetJointState(uid, joints[1], float(barrett.JOINT_COUPLING * q2))
-        state = client.getLinkState(uid, links[-1], computeForwardKinematics=True)
-        rotation = np.array(client.getMatrixFromQuaternion(state[5])).reshape(3, 3)
-        corner = np.array([barrett.DISTAL_LINK_MM, 0.0, barrett.DISTAL_PAD_MM])
-        pads.append(np.asarray(state[4]) * 1000 + rotation @ corner)
-    return np.array(pads)[:, :2]
+        centre, radius = _pad_sphere(client, uid, links[-1])
+        pads.append(centre[:2] + radius * force)
+    return np.array(pads)
 
 
 def _assert_pads_on_contacts(table: pd.DataFrame, name: str) -> None:
@@ -154,7 +166,7 @@ def test_reach_bounds_are_the_urdf_fingers_coupled_closing(hand):
     assert np.all(np.diff(reach) < 0)  # one posture per reach
     assert reach[0] == barrett.FINGER_REACH_MM[1] and reach[-1] == barrett.FINGER_REACH_MM[0]
     # the executor's fingertip model is the planner's
-    sim_reach, _ = sim_hand.fingertip_in_plane(grid, grid / 3)
+    sim_reach, _ = pad_contact_in_plane(grid, grid / 3)
     np.testing.assert_allclose(sim_reach, reach, atol=1e-9)
 
 
@@ -171,12 +183,13 @@ def test_outside_the_closing_range_the_pad_corner_is_not_what_touches():
     assert _distal_angle(high) == pytest.approx(np.pi) or high < barrett.JOINT2_RANGE_RAD[1]
     pad = barrett.DISTAL_PAD_MM
     for q2, inside in ((high - 0.05, True), (high + 0.05, False)):
-        back = barrett.fingertip_reach(q2) + 2 * pad * np.sin(_distal_angle(q2))
-        assert (barrett.fingertip_reach(q2) < back) == inside
+        corner = barrett.fingertip_reach(q2) + PAD_RADIUS_MM
+        back = corner + 2 * pad * np.sin(_distal_angle(q2))
+        assert (corner < back) == inside
     for q2, inside in ((low + 0.05, True), (low - 0.2, False)):
-        tip = barrett.fingertip_reach(q2)
-        joint3_pad = tip - barrett.DISTAL_LINK_MM * np.cos(_distal_angle(q2))
-        assert (tip < joint3_pad) == inside
+        corner = barrett.fingertip_reach(q2) + PAD_RADIUS_MM
+        joint3_pad = corner - barrett.DISTAL_LINK_MM * np.cos(_distal_angle(q2))
+        assert (corner < joint3_pad) == inside
 
 
 def test_pad_angle_range_is_the_executors():
@@ -197,13 +210,20 @@ def test_closing_joint2_inverts_the_reach_and_refuses_beyond():
 
 
 def test_the_planners_finger_width_is_the_urdf_distal_links(hand):
-    """synthesis.finger_width_mm (the approach check's footprint) is the URDF pads' width."""
+    """synthesis.finger_width_mm (the approach check's footprint) is the URDF pads' width, and
+    each distal link carries one pad sphere of ``PAD_RADIUS_MM`` centred on its pad corner."""
     client = hand.world.client
     for links in sim_hand.FINGER_LINKS:
-        (shape,) = client.getCollisionShapeData(hand.uid, links[-1])
-        box_mm = np.asarray(shape[3]) * 1000  # (length, width, thickness)
+        shapes = client.getCollisionShapeData(hand.uid, links[-1])
+        (box,) = [s for s in shapes if s[2] == pybullet.GEOM_BOX]
+        (sphere,) = [s for s in shapes if s[2] == pybullet.GEOM_SPHERE]
+        box_mm = np.asarray(box[3]) * 1000  # (length, width, thickness)
         assert box_mm[1] == pytest.approx(Config().synthesis.finger_width_mm)
         assert box_mm[2] == pytest.approx(2 * barrett.DISTAL_PAD_MM)
+        assert sphere[3][0] * 1000 == pytest.approx(PAD_RADIUS_MM)
+        # both in the link's inertial frame: the sphere sits on the box's far pad-side edge
+        offset_mm = (np.asarray(sphere[5]) - np.asarray(box[5])) * 1000
+        np.testing.assert_allclose(offset_mm, [box_mm[0] / 2, 0.0, box_mm[2] / 2], atol=1e-6)
 
 
 def test_fingers_footprints_do_not_overlap(tables):

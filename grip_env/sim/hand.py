@@ -29,6 +29,15 @@ The torques of each finger are chosen from its planned contact posture so that t
 presses horizontally with ``SimConfig.finger_force_n`` (tau_k = F times the height of the
 fingertip above joint k in the finger's closing plane).
 
+Each fingertip touches through its rubber pad (a sphere on the pad corner, one contact point),
+a compliant contact of ``sim.pad_stiffness_n_per_m`` and ``sim.pad_damping_n_s_per_m``
+(``grip_env.sim.pad``). A rigid contact is pushed out of penetration by Bullet's position
+correction, and with the worm gear locked that push could only drive the finger back through its
+stop: loaded fingers crept back by up to 5 mrad. A compliant pad keeps its penetration as the
+rubber's deformation, and it makes a grip wedged between locked fingers statically determinate:
+how hard the object wedges follows from how far the rubber is pressed, not from how far the
+solver iterates (BENCHMARKS.md).
+
 Planar finger ``i`` (grip_env's frame, seen from above) is the URDF's finger ``FINGER_LINKS[i]``:
 with the palm facing down the hand frame is mirrored, so planar finger 1 is URDF finger 2.
 """
@@ -128,7 +137,6 @@ class Hand:
     world: World
     config: SimConfig = field(default_factory=SimConfig)
     max_palm_force_n: float = 400.0
-    close_speed_rad_s: float = 1.5
 
     def __post_init__(self) -> None:
         world = self.world
@@ -140,6 +148,10 @@ class Hand:
         for link in range(world.link_count(self.uid)):
             world.set_pad_friction(self.uid, link, self.config.finger_friction,
                                    self.config.pad_torsion_mm)
+        for finger in self.fingers:
+            world.set_contact_compliance(self.uid, finger.links[-1],
+                                         self.config.pad_stiffness_n_per_m,
+                                         self.config.pad_damping_n_s_per_m)
         self._add_rotor_inertia()
         self.spread = 0.0
         self._peaks = [0.0] * 6  # running peak of each flexion joint, in ``_flex`` order
@@ -273,7 +285,7 @@ class Hand:
         """
         broke = False
         for i, finger in enumerate(self.fingers):
-            stopped = dq[2 * i] < BREAKAWAY_SPEED * self.close_speed_rad_s
+            stopped = dq[2 * i] < BREAKAWAY_SPEED * self.config.close_speed_rad_s
             if not finger.broken_away and stopped and (touching[i, 0] or touching[i, 1]):
                 finger.broken_away = broke = True
         return broke
@@ -326,7 +338,8 @@ class Hand:
                     velocity_forces.append(tau)
         if velocity:
             self.world.velocity_motors(self.uid, velocity,
-                                       [self.close_speed_rad_s] * len(velocity), velocity_forces)
+                                       [self.config.close_speed_rad_s] * len(velocity),
+                                       velocity_forces)
         if position:
             self.world.position_motors(self.uid, position, targets, position_forces, GEAR_GAIN)
 

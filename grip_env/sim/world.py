@@ -315,6 +315,14 @@ class World:
         self.client.changeDynamics(body, link, lateralFriction=lateral,
                                    spinningFriction=torsion_mm * MM, frictionAnchor=1)
 
+    def set_contact_compliance(self, body: int, link: int, stiffness_n_per_m: float,
+                               damping_n_s_per_m: float) -> None:
+        """Make one link's contacts compliant: each contact point presses with ``k d + c v``
+        (penetration d, its rate v), solved implicitly (Bullet's contact CFM and ERP), instead of
+        being pushed out by the position correction of a rigid contact."""
+        self.client.changeDynamics(body, link, contactStiffness=stiffness_n_per_m,
+                                   contactDamping=damping_n_s_per_m)
+
     def set_joint(self, body: int, joint: int, position: float) -> None:
         """Teleport one joint (rad), at rest."""
         self.client.resetJointState(body, joint, float(position))

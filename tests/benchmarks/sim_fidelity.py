@@ -298,7 +298,7 @@ def _apply(variant: str) -> None:
             advanced = self._follow(q)
             if touching is not None:
                 for i, finger in enumerate(self.fingers):
-                    if touching[i, 0] and dq[2 * i] < 0.1 * self.close_speed_rad_s:
+                    if touching[i, 0] and dq[2 * i] < 0.1 * self.config.close_speed_rad_s:
                         finger.broken_away = True
             if advanced or touching is not None:
                 self._command_motors()
