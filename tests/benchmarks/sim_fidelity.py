@@ -10,6 +10,7 @@
     python -m tests.benchmarks.sim_fidelity paired --variant first-piece-friction
     python -m tests.benchmarks.sim_fidelity paired --variant proximal-clutch
     python -m tests.benchmarks.sim_fidelity paired --variant floor-erp
+    python -m tests.benchmarks.sim_fidelity paired --variant rigid-pads
 
 * ``convergence``: a symmetric grip closes on a pinned 90 x 55 mm box; for each solver
   iteration count, each finger's joint-2 motor torque against its command and its fingertip
@@ -261,7 +262,7 @@ def sample_grips(per_object: int, config: Config) -> list[tuple[object, pd.DataF
 
 
 #: Fixes that can be undone one at a time, to measure what each changes (config B runs them).
-VARIANTS = ("none", "first-piece-friction", "proximal-clutch", "floor-erp")
+VARIANTS = ("none", "first-piece-friction", "proximal-clutch", "floor-erp", "rigid-pads")
 
 
 #: Bullet's non-contact erp before the arm (measured then: a fifth of a joint's gap per step).
@@ -290,6 +291,10 @@ def _apply(variant: str) -> None:
             self.client.setPhysicsEngineParameter(erp=FLOOR_ERP_BEFORE)
 
         world.World.reset = with_erp
+    elif variant == "rigid-pads":  # ba7f89a's pad sphere with a rigid contact, as before it
+        from grip_env.sim import world
+
+        world.World.set_contact_compliance = lambda self, *args: None
     elif variant == "proximal-clutch":
         from grip_env.sim import hand
 
