@@ -180,8 +180,8 @@ def _retest(report: Report, checks: dict[str, Any], trials: pd.DataFrame | None,
         f"robustness with the grip as class: {_number(icc.get('measured'))} "
         f"{_ci(icc.get('ci'))} ({_verdict(icc.get('passed'))}). Within a grip, the trial's "
         f"friction draw against its robustness residual has Spearman "
-        f"{_number(icc.get('friction_residual_spearman'))} (near 0: friction does not decide "
-        "the outcome)."
+        f"{_number(icc.get('friction_residual_spearman'))}: how far the draw orders one grip's "
+        "trials (0: not at all; a grip that holds by friction holds in proportion to it)."
     )
     if trials is None or trials.empty:
         return

@@ -7,6 +7,7 @@
     python -m tests.benchmarks.sim_fidelity curve --trials 3
     python -m tests.benchmarks.sim_fidelity paired --b sim.solver_iterations=300 --trials 1200
     python -m tests.benchmarks.sim_fidelity chaos
+    python -m tests.benchmarks.sim_fidelity directions --b sim.solver_iterations=300 --trials 2
     python -m tests.benchmarks.sim_fidelity paired --variant first-piece-friction
     python -m tests.benchmarks.sim_fidelity paired --variant proximal-clutch
     python -m tests.benchmarks.sim_fidelity paired --variant floor-erp
@@ -27,6 +28,8 @@
   overrides); the paired difference in success and in robustness with 95 % intervals, and the
   share of trials whose success flips.
 * ``chaos``: the same pairs with the palm moved by 1 nm: the flip rate a change must beat.
+* ``directions``: ``paired`` with every planar direction ramped to its end, and the mean change of
+  each direction's level in octaves: which disturbance a change moves.
 
 Grips: every default object's candidates, a stratified sample of ``--per-object`` per object.
 """
@@ -339,6 +342,68 @@ def outcomes(config: Config, per_object: int, trials: int, shift_mm: float = 0.0
                                        "held", "steps"])
 
 
+def _every_direction(probe, mass_kg: float, gyration_m: float, config) -> float:
+    """``disturbance.robustness`` with every direction ramped to its end (not stopped at the
+    weakest so far); the levels are kept in ``_DIRECTION_LEVELS``."""
+    from grip_env.sim import disturbance
+
+    levels = disturbance.ramp_levels(config)
+    held = []
+    for kind, axis, sign in disturbance.disturbances(config):
+        probe.restore()
+        scale = mass_kg * disturbance.GRAVITY * (gyration_m if kind == "torque" else 1.0)
+        failed = disturbance._first_failure(probe, kind, sign * probe.palm_axes[axis] * scale,
+                                            levels, config.ramp_steps_per_level)
+        held.append(float(levels[failed - 1]) if failed else 0.0)
+    _DIRECTION_LEVELS[:] = held
+    return min(held)
+
+
+_DIRECTION_LEVELS: list[float] = []
+
+
+def _run_directions(args: tuple) -> list[tuple]:
+    obj, grips, config, trials = args
+    from grip_env.sim import trial
+
+    trial.robustness = _every_direction  # this worker process only
+    rows = []
+    with TrialScene(obj, config) as scene:
+        for plan, key in zip(grip_plans(grips), grip_keys(grips), strict=True):
+            for k in range(trials):
+                _DIRECTION_LEVELS[:] = [0.0] * 6
+                r = scene.run(plan, sample_noise(trial_rng(0, key, k), config))
+                rows.append((obj.name, key, k, r.success, r.robustness_g, r.held, r.steps,
+                             *_DIRECTION_LEVELS))
+    return rows
+
+
+#: The planar disturbances' names, in ``disturbance.PLANAR_DISTURBANCES`` order.
+DIRECTIONS = ("+x", "-x", "+y", "-y", "+twist", "-twist")
+
+
+def direction_levels(config: Config, per_object: int, trials: int,
+                     workers: int = 2) -> pd.DataFrame:
+    """``outcomes`` with the level held in each planar direction, every ramp run to its end."""
+    if config.sim.ramp_directions != "planar":
+        raise ValueError("direction_levels ramps the planar disturbances only")
+    jobs = [(obj, g, config, trials) for obj, g in sample_grips(per_object, Config())]
+    with ProcessPoolExecutor(workers) as pool:
+        rows = [row for part in pool.map(_run_directions, jobs) for row in part]
+    return pd.DataFrame(rows, columns=["object", "grip", "trial", "success", "robustness",
+                                       "held", "steps", *DIRECTIONS])
+
+
+def paired_directions(a: pd.DataFrame, b: pd.DataFrame) -> dict:
+    """``paired_difference`` plus, per direction, the mean change of the level held in
+    octaves (log2 of B over A, levels below 1 g counted as 1 g)."""
+    m = a.merge(b, on=["object", "grip", "trial"], suffixes=("_a", "_b"))
+    octaves = {d: round(float(np.mean(np.log2(np.maximum(m[f"{d}_b"], 1.0))
+                                      - np.log2(np.maximum(m[f"{d}_a"], 1.0)))), 3)
+               for d in DIRECTIONS}
+    return {**paired_difference(a, b), "octaves": octaves}
+
+
 def label_curve(iterations: tuple[int, ...] = (100, 200, 400), per_object: int = 20,
                 trials: int = 3, workers: int = 2) -> list[dict]:
     """Success and robustness of the same draws at each solver iteration count; every count
@@ -387,7 +452,7 @@ def _overrides(items: list[str]) -> Config:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("what", choices=("convergence", "decomposition", "slip", "cost",
-                                           "curve", "paired", "chaos"))
+                                           "curve", "paired", "chaos", "directions"))
     parser.add_argument("--a", nargs="*", default=[], help="overrides of config A")
     parser.add_argument("--b", nargs="*", default=[], help="overrides of config B")
     parser.add_argument("--per-object", type=int, default=20)
@@ -408,6 +473,10 @@ def main() -> None:
     elif args.what == "curve":
         result = label_curve(per_object=args.per_object, trials=args.trials,
                              workers=args.workers)
+    elif args.what == "directions":
+        a = direction_levels(_overrides(args.a), args.per_object, args.trials, args.workers)
+        b = direction_levels(_overrides(args.b), args.per_object, args.trials, args.workers)
+        result = paired_directions(a, b)
     else:
         a = outcomes(_overrides(args.a), args.per_object, args.trials, workers=args.workers)
         b = outcomes(_overrides(args.b if args.what == "paired" else args.a), args.per_object,
