@@ -315,33 +315,6 @@ def _apply(variant: str) -> None:
         hand.Hand.drive_fingers = drive_fingers
 
 
-def _run(args: tuple) -> list[tuple]:
-    obj, grips, config, trials, shift_mm, variant = args
-    _apply(variant)
-    rows = []
-    with TrialScene(obj, config) as scene:
-        for plan, key in zip(grip_plans(grips), grip_keys(grips), strict=True):
-            for k in range(trials):
-                noise = sample_noise(trial_rng(0, key, k), config)
-                if shift_mm:
-                    noise = replace(noise, offset_mm=(noise.offset_mm[0] + shift_mm,
-                                                      noise.offset_mm[1]))
-                r = scene.run(plan, noise)
-                rows.append((obj.name, key, k, r.success, r.robustness_g, r.held, r.steps))
-    return rows
-
-
-def outcomes(config: Config, per_object: int, trials: int, shift_mm: float = 0.0,
-             workers: int = 2, variant: str = "none") -> pd.DataFrame:
-    """One row per (object, grip, trial) under ``config`` (with one fix undone: ``variant``)."""
-    jobs = [(obj, g, config, trials, shift_mm, variant)
-            for obj, g in sample_grips(per_object, Config())]
-    with ProcessPoolExecutor(workers) as pool:
-        rows = [row for part in pool.map(_run, jobs) for row in part]
-    return pd.DataFrame(rows, columns=["object", "grip", "trial", "success", "robustness",
-                                       "held", "steps"])
-
-
 def _every_direction(probe, mass_kg: float, gyration_m: float, config) -> float:
     """``disturbance.robustness`` with every direction ramped to its end (not stopped at the
     weakest so far); the levels are kept in ``_DIRECTION_LEVELS``."""
@@ -360,38 +333,45 @@ def _every_direction(probe, mass_kg: float, gyration_m: float, config) -> float:
 
 
 _DIRECTION_LEVELS: list[float] = []
-
-
-def _run_directions(args: tuple) -> list[tuple]:
-    obj, grips, config, trials = args
-    from grip_env.sim import trial
-
-    trial.robustness = _every_direction  # this worker process only
-    rows = []
-    with TrialScene(obj, config) as scene:
-        for plan, key in zip(grip_plans(grips), grip_keys(grips), strict=True):
-            for k in range(trials):
-                _DIRECTION_LEVELS[:] = [0.0] * 6
-                r = scene.run(plan, sample_noise(trial_rng(0, key, k), config))
-                rows.append((obj.name, key, k, r.success, r.robustness_g, r.held, r.steps,
-                             *_DIRECTION_LEVELS))
-    return rows
-
-
 #: The planar disturbances' names, in ``disturbance.PLANAR_DISTURBANCES`` order.
 DIRECTIONS = ("+x", "-x", "+y", "-y", "+twist", "-twist")
 
 
-def direction_levels(config: Config, per_object: int, trials: int,
-                     workers: int = 2) -> pd.DataFrame:
-    """``outcomes`` with the level held in each planar direction, every ramp run to its end."""
-    if config.sim.ramp_directions != "planar":
-        raise ValueError("direction_levels ramps the planar disturbances only")
-    jobs = [(obj, g, config, trials) for obj, g in sample_grips(per_object, Config())]
+def _run(args: tuple) -> list[tuple]:
+    obj, grips, config, trials, shift_mm, variant, directions = args
+    _apply(variant)
+    if directions:
+        from grip_env.sim import trial
+
+        trial.robustness = _every_direction  # this worker process only
+    rows = []
+    with TrialScene(obj, config) as scene:
+        for plan, key in zip(grip_plans(grips), grip_keys(grips), strict=True):
+            for k in range(trials):
+                noise = sample_noise(trial_rng(0, key, k), config)
+                if shift_mm:
+                    noise = replace(noise, offset_mm=(noise.offset_mm[0] + shift_mm,
+                                                      noise.offset_mm[1]))
+                _DIRECTION_LEVELS[:] = [0.0] * len(DIRECTIONS)  # a trial not held ramps none
+                r = scene.run(plan, noise)
+                row = (obj.name, key, k, r.success, r.robustness_g, r.held, r.steps)
+                rows.append(row + (tuple(_DIRECTION_LEVELS) if directions else ()))
+    return rows
+
+
+def outcomes(config: Config, per_object: int, trials: int, shift_mm: float = 0.0,
+             workers: int = 2, variant: str = "none", directions: bool = False) -> pd.DataFrame:
+    """One row per (object, grip, trial) under ``config`` (with one fix undone: ``variant``);
+    with ``directions`` also the level held in each planar direction, every ramp run to its
+    end."""
+    if directions and config.sim.ramp_directions != "planar":
+        raise ValueError("directions ramps the planar disturbances only")
+    jobs = [(obj, g, config, trials, shift_mm, variant, directions)
+            for obj, g in sample_grips(per_object, Config())]
     with ProcessPoolExecutor(workers) as pool:
-        rows = [row for part in pool.map(_run_directions, jobs) for row in part]
+        rows = [row for part in pool.map(_run, jobs) for row in part]
     return pd.DataFrame(rows, columns=["object", "grip", "trial", "success", "robustness",
-                                       "held", "steps", *DIRECTIONS])
+                                       "held", "steps", *(DIRECTIONS if directions else ())])
 
 
 def paired_directions(a: pd.DataFrame, b: pd.DataFrame) -> dict:
@@ -474,8 +454,8 @@ def main() -> None:
         result = label_curve(per_object=args.per_object, trials=args.trials,
                              workers=args.workers)
     elif args.what == "directions":
-        a = direction_levels(_overrides(args.a), args.per_object, args.trials, args.workers)
-        b = direction_levels(_overrides(args.b), args.per_object, args.trials, args.workers)
+        a, b = (outcomes(_overrides(side), args.per_object, args.trials,
+                         workers=args.workers, directions=True) for side in (args.a, args.b))
         result = paired_directions(a, b)
     else:
         a = outcomes(_overrides(args.a), args.per_object, args.trials, workers=args.workers)
