@@ -1,7 +1,9 @@
 """One grip execution in PyBullet: place, pre-shape, lower, close, lift, hold, judge, disturb.
 
-A ``TrialScene`` owns one ``World`` with the table, the object and the hand, saved once; every
-trial restores that state (cheaper than rebuilding, see the benchmark) and applies its noise.
+A ``TrialScene`` builds a fresh ``World`` (its own PyBullet client) with the table, the object
+and the hand for every trial, so that no trial can reach the state another left: PyBullet's
+``restoreState`` does not restore everything the solver carries from step to step, and restored
+scenes made 23 % of trials depend on the trials run before them (BENCHMARKS.md, "A clean trial").
 All three fingertip pads are planned to touch in one horizontal plane, as close above the
 object's mid-thickness as the hand reaches (``sim.contact_plane_rise_mm``), so the planar model's
 contacts are the simulated ones (no pitching couple between fingers). A trial is
@@ -95,26 +97,37 @@ class TrialScene:
     def __init__(self, obj: PlanarObject, config: Config | None = None) -> None:
         self.obj = obj
         self.config = config if config is not None else Config()
-        sim = self.config.sim
         self.thickness_mm = execution_height_mm(obj, self.config.objects)
         self.mass_kg = object_mass_kg(obj, self.config)
+        self._postures: dict[GripPlan, ContactPosture] = {}
+        self._build()
+
+    def _build(self) -> None:
+        """A new world holding the table, the object at rest and the hand high above it."""
+        sim, objects = self.config.sim, self.config.objects
         self.world = World(timestep=sim.timestep, solver_iterations=sim.solver_iterations)
         self.world.add_table()
-        if executes_on_mesh(obj, self.config.objects):  # the mesh itself, at rest
-            mesh = obj.mesh
+        if executes_on_mesh(self.obj, objects):  # the mesh itself, at rest
+            mesh = self.obj.mesh
             _, inertia, axes = pose_mass_properties(mesh)
             self.object = self.world.add_mesh(mesh.path(), mesh.scale, np.array(mesh.com_mm),
                                               np.array(mesh.position_mm), mesh.orientation,
                                               self.mass_kg, self.config.grasp.mu, inertia, axes)
         else:
-            self.object = self.world.add_object(obj, self.thickness_mm, self.mass_kg,
+            self.object = self.world.add_object(self.obj, self.thickness_mm, self.mass_kg,
                                                 self.config.grasp.mu,
-                                                tolerance_mm=self.config.objects.sim_tolerance_mm)
+                                                tolerance_mm=objects.sim_tolerance_mm)
         self.gyration_m = float(np.sqrt(self.object.inertia_per_kg[2]))
         self.hand = Hand(self.world, sim)
         self.hand.teleport(np.array([0.0, 0.0, 400.0]), 0.0)
-        self.state = self.world.save()
-        self._postures: dict[GripPlan, ContactPosture] = {}
+        self._pristine = True
+
+    def fresh(self) -> None:
+        """Make the scene as built: a new world unless nothing has touched this one yet."""
+        if not self._pristine:
+            self.world.close()
+            self._build()
+        self._pristine = False
 
     def close(self) -> None:
         """Release the PyBullet client."""
@@ -176,14 +189,16 @@ class TrialScene:
         return self._postures[plan]
 
     def _place(self, plan: GripPlan, noise: TrialNoise) -> tuple[NDArray, float, float]:
-        """Reset, pre-shape the hand for the plan and put it (with error) just above its height."""
+        """A fresh world, the hand pre-shaped for the plan and put (with the trial's error, in
+        the palm frame) just above its height."""
         sim = self.config.sim
-        self.world.restore(self.state)
+        self.fresh()
         self.world.set_dynamics(self.object, self.mass_kg * noise.mass_scale, noise.friction)
         posture = self.posture(plan)
         q2_open, q3_open = opening_posture(posture.q2, posture.q3, sim.preshape_gap_mm)
         grip_z = float(posture.plane_z_mm + posture.height_mm)
-        palm = np.asarray(plan.palm_mm) + np.asarray(noise.offset_mm)
+        error = palm_to_world(plan.yaw, np.array([*noise.offset_mm, 0.0]))[:2]  # palm frame
+        palm = np.asarray(plan.palm_mm) + error
         yaw = plan.yaw + noise.yaw_error
         self.hand.teleport(np.array([*palm, grip_z + APPROACH_MM]), yaw)
         self.hand.preshape(plan.spread, q2_open, q3_open)
@@ -287,11 +302,11 @@ def render_trial_strip(
     """Run one trial of ``grip`` (a candidate row) and write a PNG strip of its phases.
 
     Frames: approach, closed, held after the lift, seen obliquely from the side; the trial's
-    noise is drawn from ``seed`` (trial 0 of a grip keyed 0). Returns the trial's result.
+    noise is trial 0's draw of the object (``seed``, the object's name). Returns the result.
     """
     from PIL import Image
 
-    from grip_env.sim.uncertainty import sample_noise, trial_rng
+    from grip_env.sim.uncertainty import stable_key, trial_noises
 
     row = pd.DataFrame([dict(grip)])
     plan = grip_plans(row)[0]
@@ -304,7 +319,7 @@ def render_trial_strip(
         frames.append(scene.world.render(eye, target, width, height))
 
     with TrialScene(obj, config) as scene:
-        noise = sample_noise(trial_rng(seed, 0, 0), scene.config)
+        noise = trial_noises(scene.config, seed, stable_key(obj.name), [0], [0])[0][0]
         result = scene.run(plan, noise, on_phase=capture)
     Image.fromarray(np.concatenate(frames, axis=1)).save(Path(path))
     return result
