@@ -51,7 +51,6 @@ def _paired_best(
     perceived: list,
 ) -> tuple[pd.DataFrame, dict[str, float]]:
     """One row per object with grips on both plans: the two best grips' compared values."""
-    from grip_env.dataset.jobs import ObjectTask
     from grip_env.objects.meshes import execution_height_mm
     from grip_env.pipeline import candidates
     from grip_env.sim import run_trials
@@ -67,10 +66,9 @@ def _paired_best(
         plan_s += time.perf_counter() - start
         if true_plan.empty:
             continue
-        task = ObjectTask(entry["index"], entry["object_id"], obj, config, entry["seed"])
         start = time.perf_counter()
-        best = true_plan.iloc[:1]
-        outcome = run_trials(obj, best, config, config.dataset.trials, task.child_seeds()[1])
+        best = true_plan.iloc[:1].assign(object_id=entry["object_id"])  # the dataset's draws
+        outcome = run_trials(obj, best, config, config.dataset.trials, config.dataset.seed)
         sim_s += time.perf_counter() - start
         true_best = best.iloc[0].to_dict() | {
             "success_rate": outcome["successes"].iloc[0] / outcome["trials"].iloc[0],

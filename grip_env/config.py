@@ -212,6 +212,16 @@ class UncertaintyConfig(_Section):
         (0.4, 0.9), description="true pad-object friction drawn in (0..3)"
     )
     mass_rel_std: float = Field(0.2, ge=0.0, le=2.0, description="object mass relative std")
+    draws: Literal["common", "per_grip"] = Field(
+        "common",
+        description="trial k of every grip of an object shares one draw (common), or each grip "
+                    "draws its own (per_grip, before label model 2026.12-crn)",
+    )
+    stratified: bool = Field(
+        False,
+        description="spread friction and mass over their ranges across each block of "
+                    "dataset.trials trials (Latin hypercube) instead of sampling independently",
+    )
     perceived_contour: bool = Field(False, description="plan on the perceived contour")
 
     @model_validator(mode="after")

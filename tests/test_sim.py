@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -9,8 +11,14 @@ import pytest
 from grip_env.config import Config
 from grip_env.finger import finger_reaches
 from grip_env.objects import PlanarObject, make_shape
-from grip_env.sim import TrialNoise, render_trial_strip, run_trials, sample_noise
-from grip_env.sim.uncertainty import trial_rng
+from grip_env.sim import (
+    TrialNoise,
+    render_trial_strip,
+    run_trial_outcomes,
+    run_trials,
+    sample_noise,
+)
+from grip_env.sim.uncertainty import stable_key, trial_noises, trial_rng
 
 BOX = make_shape("rectangle")  # 90 x 55 mm
 PLATE = PlanarObject.from_polygon(
@@ -141,3 +149,67 @@ def test_squeeze_outside_the_friction_cone_slips(half_angle_deg, holds):
     result = run_trials(_wedge(angle), pd.DataFrame([wedge_grip]), config, trials=6, seed=0)
     robustness = result.loc[0, "robustness_mean"]
     assert robustness >= 2.0 if holds else robustness <= 0.5
+
+
+# ------------------------------------------------------------------ common random numbers
+def test_every_grip_of_an_object_meets_the_same_draw_in_trial_k():
+    rows = pd.DataFrame([OPPOSED, {**OPPOSED, "grip_id": "shifted", "hand_x": 6.0}])
+    common = run_trial_outcomes(BOX, rows, trials=3, seed=4).set_index(["grip", "trial"])
+    for k in range(3):
+        assert common.loc[(0, k), ["friction", "mass_kg"]].tolist() == pytest.approx(
+            common.loc[(1, k), ["friction", "mass_kg"]].tolist(), abs=0)
+    assert common.loc[(0, 0), "friction"] != common.loc[(0, 1), "friction"]
+    own = Config().override(uncertainty={"draws": "per_grip"})
+    per_grip = run_trial_outcomes(BOX, rows, own, trials=1, seed=4).set_index("grip")
+    assert per_grip.loc[0, "friction"] != per_grip.loc[1, "friction"]
+
+
+def test_the_common_draw_is_keyed_by_the_object_id_not_by_its_place_in_a_run():
+    config = Config()
+    keyed = [trial_noises(config, 2, stable_key(name), [0], [0, 1]) for name in ("a", "a", "b")]
+    assert keyed[0] == keyed[1] and keyed[0] != keyed[2]
+    rows = pd.DataFrame([OPPOSED])
+    as_box = run_trial_outcomes(BOX, rows.assign(object_id="box"), trials=1, seed=2)
+    as_other = run_trial_outcomes(BOX, rows.assign(object_id="other"), trials=1, seed=2)
+    renamed = run_trial_outcomes(dataclasses.replace(BOX, name="box"), rows, trials=1, seed=2)
+    assert as_box["friction"].iloc[0] == renamed["friction"].iloc[0]
+    assert as_box["friction"].iloc[0] != as_other["friction"].iloc[0]
+    with pytest.raises(ValueError, match="one object"):
+        run_trial_outcomes(BOX, pd.DataFrame([OPPOSED, OPPOSED]).assign(object_id=["a", "b"]))
+
+
+def test_per_grip_draws_are_the_draws_before_common_random_numbers():
+    """``draws: per_grip`` keeps the old scheme: trial k of grip key g draws from (seed, g, k)."""
+    config = Config().override(uncertainty={"draws": "per_grip"})
+    noises = trial_noises(config, 5, stable_key("obj"), [11, 12], [0, 1])
+    assert noises[1][0] == sample_noise(trial_rng(5, 12, 0), config)
+
+
+@pytest.mark.parametrize("yaw", [0.0, 0.7, 2.5])
+def test_the_palm_error_is_in_the_palm_frame(yaw):
+    """The same draw moves every grip's palm by the same amount relative to its own plan: along
+    the thumb's force and across it, whatever the plan's yaw."""
+    from grip_env.sim import GripPlan, TrialScene
+
+    plan = GripPlan((4.0, -2.0), yaw, 0.0, (27.5, 27.5, 27.5))
+    along_thumb = TrialNoise((0.0, 3.0), 0.0, 0.5, 1.0)
+    with TrialScene(BOX, Config()) as scene:
+        palm, _, _ = scene._place(plan, along_thumb)
+    np.testing.assert_allclose(palm - np.asarray(plan.palm_mm),
+                               3.0 * np.array([np.cos(yaw), np.sin(yaw)]), atol=1e-12)
+
+
+def test_stratified_draws_put_one_trial_in_each_stratum_of_a_block():
+    config = Config().override(dataset={"trials": 5}, uncertainty={"stratified": True})
+    low, high = config.uncertainty.friction_range
+    noises = trial_noises(config, 3, 99, [0], range(10))[0]
+    for block in (noises[:5], noises[5:]):
+        strata = sorted(int((n.friction - low) / (high - low) * 5) for n in block)
+        assert strata == [0, 1, 2, 3, 4]
+    masses = np.array([n.mass_scale for n in noises])
+    assert len(set(np.round(masses, 12))) == 10 and (masses > 0).all()
+
+
+def test_an_unknown_draw_scheme_is_refused_by_name():
+    with pytest.raises(ValueError, match="draws"):
+        Config().override(uncertainty={"draws": "shared"})

@@ -60,19 +60,22 @@ def object_seeds(run_seed: int, count: int) -> list[int]:
 
 def simulate_object(task: ObjectTask) -> pd.DataFrame:
     """The real job: candidates on the (perceived) contour, the ones ``dataset.sampling`` keeps,
-    trials on the true contour."""
+    trials on the true contour.
+
+    The trials' draws are keyed by the run seed and the object's id (common to its grips), never
+    by the object's position in the run."""
     from grip_env.dataset.sampling import keep_grips
     from grip_env.objects.meshes import execution_height_mm
     from grip_env.pipeline import candidates
     from grip_env.sim import run_trials
 
     config = task.config
-    _, trials_seed = task.child_seeds()
     planned_on = task.planned_on or planning_contour(task)
     height = execution_height_mm(task.obj, config.objects)  # of the true body
     table = candidates(planned_on, config.grasp, config, height_mm=height)
     kept = keep_grips(table, config.dataset, task.sampling_seed())
-    outcome = run_trials(task.obj, kept, config, config.dataset.trials, trials_seed)
+    outcome = run_trials(task.obj, kept.assign(object_id=task.object_id), config,
+                         config.dataset.trials, config.dataset.seed)
     return with_outcomes(kept, outcome, task.object_id)
 
 

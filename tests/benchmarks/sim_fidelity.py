@@ -5,6 +5,7 @@
     python -m tests.benchmarks.sim_fidelity slip
     python -m tests.benchmarks.sim_fidelity cost
     python -m tests.benchmarks.sim_fidelity curve --trials 3
+    python -m tests.benchmarks.sim_fidelity ramp --steps 3 6 12 --trials 3 --cache runs/ramp
     python -m tests.benchmarks.sim_fidelity paired --b sim.solver_iterations=300 --trials 1200
     python -m tests.benchmarks.sim_fidelity chaos
     python -m tests.benchmarks.sim_fidelity directions --b sim.solver_iterations=300 --trials 2
@@ -23,6 +24,8 @@
   grips' trials, and the share of closes that settle, at 100, 150, 200 and 300 iterations.
 * ``curve``: success and robustness of the same (grip, trial) draws at 100, 200 and 400 solver
   iterations, each count paired with the first.
+* ``ramp``: success and robustness of the same draws at each number of steps per ramp level,
+  each count paired with the next (the ramp's convergence in time: N against 2N).
 * ``cost``: time per physics step and per trial of the same grips at 100, 150 and 200 iterations.
 * ``paired``: the same (grip, trial) pairs under config A (the default) and config B (dotted
   overrides); the paired difference in success and in robustness with 95 % intervals, and the
@@ -52,7 +55,13 @@ from grip_env.objects import load_object_set, make_shape
 from grip_env.pipeline import candidates
 from grip_env.sim import TrialResult, TrialScene, grip_plans
 from grip_env.sim.execution import grip_keys
-from grip_env.sim.uncertainty import sample_noise, trial_rng, zero_noise
+from grip_env.sim.uncertainty import (
+    sample_noise,
+    stable_key,
+    trial_noises,
+    trial_rng,
+    zero_noise,
+)
 
 
 def convergence(iterations: tuple[int, ...] = (50, 100, 150, 200, 300)) -> list[dict]:
@@ -345,10 +354,11 @@ def _run(args: tuple) -> list[tuple]:
 
         trial.robustness = _every_direction  # this worker process only
     rows = []
+    keys = grip_keys(grips)
+    draws = trial_noises(config, 0, stable_key(obj.name), keys, range(trials))
     with TrialScene(obj, config) as scene:
-        for plan, key in zip(grip_plans(grips), grip_keys(grips), strict=True):
-            for k in range(trials):
-                noise = sample_noise(trial_rng(0, key, k), config)
+        for plan, key, noises in zip(grip_plans(grips), keys, draws, strict=True):
+            for k, noise in enumerate(noises):
                 if shift_mm:
                     noise = replace(noise, offset_mm=(noise.offset_mm[0] + shift_mm,
                                                       noise.offset_mm[1]))
@@ -402,6 +412,33 @@ def label_curve(iterations: tuple[int, ...] = (100, 200, 400), per_object: int =
     return rows
 
 
+def ramp_convergence(steps: tuple[int, ...] = (3, 6, 12), per_object: int = 20, trials: int = 3,
+                     workers: int = 2, cache: str | None = None) -> list[dict]:
+    """Labels of the same draws at each number of steps per ramp level, each count paired with
+    the next (N against 2N when the counts double); ``cache`` keeps each count's trials."""
+    from pathlib import Path
+
+    rows, previous = [], None
+    for n in steps:
+        path = Path(cache) / f"ramp_steps_{n}.parquet" if cache else None
+        if path is not None and path.exists():
+            out = pd.read_parquet(path)
+        else:
+            out = outcomes(Config().override(sim={"ramp_steps_per_level": n}), per_object,
+                           trials, workers=workers)
+            if path is not None:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                out.to_parquet(path)
+        row: dict = {"steps_per_level": n, "success": round(float(out.success.mean()), 4),
+                     "robustness_g": round(float(out.robustness.mean()), 2),
+                     "steps": round(float(out.steps.mean()), 1)}
+        if previous is not None:
+            row["against_previous"] = paired_difference(previous, out)
+        rows.append(row)
+        previous = out
+    return rows
+
+
 def paired_difference(a: pd.DataFrame, b: pd.DataFrame) -> dict:
     """B minus A over the same trials: success (pp) and robustness (g) with 95 % intervals."""
     m = a.merge(b, on=["object", "grip", "trial"], suffixes=("_a", "_b"))
@@ -432,7 +469,10 @@ def _overrides(items: list[str]) -> Config:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("what", choices=("convergence", "decomposition", "slip", "cost",
-                                           "curve", "paired", "chaos", "directions"))
+                                           "curve", "ramp", "paired", "chaos", "directions"))
+    parser.add_argument("--steps", type=int, nargs="*", default=[3, 6, 12],
+                        help="ramp: steps per level to compare, each with the next")
+    parser.add_argument("--cache", default=None, help="ramp: folder keeping each count's trials")
     parser.add_argument("--a", nargs="*", default=[], help="overrides of config A")
     parser.add_argument("--b", nargs="*", default=[], help="overrides of config B")
     parser.add_argument("--per-object", type=int, default=20)
@@ -453,6 +493,9 @@ def main() -> None:
     elif args.what == "curve":
         result = label_curve(per_object=args.per_object, trials=args.trials,
                              workers=args.workers)
+    elif args.what == "ramp":
+        result = ramp_convergence(tuple(args.steps), args.per_object, args.trials,
+                                  args.workers, args.cache)
     elif args.what == "directions":
         a, b = (outcomes(_overrides(side), args.per_object, args.trials,
                          workers=args.workers, directions=True) for side in (args.a, args.b))

@@ -1,0 +1,116 @@
+"""Within-object test-retest of the labels by trials per grip and draw scheme (BENCHMARKS.md,
+"Labels that rank the grips of one object"). Run by hand; it takes minutes.
+
+    python -m tests.benchmarks.label_reliability --objects 12 --trials 3 --cache runs/reliability
+
+Objects: the default set in order, then procedural ones, each with at least 4 kept grips (the
+dataset's own ``keep_grips``: up to ``dataset.max_grips_per_object``, stratified over Q_C). Each
+grip runs 2 x T trials (``--trials`` T) under every draw scheme of ``SCHEMES``: seed set A is
+trials 0..t-1, set B trials T..T+t-1, for t = 1..T (independent draws are independent of T; a
+stratified scheme stratifies blocks of ``dataset.trials`` = T). Per object: Spearman of the A
+and B grip means; the figure is their mean over objects with a bootstrap interval over objects,
+and the pooled Spearman over all grips. The cost: core-seconds per grip per trial.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from scipy import stats
+
+from grip_env.config import Config
+from grip_env.dataset.sampling import keep_grips
+from grip_env.objects import PlanarObject, load_object_set, procedural_objects
+from grip_env.pipeline import candidates
+from grip_env.sim import run_trial_outcomes
+
+#: (name, uncertainty overrides).
+SCHEMES = {
+    "per_grip": {"draws": "per_grip", "stratified": False},
+    "common": {"draws": "common", "stratified": False},
+    "common_stratified": {"draws": "common", "stratified": True},
+}
+MIN_GRIPS = 4
+
+
+def chosen_objects(count: int, config: Config) -> list[tuple[PlanarObject, pd.DataFrame]]:
+    """The first ``count`` objects with at least ``MIN_GRIPS`` kept grips, and those grips."""
+    out = []
+    for index, obj in enumerate([*load_object_set("default"), *procedural_objects(40, 0)]):
+        kept = keep_grips(candidates(obj, config=config), config.dataset, seed=index)
+        if len(kept) >= MIN_GRIPS:
+            out.append((obj, kept))
+        if len(out) == count:
+            break
+    return out
+
+
+def _run(job: tuple) -> pd.DataFrame:
+    obj, grips, config, trials, scheme = job
+    started = time.process_time()
+    out = run_trial_outcomes(obj, grips, config, trials=2 * trials, seed=0)
+    seconds = time.process_time() - started
+    return out.assign(object=obj.name, scheme=scheme, core_s=seconds / len(out))
+
+
+def outcomes(count: int, trials: int, workers: int, cache: str | None) -> pd.DataFrame:
+    """Every trial of every scheme (cached in ``cache``/reliability_T.parquet)."""
+    path = Path(cache) / f"reliability_{trials}.parquet" if cache else None
+    if path is not None and path.exists():
+        return pd.read_parquet(path)
+    base = Config().override(dataset={"trials": trials})
+    objects = chosen_objects(count, base)
+    jobs = [(obj, grips, base.override(uncertainty=overrides), trials, name)
+            for name, overrides in SCHEMES.items() for obj, grips in objects]
+    with ProcessPoolExecutor(workers) as pool:
+        table = pd.concat(pool.map(_run, jobs), ignore_index=True)
+    if path is not None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        table.to_parquet(path)
+    return table
+
+
+def retest(table: pd.DataFrame, trials: int, t: int, resamples: int = 2000) -> dict:
+    """Within-object and pooled Spearman of set A (trials 0..t-1) against B (T..T+t-1)."""
+    a = table[table["trial"] < t].groupby(["object", "grip"])["robustness"].mean()
+    b = table[(table["trial"] >= trials) & (table["trial"] < trials + t)]
+    b = b.groupby(["object", "grip"])["robustness"].mean()
+    both = pd.DataFrame({"A": a, "B": b}).dropna()
+    within = []
+    for _, g in both.groupby(level="object"):
+        if g["A"].nunique() > 1 and g["B"].nunique() > 1:
+            within.append(stats.spearmanr(g["A"], g["B"]).statistic)
+    within = np.array(within)
+    rng = np.random.default_rng(0)
+    boot = [within[rng.integers(0, within.size, within.size)].mean() for _ in range(resamples)]
+    return {"trials": t, "within": round(float(within.mean()), 3),
+            "within_ci": np.round(np.percentile(boot, [2.5, 97.5]), 3).tolist(),
+            "objects": int(within.size), "grips": len(both),
+            "pooled": round(float(stats.spearmanr(both["A"], both["B"]).statistic), 3),
+            "robustness_g": round(float(table["robustness"].mean()), 2)}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--objects", type=int, default=12)
+    parser.add_argument("--trials", type=int, default=3, help="T: trials per seed set")
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--cache", default=None)
+    args = parser.parse_args()
+    started = time.perf_counter()
+    table = outcomes(args.objects, args.trials, args.workers, args.cache)
+    result = {name: {"retest": [retest(part, args.trials, t) for t in range(1, args.trials + 1)],
+                     "core_s_per_trial": round(float(part["core_s"].mean()), 3)}
+              for name, part in table.groupby("scheme", sort=False)}
+    print(json.dumps({"objects": args.objects, "trials": args.trials, "result": result,
+                      "seconds": round(time.perf_counter() - started, 1)}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
