@@ -42,7 +42,8 @@ STAGE_INPUTS: dict[str, tuple[str, ...]] = {
     "selector": ("learning.models", "learning.seed", "learning.test_fraction", "selector", "sim"),
     "benchmark": ("learning", "selector", "sim", "grasp.mu"),
     "calibration": ("grasp", "objects", "perception", "synthesis", "sim", "uncertainty",
-                    "dataset.seed"),
+                    "dataset.seed", "dataset.trials", "dataset.max_grips_per_object",
+                    "dataset.sampling"),
     "perception": ("grasp", "objects", "perception", "synthesis", "sim", "uncertainty",
                    "dataset", "learning.seed"),
 }
@@ -81,10 +82,12 @@ def run_study(
     """Run every stage into ``out`` and return the path of ``report.md``.
 
     Learner names of ``config.learning`` are checked first: an unknown one is a ``ValueError``
-    naming its key before the dataset stage spends minutes.
+    naming its key before the dataset stage spends minutes; so is a dataset in ``out`` labelled
+    by another label model (:func:`check_label_model`).
     """
     check_learner_names(config)
     out = Path(out)
+    check_label_model(out / "dataset")
     out.mkdir(parents=True, exist_ok=True)
     if quick:
         log(f"[study] {describe_quick(config)}")
@@ -159,6 +162,21 @@ def check_learner_names(config: Config) -> None:
         if unknown:
             raise ValueError(f"learning.{key}: unknown model {unknown[0]!r}; choose from "
                              f"{', '.join(known)}")
+
+
+def check_label_model(data_dir: Path) -> None:
+    """ValueError when ``data_dir`` holds a dataset of another label model than this code's: a
+    study never mixes label models (its stages would compare labels of two simulations)."""
+    from grip_env.dataset import dataset_label_model
+    from grip_env.sim.label_model import LABEL_MODEL
+
+    found = dataset_label_model(data_dir)
+    if found not in (None, LABEL_MODEL):
+        raise ValueError(
+            f"{data_dir} holds a dataset of label model {found!r}, this grip-env's is "
+            f"{LABEL_MODEL!r}: a study does not mix label models; regenerate it into an empty "
+            f"folder (another study folder, or delete {data_dir})"
+        )
 
 
 def stage_record(

@@ -8,6 +8,7 @@ from typing import Annotated
 import typer
 
 from grip_env.cli.errors import user_errors
+from grip_env.cli.notices import warn_label_model
 from grip_env.cli.options import ConfigFile, DatasetDir, OutputDir
 from grip_env.shutdown import stop_on_signals
 
@@ -50,6 +51,7 @@ def benchmark(
         from classifiers.benchmark.leaderboard import write_leaderboard
         from classifiers.selector.training import check_grip_table
 
+        warn_label_model(data)
         table = check_grip_table(data)
         if GROUP_COLUMN not in table.columns:
             raise ValueError(f"dataset {data} has no {GROUP_COLUMN!r} column")

@@ -7,6 +7,7 @@ from typing import Annotated
 import typer
 
 from grip_env.cli.errors import user_errors
+from grip_env.cli.notices import warn_label_model
 from grip_env.cli.options import MODEL_NAMES_HELP, ConfigFile, DatasetDir, OutputDir
 from grip_env.cli.paths import output_dir
 from grip_env.progress import shown
@@ -32,6 +33,7 @@ def train(
             settings = settings.override(learning={"models": model_names(models)})
         check_model_names(settings.learning.models)
         output_dir(out)
+        warn_label_model(data)
         from classifiers.training import train_and_save
         from grip_env.dataset import load
 

@@ -9,7 +9,12 @@ from grip_env.dataset.backends import BACKENDS, WorkerLost
 from grip_env.dataset.catalog import load_objects, load_perceived_objects, read_objects
 from grip_env.dataset.generation import DatasetMismatchError, generate
 from grip_env.dataset.jobs import ObjectJob, ObjectTask, simulate_object, with_outcomes
-from grip_env.dataset.loading import dataset_manifest, load
+from grip_env.dataset.loading import (
+    dataset_label_model,
+    dataset_manifest,
+    label_model_notice,
+    load,
+)
 from grip_env.dataset.manifest import FORMAT_VERSION, FormatVersionError
 from grip_env.dataset.sampling import keep_grips, kept_ranks
 from grip_env.dataset.split import held_out_objects, split_objects, split_table
@@ -23,11 +28,13 @@ __all__ = [
     "ObjectJob",
     "ObjectTask",
     "WorkerLost",
+    "dataset_label_model",
     "dataset_manifest",
     "generate",
     "held_out_objects",
     "keep_grips",
     "kept_ranks",
+    "label_model_notice",
     "load",
     "load_objects",
     "load_perceived_objects",

@@ -2,13 +2,15 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pandas as pd
 
 from grip_env.columns import DATASET_COLUMNS
-from grip_env.dataset.manifest import Manifest, read_manifest, shard_records
+from grip_env.dataset.manifest import FORMAT, MANIFEST_FILE, Manifest, read_manifest, shard_records
 from grip_env.dataset.shards import GRIP_SCHEMA, read_shard
+from grip_env.sim.label_model import label_model_of, label_model_warning
 
 
 def load(path: str | Path, verify: bool = True, allow_partial: bool = False) -> pd.DataFrame:
@@ -51,6 +53,30 @@ def load(path: str | Path, verify: bool = True, allow_partial: bool = False) -> 
 def dataset_manifest(path: str | Path) -> Manifest:
     """The checked manifest of a dataset directory."""
     return read_manifest(Path(path))
+
+
+def dataset_label_model(path: str | Path) -> str | None:
+    """The label model the dataset in ``path`` records (``"unrecorded"`` for an older one);
+    None when ``path`` holds no readable manifest (a bare table, or not a dataset)."""
+    manifest = _manifest_json(Path(path))
+    return None if manifest is None else label_model_of(manifest)
+
+
+def label_model_notice(path: str | Path) -> str | None:
+    """One line when the dataset in ``path`` was labelled by another label model than this
+    code's (:func:`~grip_env.sim.label_model.label_model_warning`), else None."""
+    manifest = _manifest_json(Path(path))
+    return None if manifest is None else label_model_warning(manifest, f"dataset {path}")
+
+
+def _manifest_json(directory: Path) -> Manifest | None:
+    """A grip-env manifest as stored, unchecked (its readers report a bad one); None when
+    ``directory`` holds none."""
+    try:
+        manifest = json.loads((directory / MANIFEST_FILE).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError):
+        return None
+    return manifest if isinstance(manifest, dict) and manifest.get("format") == FORMAT else None
 
 
 def _empty_grips() -> pd.DataFrame:

@@ -22,6 +22,7 @@ from grip_env.dataset.files import write_text_atomically
 from grip_env.dataset.sampling import sampling_record
 from grip_env.dataset.shards import GRIPS_DIR, SHARD_FILE, ShardRecord
 from grip_env.objects.family import object_family
+from grip_env.sim.label_model import LABEL_MODEL
 
 FORMAT = "grip-env-dataset"
 #: 2: outcome columns robustness_mean and robustness_std; kept grips chosen by dataset.sampling.
@@ -57,7 +58,7 @@ def run_identity(
     config: Config, entries: list[DatasetObject], own_objects: bool = False
 ) -> dict[str, Any]:
     """Everything that determines a dataset's rows: config (minus execution fields and the
-    learning sections) and objects.
+    learning sections), objects and the label model (a new one never resumes an old run).
 
     Named and procedural objects are fixed by their ids and the config; a caller's own objects
     (``own_objects``) also by the SHA-256 of their contours, so an edited file is a new run.
@@ -65,7 +66,8 @@ def run_identity(
     settings = config.model_dump(mode="json")
     for name in EXECUTION_FIELDS:
         settings["dataset"].pop(name, None)
-    identity = {"config": settings, "object_ids": [entry.object_id for entry in entries]}
+    identity = {"config": settings, "object_ids": [entry.object_id for entry in entries],
+                "label_model": LABEL_MODEL}
     if own_objects:
         identity["object_contours_sha256"] = contours_sha256(entries)
     return without_learning(identity)
@@ -104,6 +106,7 @@ def new_manifest(
         "git_commit": _git_commit(),
         "created": datetime.now(UTC).isoformat(timespec="seconds"),
         "versions": _versions(),
+        "label_model": LABEL_MODEL,
         "seed": config.dataset.seed,
         "trials": config.dataset.trials,
         "sampling": sampling_record(config.dataset),

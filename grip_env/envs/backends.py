@@ -57,10 +57,15 @@ class ReplayBackend:
             the features, and ``trials``/``successes`` or ``success_rate``).
         objects: restrict to these object ids (names, or objects whose ``name`` is the id);
             objects also give the contours used for drawing.
+
+    A dataset directory labelled by another label model than this code's
+    (:data:`grip_env.sim.LABEL_MODEL`) gives one ``UserWarning``.
     """
 
     def __init__(self, data: str | Path | pd.DataFrame, objects: ObjectsArg = None) -> None:
         frame = data if isinstance(data, pd.DataFrame) else _load_dataset(data)
+        if not isinstance(data, pd.DataFrame):
+            _warn_label_model(data)
         missing = [name for name in _REPLAY_COLUMNS if name not in frame.columns]
         if missing:
             raise ValueError(f"replay data lacks columns {missing}")
@@ -145,6 +150,17 @@ def _load_dataset(path: str | Path) -> pd.DataFrame:
     if not Path(path).exists():
         raise ValueError(f"dataset not found: {path}")
     return load(path)
+
+
+def _warn_label_model(path: str | Path) -> None:
+    """Warn (once per backend) when the dataset was labelled by another label model."""
+    from gymnasium import logger
+
+    from grip_env.dataset import label_model_notice
+
+    notice = label_model_notice(path)
+    if notice is not None:
+        logger.warn("%s", notice)
 
 
 def _stored_contours(path: str | Path) -> dict[str, NDArray[np.float64]]:

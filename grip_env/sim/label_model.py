@@ -1,0 +1,36 @@
+"""The label model: the id of everything that decides a trial's outcome.
+
+The scene, the hand and its controller, the noise and how it is drawn, the disturbance ramp and
+the judgement together make a label. ``LABEL_MODEL`` names the one this code implements; every
+dataset's manifest records it as ``label_model``, and ``tests/test_golden.py`` pins a fixed set
+of trial outcomes to it. A change that moves any trial outcome is a new label model: bump the id,
+renew the golden recording (``python -m tests.golden --record``) and regenerate the standard
+dataset.
+
+History (the figures behind each are in BENCHMARKS.md):
+
+- ``2026.12-crn``: every trial in a freshly built world; trial k of every grip of an object
+  shares one draw (common random numbers, keyed by the object's id); the palm's error in the
+  palm frame; the ramp converged in time. Before it, datasets recorded no label model.
+"""
+
+from __future__ import annotations
+
+LABEL_MODEL = "2026.12-crn"
+#: What a manifest written before label models were recorded is taken to hold.
+UNRECORDED = "unrecorded"
+
+
+def label_model_of(manifest: dict) -> str:
+    """The label model a dataset manifest records (``UNRECORDED`` for older datasets)."""
+    value = manifest.get("label_model")
+    return value if isinstance(value, str) and value else UNRECORDED
+
+
+def label_model_warning(manifest: dict, where: str = "dataset") -> str | None:
+    """One line saying that ``where``'s labels come from another label model, or None."""
+    found = label_model_of(manifest)
+    if found == LABEL_MODEL:
+        return None
+    return (f"{where} was labelled by label model {found!r}, this grip-env's is {LABEL_MODEL!r}: "
+            f"its outcomes are not what this code produces (regenerate it to compare)")
