@@ -1,6 +1,6 @@
 """Label validity: do the simulated outcomes measure the grip rather than the trial's draws?
 
-``calibrate(config, settings)`` runs four measured checks through the public simulation API
+``calibrate(config, settings)`` runs five measured checks through the public simulation API
 (:func:`grip_env.sim.run_trial_outcomes`), one job per object on ``dataset.backend``
 (:func:`grip_env.dataset.backends.run_jobs`):
 
@@ -14,7 +14,12 @@
   ``0..n-1`` and ``n..2n-1`` of one call, i.e. ``trial_offset = 0`` and ``n``) over the best and
   worst grips by Q_C of default objects: Spearman with a bootstrap interval over grips;
 - ``icc``: ICC(1) of per-trial robustness with the grip as class (one-way random effects,
-  Shrout & Fleiss 1979), with its exact F-based 95% interval.
+  Shrout & Fleiss 1979), with its exact F-based 95% interval;
+- ``within_object``: within one object, do two sets of trials rank its grips alike (what a robot
+  choosing among them needs)? On default then procedural objects, all the grips a dataset keeps
+  for each (``dataset.sampling``) run 2n trials, n = ``dataset.trials`` (one common draw per
+  trial and object); per object, Spearman of set-A (trials ``0..n-1``) against set-B
+  (``n..2n-1``) grip means; their mean with a bootstrap interval over objects.
 
 :func:`decile_check` adds the dataset check (Spearman of Q_C or Q_G decile against the decile's
 mean robustness, with an object-cluster bootstrap interval). Every figure is reported as measured;
@@ -39,6 +44,10 @@ from grip_env.progress import progress_bar
 
 BOXES_MM: tuple[tuple[float, float], ...] = ((90.0, 55.0), (70.0, 70.0), (120.0, 40.0))
 RETEST_TARGET = 0.8
+#: Objects the within-object check must score (not tied on a side) for a verdict.
+WITHIN_SCORED = 12
+#: Kept grips an object needs to take part in the within-object check.
+MIN_WITHIN_GRIPS = 4
 ICC_TARGET = 0.5
 DECILE_TARGET = -0.8
 #: Procedural candidates per wanted cone object (nearly every procedural shape has grips both
@@ -63,22 +72,34 @@ class CalibrationSettings:
     cone_objects: int = 40
     cone_trials: int = 4
     design_trials: int = 2
+    # default, then procedural, objects with >= MIN_WITHIN_GRIPS kept grips (0: no check), and
+    # kept grips used per object (0: all of them, as the target asks; quick() caps them); 14 so
+    # that WITHIN_SCORED are scored when a light box's grips all tie (every trial at the ceiling)
+    within_objects: int = 14
+    within_grips: int = 0
     bootstrap: int = 2000
     seed: int = 0
     workers: int = 2
 
     def __post_init__(self) -> None:
         for name, value in asdict(self).items():
-            minimum = 0 if name in ("seed", "retest_objects", "cone_objects") else 1
+            minimum = 0 if name in ("seed", "retest_objects", "cone_objects", "within_objects",
+                                    "within_grips") else 1  # fmt: skip
             if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
                 raise ValueError(f"calibration setting {name} must be an integer >= {minimum}, "
                                  f"got {value!r}")  # fmt: skip
+        if 0 < self.within_grips < MIN_WITHIN_GRIPS:
+            raise ValueError(f"calibration setting within_grips must be 0 (all) or >= "
+                             f"{MIN_WITHIN_GRIPS}, got {self.within_grips}")  # fmt: skip
 
     @classmethod
     def quick(cls, workers: int = 1) -> CalibrationSettings:
         """A run of a few dozen trials: every check computed, none meaningful."""
+        # three within-object objects: the first two, a rectangle and a square, have grips that
+        # meet each common draw alike (a constant side: skipped)
         return cls(retest_objects=2, grips_per_end=2, trials_per_set=2, cone_objects=1,
-                   cone_trials=2, design_trials=1, bootstrap=200, workers=workers)  # fmt: skip
+                   cone_trials=2, design_trials=1, within_objects=3,
+                   within_grips=MIN_WITHIN_GRIPS, bootstrap=200, workers=workers)  # fmt: skip
 
 
 # ------------------------------------------------------------------------------------ objects
@@ -123,9 +144,29 @@ def _planned(obj: PlanarObject, config: Config) -> pd.DataFrame:
     return table.sort_values("Q_C", kind="stable").set_index("grip_id", drop=False)
 
 
+def kept_grips(obj: PlanarObject, table: pd.DataFrame, config: Config, seed: int,
+               index: int) -> pd.DataFrame:
+    """The grips of ``table`` a dataset keeps (``dataset.sampling``), with the sampling seed a
+    dataset of run seed ``seed`` gives its object ``index`` (``ObjectTask.sampling_seed``)."""
+    from grip_env.dataset.jobs import ObjectTask, object_seeds
+    from grip_env.dataset.sampling import keep_grips
+
+    task = ObjectTask(index, obj.name, obj, config, object_seeds(seed, index + 1)[index])
+    return keep_grips(table, config.dataset, task.sampling_seed())
+
+
+def spread_subset(grips: pd.DataFrame, count: int) -> pd.DataFrame:
+    """``count`` rows spread evenly over ``grips``' order (all of them for ``count`` 0)."""
+    if count == 0 or count >= len(grips):
+        return grips
+    return grips.iloc[np.unique(np.linspace(0, len(grips) - 1, count).round().astype(int))]
+
+
 def _selections(obj: PlanarObject, config: Config, parts: Iterable[str],
-                settings: CalibrationSettings) -> list[tuple[str, str, pd.DataFrame, Config]]:
-    """(part, end, grips, config) of each simulation the object takes part in."""
+                settings: CalibrationSettings,
+                index: int = 0) -> list[tuple[str, str, pd.DataFrame, Config]]:
+    """(part, end, grips, config) of each simulation the object (candidate ``index``) takes
+    part in."""
     table = _planned(obj, config)
     runs = []
     if "design" in parts and len(table):
@@ -141,23 +182,29 @@ def _selections(obj: PlanarObject, config: Config, parts: Iterable[str],
         n = settings.grips_per_end
         runs += [("retest", "best", table.head(n), config),
                  ("retest", "worst", table.tail(n), config)]  # fmt: skip
+    if "within_object" in parts:
+        kept = kept_grips(obj, table, config, settings.seed, index)
+        runs.append(("within_object", "kept", spread_subset(kept, settings.within_grips), config))
     return runs
 
 
-def _trials_for(part: str, settings: CalibrationSettings) -> int:
+def _trials_for(part: str, settings: CalibrationSettings, config: Config) -> int:
     return {"design": settings.design_trials, "cone": settings.cone_trials,
-            "retest": 2 * settings.trials_per_set}[part]  # fmt: skip
+            "retest": 2 * settings.trials_per_set,
+            "within_object": 2 * config.dataset.trials}[part]  # fmt: skip
 
 
 def object_job(task: Any, parts: dict[str, tuple[str, ...]],
                settings: CalibrationSettings) -> pd.DataFrame:
-    """One object's calibration trials (long table, :data:`TRIAL_COLUMNS`)."""
+    """One object's calibration trials (long table, :data:`TRIAL_COLUMNS`); ``task.index`` is
+    the object's position in :func:`candidate_objects`."""
     from grip_env.sim import run_trial_outcomes
 
     frames = []
     for part, end, grips, config in _selections(task.obj, task.config, parts[task.object_id],
-                                                settings):
-        outcomes = run_trial_outcomes(task.obj, grips, config, trials=_trials_for(part, settings),
+                                                settings, task.index):
+        outcomes = run_trial_outcomes(task.obj, grips.assign(object_id=task.object_id), config,
+                                      trials=_trials_for(part, settings, config),
                                       seed=settings.seed)  # fmt: skip
         quality = grips.loc[outcomes["grip"], ["Q_C", "Q_G"]].to_numpy(float)
         frames.append(outcomes.assign(object_id=task.object_id, part=part, end=end,
@@ -171,9 +218,11 @@ def candidate_objects(config: Config, settings: CalibrationSettings | None = Non
                       ) -> list[PlanarObject]:
     """The boxes, the default objects, then procedural objects: the study's, continued with the
     same seed (object ``i`` depends only on the seed and ``i``) so that the cone check finds
-    ``settings.cone_objects`` objects even on a config with few procedural ones."""
-    cone = (settings or CalibrationSettings()).cone_objects
-    count = max(config.objects.procedural_count, PROCEDURAL_SPARE * cone)
+    ``settings.cone_objects`` (and ``within_objects``) objects even on a config with few
+    procedural ones."""
+    settings = settings or CalibrationSettings()
+    count = max(config.objects.procedural_count, PROCEDURAL_SPARE * settings.cone_objects,
+                settings.within_objects)  # fmt: skip
     procedural = procedural_objects(count, config.dataset.seed,
                                     config.objects.procedural_size_mm)  # fmt: skip
     return [*box_objects(), *load_object_set("default"), *procedural]
@@ -181,12 +230,16 @@ def candidate_objects(config: Config, settings: CalibrationSettings | None = Non
 
 def choose_objects(config: Config, settings: CalibrationSettings) -> dict[str, tuple[str, ...]]:
     """Object name → calibration parts: the boxes (design); default objects in set order for
-    the retest; default, then procedural, objects with grips in and out of the cone."""
+    the retest; default, then procedural, objects with grips in and out of the cone, and with
+    at least :data:`MIN_WITHIN_GRIPS` kept grips (within-object)."""
     plan: dict[str, tuple[str, ...]] = {obj.name: ("design",) for obj in box_objects()}
-    retest = cone = 0
+    retest = cone = within = 0
     default = {obj.name for obj in load_object_set("default")}
-    for obj in candidate_objects(config, settings)[len(BOXES_MM):]:
-        if retest >= settings.retest_objects and cone >= settings.cone_objects:
+    for index, obj in enumerate(candidate_objects(config, settings)):
+        if index < len(BOXES_MM):
+            continue
+        if (retest >= settings.retest_objects and cone >= settings.cone_objects
+                and within >= settings.within_objects):  # fmt: skip
             break
         table = _planned(obj, config)
         parts = []
@@ -198,6 +251,10 @@ def choose_objects(config: Config, settings: CalibrationSettings) -> dict[str, t
         if cone < settings.cone_objects and outside.any() and not outside.all():
             parts.append("cone")
             cone += 1
+        if (within < settings.within_objects and len(
+                kept_grips(obj, table, config, settings.seed, index)) >= MIN_WITHIN_GRIPS):
+            parts.append("within_object")
+            within += 1
         if parts:
             plan[obj.name] = tuple(parts)
     return plan
@@ -213,9 +270,10 @@ def run_calibration_trials(
     from grip_env.dataset.jobs import ObjectTask
 
     plan = choose_objects(config, settings)
-    shapes = {obj.name: obj for obj in candidate_objects(config, settings)}
-    tasks = [ObjectTask(i, name, shapes[name], config, settings.seed)
-             for i, name in enumerate(plan)]  # fmt: skip
+    shapes = candidate_objects(config, settings)
+    position = {obj.name: i for i, obj in enumerate(shapes)}
+    tasks = [ObjectTask(position[name], name, shapes[position[name]], config, settings.seed)
+             for name in plan]  # fmt: skip
     job = functools.partial(object_job, parts=plan, settings=settings)
     frames = []
     with progress_bar(len(tasks), "calibrate") as bar:
@@ -242,6 +300,16 @@ def spearman_bootstrap(a: np.ndarray, b: np.ndarray, resamples: int = 2000,
     boot = boot[np.isfinite(boot)]
     ci = np.percentile(boot, [2.5, 97.5]).tolist() if boot.size else [None, None]
     return {"value": value, "ci": ci, "n": int(a.size)}
+
+
+def mean_bootstrap(values: np.ndarray, resamples: int = 2000,
+                   seed: int = 0) -> list[float | None]:
+    """Percentile bootstrap 95% interval of the mean of independent values."""
+    values = np.asarray(values, float)
+    if values.size == 0:
+        return [None, None]
+    draws = np.random.default_rng(seed).integers(0, values.size, size=(resamples, values.size))
+    return [float(c) for c in np.percentile(values[draws].mean(axis=1), [2.5, 97.5])]
 
 
 def icc1(values: np.ndarray) -> dict[str, Any]:
@@ -385,9 +453,10 @@ def cone_check(trials: pd.DataFrame) -> dict[str, Any]:
                   per_object=per_object.reset_index().to_dict(orient="records"))
 
 
-def retest_table(trials: pd.DataFrame, trials_per_set: int) -> pd.DataFrame:
-    """Per retest grip: mean robustness on seed set A (first n trials) and set B (next n)."""
-    rows = trials[trials["part"] == "retest"].assign(
+def retest_table(trials: pd.DataFrame, trials_per_set: int, part: str = "retest",
+                 ) -> pd.DataFrame:
+    """Per grip of ``part``: mean robustness on seed set A (first n trials) and set B (next n)."""
+    rows = trials[trials["part"] == part].assign(
         seed_set=lambda t: np.where(t["trial"] < trials_per_set, "A", "B")
     )
     table = rows.pivot_table(index=["object_id", "grip", "end", "Q_C"], columns="seed_set",
@@ -409,6 +478,38 @@ def retest_check(trials: pd.DataFrame, settings: CalibrationSettings) -> dict[st
                   grips=len(table), objects=int(table["object_id"].nunique()),
                   trials_per_set=settings.trials_per_set,
                   within_object_mean=float(np.nanmean(within)) if within else None)
+
+
+def within_object_spearman(table: pd.DataFrame) -> pd.Series:
+    """Per object of a :func:`retest_table`: Spearman of its grips' set-A against set-B means
+    (NaN where either side is constant: the object ranks nothing)."""
+    return pd.Series({name: _spearman(g["A"].to_numpy(float), g["B"].to_numpy(float))
+                      for name, g in table.groupby("object_id")}, dtype=float)  # fmt: skip
+
+
+def within_object_check(trials: pd.DataFrame, trials_per_set: int, resamples: int = 2000,
+                        seed: int = 0) -> dict[str, Any]:
+    """Mean over objects of the within-object Spearman, with a bootstrap interval resampling
+    objects; objects with a constant side are skipped and counted."""
+    target = (f"mean within-object Spearman >= {RETEST_TARGET} at {trials_per_set} trials "
+              "per set (dataset.trials)")
+    table = retest_table(trials, trials_per_set, part="within_object")
+    if not {"A", "B"} <= set(table.columns):
+        return _check("within_object", None, [None, None], target, None, objects=0, skipped=0,
+                      grips=0, trials_per_set=trials_per_set, per_object=[])  # fmt: skip
+    table = table.dropna(subset=["A", "B"])
+    rho = within_object_spearman(table)
+    scored = rho.dropna().to_numpy()
+    value = float(scored.mean()) if scored.size else None
+    grips = table.groupby("object_id").size()
+    per_object = [{"object_id": name, "grips": int(grips[name]),
+                   "spearman": None if np.isnan(r) else float(r)} for name, r in rho.items()]
+    verdict = None if value is None or scored.size < WITHIN_SCORED else bool(
+        value >= RETEST_TARGET)  # a verdict needs WITHIN_SCORED objects scored
+    return _check("within_object", value, mean_bootstrap(scored, resamples, seed), target,
+                  verdict,
+                  objects=int(scored.size), skipped=int(rho.isna().sum()), grips=len(table),
+                  trials_per_set=trials_per_set, per_object=per_object)  # fmt: skip
 
 
 def icc_check(trials: pd.DataFrame) -> dict[str, Any]:
@@ -502,6 +603,9 @@ def calibrate(
     reference = float(config.sim.reference_level_g)
     checks = [design_check(trials, reference, config), cone_check(trials),
               retest_check(trials, settings), icc_check(trials)]  # fmt: skip
+    if settings.within_objects:
+        checks.append(within_object_check(trials, config.dataset.trials, settings.bootstrap,
+                                          settings.seed))  # fmt: skip
     if dataset is not None:
         checks += dataset_checks(dataset, settings)
     result = {"reference_level_g": reference, "mu": float(config.grasp.mu),

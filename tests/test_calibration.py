@@ -14,6 +14,7 @@ from typer.testing import CliRunner
 from classifiers.synthetic import synthetic_grips
 from grip_env.calibration import (
     BOXES_MM,
+    WITHIN_SCORED,
     CalibrationSettings,
     box_objects,
     choose_objects,
@@ -25,9 +26,12 @@ from grip_env.calibration import (
     outside_cone,
     retest_check,
     spearman_bootstrap,
+    spread_subset,
+    within_object_check,
 )
 from grip_env.cli import _register_commands, app
 from grip_env.config import Config
+from grip_env.objects import load_object_set
 
 
 def test_icc1_matches_the_anova_definition_and_its_interval_brackets_it():
@@ -90,6 +94,9 @@ def test_objects_cover_the_boxes_and_enough_retest_grips():
     plan = choose_objects(Config(), CalibrationSettings())
     assert sum("retest" in parts for parts in plan.values()) == 6  # 6 x 16 = 96 grips >= 90
     assert sum("cone" in parts for parts in plan.values()) == CalibrationSettings().cone_objects
+    within = [name for name, parts in plan.items() if "within_object" in parts]
+    default = [obj.name for obj in load_object_set("default")]
+    assert len(within) == 14 and within == [n for n in default if n in within][:14]
 
 
 def _trials(part: str, grips: dict[str, float], n: int, rng: np.random.Generator,
@@ -151,20 +158,86 @@ def test_icc_check_reports_how_much_the_friction_draw_decides():
 def test_settings_reject_bad_sizes():
     with pytest.raises(ValueError, match="grips_per_end"):
         CalibrationSettings(grips_per_end=0)
+    with pytest.raises(ValueError, match="within_grips"):
+        CalibrationSettings(within_grips=2)
+    assert CalibrationSettings(within_objects=0).within_objects == 0
+
+
+def _within_trials(sets: dict[str, tuple[list[float], list[float]]], n: int = 2) -> pd.DataFrame:
+    """Within-object trials: per object, each grip's robustness on set A and on set B."""
+    rows = [{"object_id": obj, "grip": f"{obj}/{g}", "part": "within_object", "end": "kept",
+             "Q_C": float(g), "Q_G": 1.0, "trial": k + n * side, "robustness": level,
+             "success": True, "friction": 0.4, "mass_kg": 0.2}
+            for obj, levels in sets.items() for side, values in enumerate(levels)
+            for g, level in enumerate(values) for k in range(n)]  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def test_within_object_check_is_one_for_the_same_ranking_and_minus_one_reversed():
+    up = [1.0, 3.0, 2.0, 5.0, 4.0]
+    names = [f"o{i}" for i in range(WITHIN_SCORED)]
+    same = _within_trials({o: (up, [2 * v for v in up]) for o in names})
+    check = within_object_check(same, 2, resamples=200)
+    assert check["measured"] == pytest.approx(1.0) and check["ci"] == pytest.approx([1.0, 1.0])
+    assert check["passed"] and check["objects"] == WITHIN_SCORED and check["grips"] == 60
+    assert check["trials_per_set"] == 2 and check["skipped"] == 0
+    assert [r["spearman"] for r in check["per_object"]] == pytest.approx([1.0] * WITHIN_SCORED)
+    reversed_ = _within_trials({o: (up, [-v for v in up]) for o in names})
+    assert within_object_check(reversed_, 2, resamples=200)["measured"] == pytest.approx(-1.0)
+    assert within_object_check(reversed_, 2, resamples=200)["passed"] is False
+    few = _within_trials({o: (up, up) for o in names[:3]})
+    assert within_object_check(few, 2, resamples=200)["passed"] is None  # too few for a verdict
+
+
+def test_within_object_interval_resamples_objects():
+    up = [1.0, 3.0, 2.0, 5.0, 4.0]
+    mixed = _within_trials({"a": (up, up), "b": (up, [-v for v in up])})
+    check = within_object_check(mixed, 2, resamples=500)
+    # two objects at +1 and -1: resampled means are -1, 0 or +1, whatever the grips
+    assert check["measured"] == pytest.approx(0.0) and check["ci"] == pytest.approx([-1.0, 1.0])
+    many = _within_trials({f"o{i}": (up, up if i % 4 else up[::-1]) for i in range(40)})
+    low, high = within_object_check(many, 2, resamples=500)["ci"]
+    assert low < within_object_check(many, 2)["measured"] < high < 1.0
+
+
+def test_within_object_skips_and_counts_objects_with_a_constant_side():
+    up = [1.0, 3.0, 2.0, 5.0]
+    table = _within_trials({"a": (up, up), "flat": (up, [0.0] * 4), "b": (up, up)})
+    check = within_object_check(table, 2, resamples=100)
+    assert check["skipped"] == 1 and check["objects"] == 2 and check["measured"] == 1.0
+    spearman = {r["object_id"]: r["spearman"] for r in check["per_object"]}
+    assert spearman["flat"] is None and check["grips"] == 12
+    assert within_object_check(table.iloc[:0], 2)["measured"] is None
+    only_flat = within_object_check(_within_trials({"flat": (up, [0.0] * 4)}), 2)
+    assert only_flat["passed"] is None and only_flat["skipped"] == 1
+
+
+def test_spread_subset_keeps_both_ends_of_the_ranking():
+    grips = pd.DataFrame({"Q_C": np.arange(30.0)})
+    assert spread_subset(grips, 4)["Q_C"].tolist() == [0.0, 10.0, 19.0, 29.0]
+    assert len(spread_subset(grips, 0)) == 30 and len(spread_subset(grips.head(3), 4)) == 3
 
 
 def test_calibrate_quick_writes_a_report_from_real_trials(tmp_path: Path):
     """A tiny real run: planning, PyBullet trials through the public sim API, the report."""
     _register_commands()
     out = tmp_path / "cal"
+    config = tmp_path / "one_trial.yaml"  # dataset.trials = 1: within-object sets of one trial
+    config.write_text("dataset:\n  trials: 1\n")
     result = CliRunner().invoke(app, ["calibrate", "--quick", "--out", str(out), "--workers", "1",
-                                      "--cone-objects", "2", "--cone-trials", "1"])
+                                      "--cone-objects", "2", "--cone-trials", "1",
+                                      "--config", str(config)])
     assert result.exit_code == 0, result.output
     assert "design_hold" in result.output
     saved = json.loads((out / "calibration.json").read_text())
-    assert set(saved["checks"]) == {"design_hold", "cone", "retest", "icc"}
+    assert set(saved["checks"]) == {"design_hold", "cone", "retest", "icc", "within_object"}
     trials = pd.read_parquet(out / "calibration_trials.parquet")
-    assert set(trials["part"]) == {"design", "cone", "retest"}
+    assert set(trials["part"]) == {"design", "cone", "retest", "within_object"}
+    within = saved["checks"]["within_object"]
+    assert np.isfinite(within["measured"]) and within["trials_per_set"] == 1
+    assert within["objects"] + within["skipped"] == 3 and within["grips"] == 12
+    kept = trials[trials["part"] == "within_object"]
+    assert kept.groupby("grip")["trial"].nunique().eq(2).all()  # sets A and B of dataset.trials
     assert trials["robustness"].ge(0).all()
     cone = trials[trials["part"] == "cone"]
     assert cone["object_id"].nunique() == 2 and cone["trial"].eq(0).all()  # the flags' sizes
@@ -173,9 +246,11 @@ def test_calibrate_quick_writes_a_report_from_real_trials(tmp_path: Path):
     assert retest.groupby("grip")["trial"].nunique().eq(4).all()  # two disjoint sets of 2
     text = (out / "calibration.md").read_text()
     assert "Label validity" in text and "figures/calibration_retest.png" in text
+    assert "within_object: within one object: do two sets of trials rank" in text
+    assert "figures/calibration_within_object.png" in text
     assert "Decile checks" in text and "not run" in text  # no --data given
     assert (out / "figures" / "calibration_design.png").is_file()
-    for name in ("design_hold", "retest", "icc"):
+    for name in ("design_hold", "retest", "icc", "within_object"):
         assert name in text
     bad = CliRunner().invoke(app, ["calibrate", "--quick", "--workers", "0"])
     assert bad.exit_code == 2

@@ -18,6 +18,9 @@ from matplotlib.figure import Figure
 from classifiers.report.document import Report
 from grip_env.drawing import save_figure
 
+#: What the within-object check asks, in one line.
+WITHIN_GLOSS = ("within one object: do two sets of trials rank that object's grips alike (what a "
+                "robot choosing among them needs)")
 RESULT_FILE = "calibration.json"
 TRIALS_FILE = "calibration_trials.parquet"
 
@@ -46,6 +49,8 @@ def calibration_section(report: Report, result: dict[str, Any], trials: pd.DataF
         "measured figure meets it."
     )
     report.table(summary_table(checks), caption="Checks against their targets.")
+    if "within_object" in checks:
+        report.text(f"within_object: {WITHIN_GLOSS}.")
     sub = level + 1
     if "design_hold" in checks:
         _design(report, checks["design_hold"], result["reference_level_g"], fig_dir, root, sub)
@@ -53,6 +58,8 @@ def calibration_section(report: Report, result: dict[str, Any], trials: pd.DataF
         _cone(report, checks["cone"], fig_dir, root, sub)
     if "retest" in checks:
         _retest(report, checks, trials, result, fig_dir, root, sub)
+    if "within_object" in checks:
+        _within_object(report, checks["within_object"], fig_dir, root, sub)
     deciles = [checks[k] for k in ("decile_Q_C", "decile_Q_G") if k in checks]
     if deciles:
         _deciles(report, deciles, fig_dir, root, sub)
@@ -175,8 +182,9 @@ def _retest(report: Report, checks: dict[str, Any], trials: pd.DataFrame | None,
         f"Per-grip mean robustness from two disjoint sets of {retest.get('trials_per_set')} "
         f"trial seeds over {retest.get('grips')} grips (best and worst by Q_C on "
         f"{retest.get('objects')} default objects): Spearman {_number(retest['measured'])} "
-        f"{_ci(retest['ci'])} ({_verdict(retest['passed'])}); within one object the mean "
-        f"Spearman is {_number(retest.get('within_object_mean'))}. ICC(1) of per-trial "
+        f"{_ci(retest['ci'])} ({_verdict(retest['passed'])}); within one object, over these "
+        f"grips only, the mean Spearman is {_number(retest.get('within_object_mean'))} (the "
+        "within-object check uses all kept grips at the dataset's trials). ICC(1) of per-trial "
         f"robustness with the grip as class: {_number(icc.get('measured'))} "
         f"{_ci(icc.get('ci'))} ({_verdict(icc.get('passed'))}). Within a grip, the trial's "
         f"friction draw against its robustness residual has Spearman "
@@ -207,6 +215,42 @@ def _retest(report: Report, checks: dict[str, Any], trials: pd.DataFrame | None,
     fig.tight_layout()
     _figure(report, save_figure(fig, fig_dir / "calibration_retest.png"), root,
             "Left: grip means on two disjoint seed sets. Right: every grip's trial spread.")
+
+
+def _within_object(report: Report, check: dict[str, Any], fig_dir: Path, root: Path,
+                   level: int) -> None:
+    from grip_env.calibration import RETEST_TARGET
+
+    report.heading("Within-object test-retest at the dataset's trials", level)
+    n = int(check["trials_per_set"])
+    report.text(
+        f"Per object, Spearman of its kept grips' mean robustness over trials 0..{n - 1} (set "
+        f"A) against {n}..{2 * n - 1} (set B), n = dataset.trials: mean "
+        f"{_number(check['measured'])} over {check['objects']} objects, 95% bootstrap interval "
+        f"over objects {_ci(check['ci'])}; target >= {RETEST_TARGET}: "
+        f"{_verdict(check['passed'])}. {check['grips']} grips on "
+        f"{check['objects'] + check['skipped']} objects were run; {check['skipped']} object(s) "
+        "skipped, where a set gives all the object's grips one robustness (it ranks nothing)."
+    )
+    rows = pd.DataFrame(check.get("per_object", []))
+    if rows.empty:
+        return
+    report.table(rows.set_index("object_id"), caption="Per object: kept grips run and the "
+                 "Spearman of their set-A against set-B means (nan: skipped).")
+    scored = rows.dropna(subset=["spearman"]).sort_values("spearman")
+    fig = Figure(figsize=(6.0, 3.4))
+    ax = fig.subplots()
+    ax.bar(scored["object_id"].astype(str), scored["spearman"], color="tab:blue")
+    if check["measured"] is not None:
+        ax.axhline(check["measured"], color="black", label=f"mean {check['measured']:.2f}")
+    ax.axhline(RETEST_TARGET, color="tab:red", linestyle="--", label="target")
+    ax.set(ylabel="Spearman, set A vs set B", ylim=(-1.05, 1.05),
+           title="Within-object test-retest")  # fmt: skip
+    ax.tick_params(axis="x", labelrotation=60, labelsize=7)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    _figure(report, save_figure(fig, fig_dir / "calibration_within_object.png"), root,
+            "Each object's Spearman between two disjoint sets of its grips' trials.")
 
 
 def _deciles(report: Report, checks: list[dict[str, Any]], fig_dir: Path, root: Path,
