@@ -173,7 +173,14 @@ class SimConfig(_Section):
     ramp_ratio: float = Field(
         2.0**0.25, gt=1.0, le=4.0, description="ratio between ramp levels"
     )
-    ramp_steps_per_level: int = Field(3, ge=1, le=1000, description="steps each level is held")
+    ramp_steps_per_level: int = Field(
+        3, ge=1, le=1000,
+        description="steps each level is held at least, and the window in which it must settle",
+    )
+    ramp_max_steps_per_level: int = Field(
+        60, ge=1, le=10_000,
+        description="steps a level is held at most while the object still moves (then held)",
+    )
     ramp_directions: Literal["planar", "spatial"] = Field(
         "planar", description="ramped disturbances: in the grip's plane, or also along its normal"
     )

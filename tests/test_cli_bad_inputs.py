@@ -42,6 +42,10 @@ BAD_CONFIGS = {
     "size_huge": ("objects:\n  procedural_size_mm: [1.0e300, 1.0e301]\n",
                   "objects.procedural_size_mm"),
     "deep": ("grasp: " + "[" * 5000 + "]" * 5000 + "\n", "nested too deeply"),
+    "draw_scheme": ("uncertainty:\n  draws: shared\n", "uncertainty.draws"),
+    "steps_per_level": ("sim:\n  ramp_steps_per_level: 0\n", "sim.ramp_steps_per_level"),
+    "longest_level": ("sim:\n  ramp_max_steps_per_level: -3\n",
+                      "sim.ramp_max_steps_per_level"),
 }
 
 

@@ -4,10 +4,17 @@ After the lift and hold, the world is saved. For each disturbance (by default th
 grip's plane: along the palm frame's +-x and +-y, and a twist either way about the palm normal;
 ``sim.ramp_directions: spatial`` adds pulling the object out of the hand along gravity and
 pushing it in) the saved moment is restored and the disturbance is raised level by level,
-geometrically from ``sim.ramp_levels_g[0]`` by ``sim.ramp_ratio``, each level held
-``sim.ramp_steps_per_level`` steps. A level of ``a`` g is a force ``m a g`` through the centre of
-mass, or for the twist the torque ``m a g k`` that gives a tangential acceleration of ``a`` g at
-the object's radius of gyration ``k``. The level held in a direction is the last one before the
+geometrically from ``sim.ramp_levels_g[0]`` by ``sim.ramp_ratio``. Each level is held until the
+object is at rest under it (quasi-static loading): at least ``sim.ramp_steps_per_level`` steps,
+and on until it moved less than ``SETTLED_SHARE`` of the hold tolerances over the last that many
+steps, or ``sim.ramp_max_steps_per_level`` steps have passed (it then counts as held: it is still
+within tolerance). A level held a fixed few steps was not quasi-static: an object that had begun
+to slide was caught levels later the shorter the hold, so the labels fell with every doubling of
+the hold (BENCHMARKS.md, "A converged ramp").
+
+A level of ``a`` g is a force ``m a g`` through the centre of mass, or for the twist the torque
+``m a g k`` that gives a tangential acceleration of ``a`` g at the object's radius of gyration
+``k``. The level held in a direction is the last one before the
 object moves past the hold tolerance (drift or rotation in the palm frame). The trial's
 robustness is the weakest direction's level; a direction only ramps up to the weakest level found
 so far, so the cost stops at the first level that fails.
@@ -15,6 +22,7 @@ so far, so the cost stops at the first level that fails.
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -22,8 +30,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from grip_env.config import SimConfig
+from grip_env.sim import pose
 
 GRAVITY = 9.81
+#: A level has settled when, over its last ``ramp_steps_per_level`` steps, the object moved less
+#: than this share of ``hold_tolerance_mm`` and turned less than this share of
+#: ``hold_rotation_deg``.
+SETTLED_SHARE = 0.01
 
 #: (kind, palm-frame axis, sign) in the grip's plane: forces along the palm's x and y axes and
 #: twists about its normal, the wrenches the planar grip's geometry resists.
@@ -56,7 +69,8 @@ class RampProbe:
 
     ``restore()`` returns the world to the saved moment; ``push(kind, vector)`` applies a world
     force (N) or torque (N·m) to the object for the next step; ``step()`` advances one step;
-    ``moved()`` says whether the object is past the hold tolerance; ``palm_axes`` (3, 3) has the
+    ``moved()`` says whether the object is past the hold tolerance; ``where()`` gives the
+    object's pose in the palm frame as ``moved()`` last saw it; ``palm_axes`` (3, 3) has the
     palm frame's axes as rows, in world coordinates.
     """
 
@@ -64,6 +78,7 @@ class RampProbe:
     push: Callable[[str, NDArray[np.float64]], None]
     step: Callable[[], None]
     moved: Callable[[], bool]
+    where: Callable[[], tuple[pose.Vector, pose.Quaternion]]
     palm_axes: NDArray[np.float64]
 
 
@@ -81,8 +96,7 @@ def robustness(probe: RampProbe, mass_kg: float, gyration_m: float, config: SimC
         probe.restore()
         unit = sign * probe.palm_axes[axis]
         scale = mass_kg * GRAVITY * (gyration_m if kind == "torque" else 1.0)
-        failed = _first_failure(probe, kind, unit * scale, levels[:weakest],
-                                config.ramp_steps_per_level)
+        failed = _first_failure(probe, kind, unit * scale, levels[:weakest], config)
         weakest = min(weakest, failed)
         if weakest == 0:
             return 0.0
@@ -91,14 +105,24 @@ def robustness(probe: RampProbe, mass_kg: float, gyration_m: float, config: SimC
 
 def _first_failure(
     probe: RampProbe, kind: str, unit: NDArray[np.float64], levels: NDArray[np.float64],
-    steps_per_level: int,
+    config: SimConfig,
 ) -> int:
     """Index of the first level at which the object moved (``len(levels)`` if none did)."""
+    window = config.ramp_steps_per_level
+    longest = max(config.ramp_max_steps_per_level, window)
+    still_mm = SETTLED_SHARE * config.hold_tolerance_mm
+    still_deg = SETTLED_SHARE * config.hold_rotation_deg
     for index, level in enumerate(levels):
         vector = unit * level
-        for _ in range(steps_per_level):
+        recent = deque([probe.where()], maxlen=window + 1)
+        for step in range(1, longest + 1):
             probe.push(kind, vector)
             probe.step()
             if probe.moved():
                 return index
+            recent.append(probe.where())
+            if step >= window:
+                drift, turn = pose.moved_from(recent[0], recent[-1])
+                if drift < still_mm and turn < still_deg:
+                    break
     return len(levels)

@@ -254,12 +254,19 @@ class TrialScene:
             else:
                 world.push(uid, vector)
 
+        seen = [reference]
+
         def moved() -> bool:
-            drift, turn = self._moved_from(reference)
+            seen[0] = self._object_in_palm()
+            drift, turn = pose.moved_from(reference, seen[0])
             return drift > sim.hold_tolerance_mm or turn > sim.hold_rotation_deg
 
+        def restore_seen() -> None:
+            restore()
+            seen[0] = reference
+
         axes = np.stack([palm_to_world(yaw, np.eye(3)[k]) for k in range(3)])
-        probe = RampProbe(restore, push, counter.step, moved, axes)
+        probe = RampProbe(restore_seen, push, counter.step, moved, lambda: seen[0], axes)
         try:
             return robustness(probe, self.mass_kg * noise.mass_scale, self.gyration_m, sim)
         finally:

@@ -5,7 +5,9 @@
     python -m tests.benchmarks.sim_fidelity slip
     python -m tests.benchmarks.sim_fidelity cost
     python -m tests.benchmarks.sim_fidelity curve --trials 3
-    python -m tests.benchmarks.sim_fidelity ramp --steps 3 6 12 --trials 3 --cache runs/ramp
+    python -m tests.benchmarks.sim_fidelity ramp --steps 3 6 --trials 5 --cache runs/ramp
+    python -m tests.benchmarks.sim_fidelity ramp --key ramp_max_steps_per_level --steps 60 120 \
+        --trials 5 --cache runs/ramp
     python -m tests.benchmarks.sim_fidelity paired --b sim.solver_iterations=300 --trials 1200
     python -m tests.benchmarks.sim_fidelity chaos
     python -m tests.benchmarks.sim_fidelity directions --b sim.solver_iterations=300 --trials 2
@@ -13,6 +15,9 @@
     python -m tests.benchmarks.sim_fidelity paired --variant proximal-clutch
     python -m tests.benchmarks.sim_fidelity paired --variant floor-erp
     python -m tests.benchmarks.sim_fidelity paired --variant rigid-pads
+    python -m tests.benchmarks.sim_fidelity paired --variant restored-scene
+    python -m tests.benchmarks.sim_fidelity paired --variant weak-stop      # HOLD_FACTOR 2.5
+    python -m tests.benchmarks.sim_fidelity paired --variant strong-stop    # HOLD_FACTOR 10
 
 * ``convergence``: a symmetric grip closes on a pinned 90 x 55 mm box; for each solver
   iteration count, each finger's joint-2 motor torque against its command and its fingertip
@@ -24,8 +29,9 @@
   grips' trials, and the share of closes that settle, at 100, 150, 200 and 300 iterations.
 * ``curve``: success and robustness of the same (grip, trial) draws at 100, 200 and 400 solver
   iterations, each count paired with the first.
-* ``ramp``: success and robustness of the same draws at each number of steps per ramp level,
-  each count paired with the next (the ramp's convergence in time: N against 2N).
+* ``ramp``: success and robustness of the same draws at each value of a ramp hold setting (the
+  steps a level is held at least, or at most), each paired with the next: the ramp's
+  convergence in time, N against 2N.
 * ``cost``: time per physics step and per trial of the same grips at 100, 150 and 200 iterations.
 * ``paired``: the same (grip, trial) pairs under config A (the default) and config B (dotted
   overrides); the paired difference in success and in robustness with 95 % intervals, and the
@@ -274,7 +280,11 @@ def sample_grips(per_object: int, config: Config) -> list[tuple[object, pd.DataF
 
 
 #: Fixes that can be undone one at a time, to measure what each changes (config B runs them).
-VARIANTS = ("none", "first-piece-friction", "proximal-clutch", "floor-erp", "rigid-pads")
+VARIANTS = ("none", "first-piece-friction", "proximal-clutch", "floor-erp", "rigid-pads",
+            "restored-scene", "weak-stop", "strong-stop")
+#: The worm gear stop's holding torque (``hand.HOLD_FACTOR`` times the motor's) of the stop
+#: variants: the plausible range around the default 5 (BENCHMARKS, "HOLD_FACTOR").
+STOP_FACTORS = {"weak-stop": 2.5, "strong-stop": 10.0}
 
 
 #: Bullet's non-contact erp before the arm (measured then: a fifth of a joint's gap per step).
@@ -303,6 +313,24 @@ def _apply(variant: str) -> None:
             self.client.setPhysicsEngineParameter(erp=FLOOR_ERP_BEFORE)
 
         world.World.reset = with_erp
+    elif variant in STOP_FACTORS:
+        from grip_env.sim import hand
+
+        hand.HOLD_FACTOR = STOP_FACTORS[variant]
+    elif variant == "restored-scene":  # cb01661's: one world per scene, restored every trial
+        from grip_env.sim import trial
+
+        build = trial.TrialScene._build
+
+        def build_and_save(self):
+            build(self)
+            self._saved = self.world.save()
+
+        def restore(self):
+            self.world.restore(self._saved)
+
+        trial.TrialScene._build = build_and_save
+        trial.TrialScene.fresh = restore
     elif variant == "rigid-pads":  # ba7f89a's pad sphere with a rigid contact, as before it
         from grip_env.sim import world
 
@@ -335,7 +363,7 @@ def _every_direction(probe, mass_kg: float, gyration_m: float, config) -> float:
         probe.restore()
         scale = mass_kg * disturbance.GRAVITY * (gyration_m if kind == "torque" else 1.0)
         failed = disturbance._first_failure(probe, kind, sign * probe.palm_axes[axis] * scale,
-                                            levels, config.ramp_steps_per_level)
+                                            levels, config)
         held.append(float(levels[failed - 1]) if failed else 0.0)
     _DIRECTION_LEVELS[:] = held
     return min(held)
@@ -347,7 +375,7 @@ DIRECTIONS = ("+x", "-x", "+y", "-y", "+twist", "-twist")
 
 
 def _run(args: tuple) -> list[tuple]:
-    obj, grips, config, trials, shift_mm, variant, directions = args
+    obj, grips, config, trials, shift_mm, variant, directions, first = args
     _apply(variant)
     if directions:
         from grip_env.sim import trial
@@ -355,10 +383,10 @@ def _run(args: tuple) -> list[tuple]:
         trial.robustness = _every_direction  # this worker process only
     rows = []
     keys = grip_keys(grips)
-    draws = trial_noises(config, 0, stable_key(obj.name), keys, range(trials))
+    draws = trial_noises(config, 0, stable_key(obj.name), keys, range(first, first + trials))
     with TrialScene(obj, config) as scene:
         for plan, key, noises in zip(grip_plans(grips), keys, draws, strict=True):
-            for k, noise in enumerate(noises):
+            for k, noise in enumerate(noises, start=first):
                 if shift_mm:
                     noise = replace(noise, offset_mm=(noise.offset_mm[0] + shift_mm,
                                                       noise.offset_mm[1]))
@@ -370,13 +398,14 @@ def _run(args: tuple) -> list[tuple]:
 
 
 def outcomes(config: Config, per_object: int, trials: int, shift_mm: float = 0.0,
-             workers: int = 2, variant: str = "none", directions: bool = False) -> pd.DataFrame:
+             workers: int = 2, variant: str = "none", directions: bool = False,
+             first_trial: int = 0) -> pd.DataFrame:
     """One row per (object, grip, trial) under ``config`` (with one fix undone: ``variant``);
     with ``directions`` also the level held in each planar direction, every ramp run to its
     end."""
     if directions and config.sim.ramp_directions != "planar":
         raise ValueError("directions ramps the planar disturbances only")
-    jobs = [(obj, g, config, trials, shift_mm, variant, directions)
+    jobs = [(obj, g, config, trials, shift_mm, variant, directions, first_trial)
             for obj, g in sample_grips(per_object, Config())]
     with ProcessPoolExecutor(workers) as pool:
         rows = [row for part in pool.map(_run, jobs) for row in part]
@@ -413,23 +442,28 @@ def label_curve(iterations: tuple[int, ...] = (100, 200, 400), per_object: int =
 
 
 def ramp_convergence(steps: tuple[int, ...] = (3, 6, 12), per_object: int = 20, trials: int = 3,
-                     workers: int = 2, cache: str | None = None) -> list[dict]:
-    """Labels of the same draws at each number of steps per ramp level, each count paired with
-    the next (N against 2N when the counts double); ``cache`` keeps each count's trials."""
+                     workers: int = 2, cache: str | None = None,
+                     key: str = "ramp_steps_per_level") -> list[dict]:
+    """Labels of the same draws at each value of the ramp setting ``key`` (``sim.<key>``: the
+    steps a level is held at least, or at most), each value paired with the next (N against 2N
+    when the values double); ``cache`` keeps each value's trials."""
     from pathlib import Path
 
     rows, previous = [], None
     for n in steps:
-        path = Path(cache) / f"ramp_steps_{n}.parquet" if cache else None
-        if path is not None and path.exists():
-            out = pd.read_parquet(path)
-        else:
-            out = outcomes(Config().override(sim={"ramp_steps_per_level": n}), per_object,
-                           trials, workers=workers)
+        path = Path(cache) / f"{key}_{n}.parquet" if cache else None
+        kept = pd.read_parquet(path) if path is not None and path.exists() else None
+        done = 0 if kept is None else int(kept["trial"].max()) + 1
+        out = kept
+        if done < trials:  # only the trial numbers the cache lacks
+            more = outcomes(Config().override(sim={key: n}), per_object,
+                            trials - done, workers=workers, first_trial=done)
+            out = more if kept is None else pd.concat([kept, more], ignore_index=True)
             if path is not None:
                 path.parent.mkdir(parents=True, exist_ok=True)
                 out.to_parquet(path)
-        row: dict = {"steps_per_level": n, "success": round(float(out.success.mean()), 4),
+        out = out[out["trial"] < trials]
+        row: dict = {key: n, "success": round(float(out.success.mean()), 4),
                      "robustness_g": round(float(out.robustness.mean()), 2),
                      "steps": round(float(out.steps.mean()), 1)}
         if previous is not None:
@@ -473,6 +507,12 @@ def main() -> None:
     parser.add_argument("--steps", type=int, nargs="*", default=[3, 6, 12],
                         help="ramp: steps per level to compare, each with the next")
     parser.add_argument("--cache", default=None, help="ramp: folder keeping each count's trials")
+    parser.add_argument("--a-from", default=None,
+                        help="paired, chaos: config A's trials from this file (a ramp cache of "
+                             "the same --per-object) instead of running them")
+    parser.add_argument("--key", default="ramp_steps_per_level",
+                        choices=("ramp_steps_per_level", "ramp_max_steps_per_level"),
+                        help="ramp: the setting --steps gives values of")
     parser.add_argument("--a", nargs="*", default=[], help="overrides of config A")
     parser.add_argument("--b", nargs="*", default=[], help="overrides of config B")
     parser.add_argument("--per-object", type=int, default=20)
@@ -495,13 +535,14 @@ def main() -> None:
                              workers=args.workers)
     elif args.what == "ramp":
         result = ramp_convergence(tuple(args.steps), args.per_object, args.trials,
-                                  args.workers, args.cache)
+                                  args.workers, args.cache, args.key)
     elif args.what == "directions":
         a, b = (outcomes(_overrides(side), args.per_object, args.trials,
                          workers=args.workers, directions=True) for side in (args.a, args.b))
         result = paired_directions(a, b)
     else:
-        a = outcomes(_overrides(args.a), args.per_object, args.trials, workers=args.workers)
+        a = (pd.read_parquet(args.a_from).query(f"trial < {args.trials}") if args.a_from else
+             outcomes(_overrides(args.a), args.per_object, args.trials, workers=args.workers))
         b = outcomes(_overrides(args.b if args.what == "paired" else args.a), args.per_object,
                      args.trials, shift_mm=1e-6 if args.what == "chaos" else 0.0,
                      workers=args.workers, variant=args.variant)

@@ -1,0 +1,107 @@
+"""The disturbance ramp's protocol, on a one-dimensional object whose physics is written out.
+
+The object sticks while the level is at most its capacity ``c`` (g) and otherwise slides along
+the push with acceleration ``(level - c) g``. A quasi-static ramp must report the last level at
+or below ``c`` whatever the hold's length; a fixed short hold reports a later one, because an
+object that began to slide is caught only once it has slid past the tolerance.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from grip_env.config import SimConfig
+from grip_env.sim.disturbance import RampProbe, ramp_levels, robustness
+
+STEP_S = 1.0 / 240.0
+
+
+class SlidingBlock:
+    """A block held by friction up to ``capacity_g``; it slides (mm) beyond it."""
+
+    def __init__(self, capacity_g: float) -> None:
+        self.capacity_g = capacity_g
+        self.position_mm = self.speed_mm_s = 0.0
+        self.level_g = 0.0
+        self.steps = 0
+
+    def probe(self, config: SimConfig) -> RampProbe:
+        def restore() -> None:
+            self.position_mm = self.speed_mm_s = 0.0
+
+        def push(kind: str, vector: np.ndarray) -> None:
+            self.level_g = float(np.linalg.norm(vector))  # unit force per g (mass 1/g)
+
+        def step() -> None:
+            self.steps += 1
+            excess = self.level_g - self.capacity_g
+            if excess > 0 or self.speed_mm_s > 0:
+                self.speed_mm_s = max(self.speed_mm_s + excess * 9810.0 * STEP_S, 0.0)
+                self.position_mm += self.speed_mm_s * STEP_S
+
+        def moved() -> bool:
+            return self.position_mm > config.hold_tolerance_mm
+
+        def where() -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
+            return (self.position_mm, 0.0, 0.0), (0.0, 0.0, 0.0, 1.0)
+
+        return RampProbe(restore, push, step, moved, where, np.eye(3))
+
+
+def measured(capacity_g: float, config: SimConfig) -> float:
+    block = SlidingBlock(capacity_g)
+    return robustness(block.probe(config), 1.0 / 9.81, 0.05, config)
+
+
+def last_level_within(capacity_g: float, config: SimConfig) -> float:
+    levels = ramp_levels(config)
+    held = levels[levels <= capacity_g * (1 + 1e-12)]
+    return float(held[-1]) if held.size else 0.0
+
+
+@given(capacity=st.floats(2.5, 120.0), steps=st.sampled_from([2, 3, 6, 12]))
+def test_a_quasi_static_ramp_reports_the_last_level_the_block_holds(capacity, steps):
+    levels = ramp_levels(SimConfig())
+    if np.min(np.abs(levels / capacity - 1)) < 0.02:  # a level within 2 % of the capacity
+        return  # slides too slowly to pass 5 mm in the longest hold: ambiguous by design
+    config = SimConfig(ramp_steps_per_level=steps, ramp_max_steps_per_level=120)
+    assert measured(capacity, config) == last_level_within(capacity, config)
+
+
+def test_a_short_fixed_hold_overestimates_what_the_block_holds():
+    """Why the ramp waits for rest: 3 steps a level, never longer, reports levels the block
+    does not hold (it is caught sliding only levels later)."""
+    fixed = SimConfig(ramp_steps_per_level=3, ramp_max_steps_per_level=3)
+    quasi_static = SimConfig(ramp_steps_per_level=3, ramp_max_steps_per_level=120)
+    capacity = 20.0
+    assert measured(capacity, quasi_static) == last_level_within(capacity, quasi_static)
+    assert measured(capacity, fixed) > last_level_within(capacity, fixed)
+
+
+def test_a_level_the_block_holds_at_rest_lasts_the_window_only():
+    config = SimConfig(ramp_steps_per_level=4, ramp_max_steps_per_level=60)
+    block = SlidingBlock(capacity_g=1000.0)
+    assert robustness(block.probe(config), 1.0 / 9.81, 0.05, config) == ramp_levels(config)[-1]
+    directions, levels = 6, len(ramp_levels(config))
+    assert block.steps == directions * levels * 4
+
+
+def test_a_level_still_moving_within_tolerance_counts_as_held_after_the_longest_hold():
+    """A block creeping at 10 mm/s never rests (0.125 mm per 3-step window, the rest threshold
+    is 0.05 mm) but stays within 5 mm for 60 steps (2.5 mm): each level lasts 60 steps."""
+    config = SimConfig(ramp_steps_per_level=3, ramp_max_steps_per_level=60,
+                       ramp_levels_g=(2.0, 2.0))
+    block = SlidingBlock(capacity_g=1000.0)
+    probe = block.probe(config)
+
+    def creep() -> None:
+        block.position_mm += 10.0 * STEP_S
+        probe.step()
+
+    creeping = RampProbe(probe.restore, probe.push, creep, probe.moved, probe.where,
+                         probe.palm_axes)
+    assert robustness(creeping, 1.0 / 9.81, 0.05, config) == pytest.approx(2.0)
+    assert block.steps == 6 * 60
