@@ -9,9 +9,10 @@ dataset.
 
 History (the figures behind each are in BENCHMARKS.md):
 
-- ``2026.12-crn``: every trial in a freshly built world; trial k of every grip of an object
+- ``2026.12-crn``: every trial in a world built for it; trial k of every grip of an object
   shares one draw (common random numbers, keyed by the object's id); the palm's error in the
-  palm frame; the ramp converged in time. Before it, datasets recorded no label model.
+  palm frame; a quasi-static ramp (each level held until the object rests: at least 3 steps, at
+  most 60). Before it, datasets recorded no label model.
 """
 
 from __future__ import annotations
