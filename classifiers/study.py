@@ -168,7 +168,7 @@ def check_label_model(data_dir: Path) -> None:
     """ValueError when ``data_dir`` holds a dataset of another label model than this code's: a
     study never mixes label models (its stages would compare labels of two simulations)."""
     from grip_env.dataset import dataset_label_model
-    from grip_env.sim.label_model import LABEL_MODEL
+    from grip_env.label_model import LABEL_MODEL
 
     found = dataset_label_model(data_dir)
     if found not in (None, LABEL_MODEL):

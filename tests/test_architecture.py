@@ -16,7 +16,7 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 FOUNDATION = {"grip_env.params", "grip_env.columns", "grip_env.config", "grip_env.shutdown",
-              "grip_env.hand_geometry", "grip_env.progress"}
+              "grip_env.hand_geometry", "grip_env.progress", "grip_env.label_model"}
 GEOMETRY = {"grip_env.objects", "grip_env.perception"}
 PLANNING = {"grip_env.barrett", "grip_env.finger", "grip_env.grasps", "grip_env.features",
             "grip_env.epsilon", "grip_env.pipeline"}
@@ -30,6 +30,7 @@ ONLY: dict[str, set[str]] = {
     "grip_env.shutdown": set(),
     "grip_env.hand_geometry": set(),
     "grip_env.progress": set(),
+    "grip_env.label_model": set(),
     "grip_env.config": {"grip_env.params", "grip_env.hand_geometry"},
 }
 # every other unit -> the units it must never import (foundations are always allowed)

@@ -25,8 +25,8 @@ from classifiers.benchmark.split import STANDARD_TEST_OBJECTS
 from classifiers.synthetic import synthetic_grips
 from grip_env.config import Config
 from grip_env.dataset import ObjectTask, generate, with_outcomes
+from grip_env.label_model import LABEL_MODEL, UNRECORDED
 from grip_env.objects import PlanarObject
-from grip_env.sim.label_model import LABEL_MODEL, UNRECORDED
 
 OTHER = "2025.01-old"
 #: The label model a test dataset records: this code's, another one, or none (an older dataset).

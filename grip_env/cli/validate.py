@@ -23,7 +23,7 @@ def validate(
     with user_errors():
         from grip_env.dataset import validate as validate_dataset
         from grip_env.dataset.manifest import read_manifest
-        from grip_env.sim.label_model import label_model_of
+        from grip_env.label_model import label_model_of
 
         manifest = read_manifest(directory)
         problems = validate_dataset(directory)

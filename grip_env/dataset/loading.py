@@ -10,7 +10,7 @@ import pandas as pd
 from grip_env.columns import DATASET_COLUMNS
 from grip_env.dataset.manifest import FORMAT, MANIFEST_FILE, Manifest, read_manifest, shard_records
 from grip_env.dataset.shards import GRIP_SCHEMA, read_shard
-from grip_env.sim.label_model import label_model_of, label_model_warning
+from grip_env.label_model import label_model_of, label_model_warning
 
 
 def load(path: str | Path, verify: bool = True, allow_partial: bool = False) -> pd.DataFrame:
@@ -64,7 +64,7 @@ def dataset_label_model(path: str | Path) -> str | None:
 
 def label_model_notice(path: str | Path) -> str | None:
     """One line when the dataset in ``path`` was labelled by another label model than this
-    code's (:func:`~grip_env.sim.label_model.label_model_warning`), else None."""
+    code's (:func:`~grip_env.label_model.label_model_warning`), else None."""
     manifest = _manifest_json(Path(path))
     return None if manifest is None else label_model_warning(manifest, f"dataset {path}")
 

@@ -21,8 +21,8 @@ from grip_env.dataset.catalog import OBJECTS_FILE, DatasetObject
 from grip_env.dataset.files import write_text_atomically
 from grip_env.dataset.sampling import sampling_record
 from grip_env.dataset.shards import GRIPS_DIR, SHARD_FILE, ShardRecord
+from grip_env.label_model import LABEL_MODEL
 from grip_env.objects.family import object_family
-from grip_env.sim.label_model import LABEL_MODEL
 
 FORMAT = "grip-env-dataset"
 #: 2: outcome columns robustness_mean and robustness_std; kept grips chosen by dataset.sampling.

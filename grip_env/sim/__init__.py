@@ -2,9 +2,9 @@
 
 # world first: it imports pybullet with the native start-up banner silenced
 from grip_env.sim.world import MM, Body, World  # isort: skip
+from grip_env.label_model import LABEL_MODEL, label_model_of, label_model_warning
 from grip_env.sim.execution import OUTCOME_COLUMNS, run_trial_outcomes, run_trials
 from grip_env.sim.hand import HAND_URDF, Hand
-from grip_env.sim.label_model import LABEL_MODEL, label_model_of, label_model_warning
 from grip_env.sim.trial import GripPlan, TrialResult, TrialScene, grip_plans, render_trial_strip
 from grip_env.sim.uncertainty import TrialNoise, object_mass_kg, sample_noise, zero_noise
 

@@ -5,7 +5,8 @@ the judgement together make a label. ``LABEL_MODEL`` names the one this code imp
 dataset's manifest records it as ``label_model``, and ``tests/test_golden.py`` pins a fixed set
 of trial outcomes to it. A change that moves any trial outcome is a new label model: bump the id,
 renew the golden recording (``python -m tests.golden --record``) and regenerate the standard
-dataset.
+dataset. It lives outside ``grip_env.sim`` (which re-exports it) so that reading a manifest
+does not import PyBullet.
 
 History (the figures behind each are in BENCHMARKS.md):
 
