@@ -2,6 +2,7 @@
 "Labels that rank the grips of one object"). Run by hand; it takes minutes.
 
     python -m tests.benchmarks.label_reliability --objects 12 --trials 3 --cache runs/reliability
+    python -m tests.benchmarks.label_reliability --objects 12 --trials 5 --schemes common
 
 Objects: the default set in order, then procedural ones, each with at least 4 kept grips (the
 dataset's own ``keep_grips``: up to ``dataset.max_grips_per_object``, stratified over Q_C). Each
@@ -59,15 +60,17 @@ def _run(job: tuple) -> pd.DataFrame:
     return out.assign(object=obj.name, scheme=scheme, core_s=seconds / len(out))
 
 
-def outcomes(count: int, trials: int, workers: int, cache: str | None) -> pd.DataFrame:
-    """Every trial of every scheme (cached in ``cache``/reliability_T.parquet)."""
-    path = Path(cache) / f"reliability_{trials}.parquet" if cache else None
+def outcomes(count: int, trials: int, workers: int, cache: str | None,
+             schemes: tuple[str, ...] = tuple(SCHEMES)) -> pd.DataFrame:
+    """Every trial of every scheme (cached in ``cache``/reliability_T[_schemes].parquet)."""
+    tag = "" if set(schemes) == set(SCHEMES) else "_" + "_".join(schemes)
+    path = Path(cache) / f"reliability_{trials}{tag}.parquet" if cache else None
     if path is not None and path.exists():
         return pd.read_parquet(path)
     base = Config().override(dataset={"trials": trials})
     objects = chosen_objects(count, base)
     jobs = [(obj, grips, base.override(uncertainty=overrides), trials, name)
-            for name, overrides in SCHEMES.items() for obj, grips in objects]
+            for name, overrides in SCHEMES.items() if name in schemes for obj, grips in objects]
     with ProcessPoolExecutor(workers) as pool:
         table = pd.concat(pool.map(_run, jobs), ignore_index=True)
     if path is not None:
@@ -102,9 +105,10 @@ def main() -> None:
     parser.add_argument("--trials", type=int, default=3, help="T: trials per seed set")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--cache", default=None)
+    parser.add_argument("--schemes", nargs="*", choices=tuple(SCHEMES), default=list(SCHEMES))
     args = parser.parse_args()
     started = time.perf_counter()
-    table = outcomes(args.objects, args.trials, args.workers, args.cache)
+    table = outcomes(args.objects, args.trials, args.workers, args.cache, tuple(args.schemes))
     result = {name: {"retest": [retest(part, args.trials, t) for t in range(1, args.trials + 1)],
                      "core_s_per_trial": round(float(part["core_s"].mean()), 3)}
               for name, part in table.groupby("scheme", sort=False)}
