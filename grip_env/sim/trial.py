@@ -120,14 +120,12 @@ class TrialScene:
         self.gyration_m = float(np.sqrt(self.object.inertia_per_kg[2]))
         self.hand = Hand(self.world, sim)
         self.hand.teleport(np.array([0.0, 0.0, 400.0]), 0.0)
-        self._pristine = True
 
     def fresh(self) -> None:
-        """Make the scene as built: a new world unless nothing has touched this one yet."""
-        if not self._pristine:
-            self.world.close()
-            self._build()
-        self._pristine = False
+        """Replace the world by a new one, as built: whatever touched the old one (an earlier
+        trial, or a caller stepping ``world`` itself) cannot reach the next trial."""
+        self.world.close()
+        self._build()
 
     def close(self) -> None:
         """Release the PyBullet client."""
