@@ -148,6 +148,7 @@ class TrialScene:
             ValueError: the plan is out of the hand's reach (no posture puts its pads there).
         """
         sim = self.config.sim
+        self.fresh()
         palm, yaw, grip_z = self._place(plan, noise)
         counter = _StepCounter(self.world, self.hand)
         notify = on_phase or (lambda name, scene: None)
@@ -187,10 +188,9 @@ class TrialScene:
         return self._postures[plan]
 
     def _place(self, plan: GripPlan, noise: TrialNoise) -> tuple[NDArray, float, float]:
-        """A fresh world, the hand pre-shaped for the plan and put (with the trial's error, in
-        the palm frame) just above its height."""
+        """The hand pre-shaped for the plan and put (with the trial's error, in the palm frame)
+        just above its height, in the current world."""
         sim = self.config.sim
-        self.fresh()
         self.world.set_dynamics(self.object, self.mass_kg * noise.mass_scale, noise.friction)
         posture = self.posture(plan)
         q2_open, q3_open = opening_posture(posture.q2, posture.q3, sim.preshape_gap_mm)
