@@ -9,7 +9,7 @@ from typing import Annotated
 import typer
 
 from grip_env.cli.errors import user_errors
-from grip_env.cli.options import ConfigFile
+from grip_env.cli.options import ConfigFile, dataset_folder
 from grip_env.cli.paths import output_dir
 from grip_env.progress import shown
 from grip_env.shutdown import stop_on_signals
@@ -22,7 +22,8 @@ def calibrate(
     ),
     data: Annotated[
         Path | None,
-        typer.Option("--data", "-d", help="dataset for the decile checks (e.g. a study's)"),
+        typer.Option("--data", "-d", help="dataset for the decile checks (a study's, or "
+                     "'standard')", callback=dataset_folder),
     ] = None,
     workers: Annotated[int, typer.Option(min=1, help="worker processes (one object each)")] = 2,
     quick: Annotated[bool, typer.Option("--quick", help="a few dozen trials, for tests")] = False,

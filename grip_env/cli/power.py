@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from grip_env.cli.errors import user_errors
-from grip_env.cli.options import MODEL_NAMES_HELP, ConfigFile, OutputDir
+from grip_env.cli.options import MODEL_NAMES_HELP, ConfigFile, OutputDir, dataset_folders
 from grip_env.cli.paths import output_dir
 from grip_env.progress import shown
 from grip_env.shutdown import stop_on_signals
@@ -21,7 +21,8 @@ def power(
         list[Path],
         typer.Option("--data", "-d", help="dataset directory; repeat to pool datasets of the "
                      "same simulator for the objects axis (every grip cut to the fewest trials "
-                     "any holds); the trials axis runs on the first"),
+                     "any holds); the trials axis runs on the first; 'standard' for the "
+                     "shipped one", callback=dataset_folders),
     ],
     out: OutputDir,
     config: ConfigFile = None,

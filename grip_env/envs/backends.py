@@ -16,6 +16,7 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from grip_env.config import Config
+from grip_env.datasets import resolve_data
 from grip_env.envs.observation import CandidateSet
 from grip_env.mesh_sets import named_set
 from grip_env.objects import SHAPE_NAMES, PlanarObject, make_shape
@@ -52,7 +53,8 @@ class ReplayBackend:
     one step costs one uniform draw.
 
     Args:
-        data: a dataset directory or file (read with ``grip_env.dataset.load``) or a DataFrame with
+        data: a dataset directory or file (read with ``grip_env.dataset.load``), ``"standard"``
+            for the shipped standard dataset (:mod:`grip_env.datasets`), or a DataFrame with
             the dataset columns (at least ``object_id``, ``grip_id``, ``Q_C``, the contact points,
             the features, and ``trials``/``successes`` or ``success_rate``).
         objects: restrict to these object ids (names, or objects whose ``name`` is the id);
@@ -63,6 +65,8 @@ class ReplayBackend:
     """
 
     def __init__(self, data: str | Path | pd.DataFrame, objects: ObjectsArg = None) -> None:
+        if not isinstance(data, pd.DataFrame):
+            data = resolve_data(data)
         frame = data if isinstance(data, pd.DataFrame) else _load_dataset(data)
         if not isinstance(data, pd.DataFrame):
             _warn_label_model(data)

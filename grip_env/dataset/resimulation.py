@@ -1,0 +1,175 @@
+"""``resimulate``: does a dataset hold what this code makes from its recipe?
+
+A seeded sample of a dataset's objects is planned again (perception, synthesis and the kept-grip
+sampling, with the dataset's own config and object seeds) and a seeded sample of their recorded
+grips is simulated again (the dataset's trials and seed). Both are compared bit for bit with what
+the dataset holds: a reviewer reproducing a published label expects the same numbers, not close
+ones.
+"""
+
+from __future__ import annotations
+
+import math
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from grip_env.columns import DESCRIPTORS, FEATURES, INDEXES, ROBUSTNESS
+from grip_env.config import Config
+from grip_env.dataset.catalog import load_objects
+from grip_env.dataset.jobs import ObjectTask, planning_contour
+from grip_env.dataset.loading import load
+from grip_env.dataset.manifest import read_manifest
+from grip_env.objects import PlanarObject
+
+#: Grips re-simulated per sampled object (the sample spreads over N / this many objects).
+GRIPS_PER_OBJECT = 5
+#: The recorded outcome columns a re-simulated grip must reproduce exactly.
+OUTCOME_COLUMNS = ("trials", "successes", *ROBUSTNESS)
+
+
+@dataclass
+class Resimulation:
+    """What a re-simulation found; every count is of exact (bit-identical) agreement."""
+
+    objects: int = 0
+    candidates_identical: int = 0  # objects whose kept grips were planned again identically
+    grips: int = 0
+    outcomes_identical: int = 0  # grips whose trials, successes and robustness repeat exactly
+    differences: list[str] = field(default_factory=list)
+
+    @property
+    def identical(self) -> bool:
+        return (self.candidates_identical == self.objects and self.outcomes_identical == self.grips)
+
+    def summary(self) -> str:
+        return (f"re-planned {self.objects} objects: candidates identical on "
+                f"{self.candidates_identical}; re-simulated {self.grips} grips: outcomes "
+                f"identical on {self.outcomes_identical}")
+
+
+@dataclass(frozen=True)
+class _ObjectCheck:
+    task: ObjectTask
+    recorded: pd.DataFrame  # the object's rows in the dataset
+    picked: tuple[int, ...]  # positions (in ``recorded``) of the grips to simulate again
+
+
+def resimulate(path: str | Path, grips: int, seed: int = 0, workers: int = 1) -> Resimulation:
+    """Plan again a seeded sample of the dataset's objects and simulate again ``grips`` of their
+    recorded grips (about :data:`GRIPS_PER_OBJECT` an object), comparing both exactly.
+
+    Raises:
+        ValueError: ``grips`` is not a positive integer, the dataset is unfinished or unreadable,
+            or its objects table lacks an object the sample asks for.
+    """
+    if isinstance(grips, bool) or not isinstance(grips, int | np.integer) or grips < 1:
+        raise ValueError(f"--resimulate takes a positive number of grips, got {grips!r}")
+    directory = Path(path)
+    checks = _sample(directory, int(grips), seed)
+    result = Resimulation()
+    if workers > 1 and len(checks) > 1:
+        with ProcessPoolExecutor(min(workers, len(checks))) as pool:
+            found = list(pool.map(_check_object, checks))
+    else:
+        found = [_check_object(check) for check in checks]
+    for check, (same_candidates, same_outcomes, notes) in zip(checks, found, strict=True):
+        result.objects += 1
+        result.candidates_identical += same_candidates
+        result.grips += len(check.picked)
+        result.outcomes_identical += same_outcomes
+        result.differences += notes
+    return result
+
+
+def _sample(directory: Path, grips: int, seed: int) -> list[_ObjectCheck]:
+    """The objects (seeded order) and grips (seeded, ``GRIPS_PER_OBJECT`` at most each) to check."""
+    manifest = read_manifest(directory)
+    table = load(directory)
+    config = Config.model_validate(manifest["config"])
+    objects = {obj.name: obj for obj in load_objects(directory)}
+    seeds = {entry["object_id"]: entry["seed"] for entry in manifest["objects"]}
+    ids = [object_id for object_id in pd.unique(table["object_id"])]
+    rng = np.random.default_rng(seed)
+    order = [ids[i] for i in rng.permutation(len(ids))]
+    wanted = min(len(order), math.ceil(grips / GRIPS_PER_OBJECT))
+    chosen = order[:wanted]
+    lacking = [object_id for object_id in chosen if object_id not in objects]
+    if lacking:
+        raise ValueError(f"dataset {directory}: its objects table lacks {lacking[0]!r} "
+                         f"(and {len(lacking) - 1} more), so it cannot be re-planned")
+    rows = {object_id: table[table["object_id"] == object_id].reset_index(drop=True)
+            for object_id in chosen}
+    share = _shares(grips, [len(rows[o]) for o in chosen])
+    checks = []
+    for object_id, count in zip(chosen, share, strict=True):
+        picked = tuple(sorted(rng.choice(len(rows[object_id]), count, replace=False).tolist()))
+        task = ObjectTask(_index(manifest, object_id), object_id, objects[object_id], config,
+                          seeds[object_id])
+        checks.append(_ObjectCheck(task, rows[object_id], picked))
+    return checks
+
+
+def _shares(grips: int, available: list[int]) -> list[int]:
+    """Grips per object: ``grips`` spread as evenly as the objects' grip counts allow."""
+    share = [0] * len(available)
+    left = grips
+    while left > 0 and any(s < a for s, a in zip(share, available, strict=True)):
+        for i, count in enumerate(available):
+            if left > 0 and share[i] < count:
+                share[i] += 1
+                left -= 1
+    return share
+
+
+def _index(manifest: dict, object_id: str) -> int:
+    return next(int(e["index"]) for e in manifest["objects"] if e["object_id"] == object_id)
+
+
+def _check_object(check: _ObjectCheck) -> tuple[bool, int, list[str]]:
+    """(candidates identical, grips whose outcomes are identical, what differed)."""
+    from grip_env.dataset.sampling import keep_grips
+    from grip_env.objects.meshes import execution_height_mm
+    from grip_env.pipeline import candidates
+    from grip_env.sim import run_trials
+
+    task, recorded, config = check.task, check.recorded, check.task.config
+    notes = []
+    planned_on: PlanarObject = planning_contour(task)
+    height = execution_height_mm(task.obj, config.objects)
+    kept = keep_grips(candidates(planned_on, config.grasp, config, height_mm=height),
+                      config.dataset, task.sampling_seed())
+    same_candidates = _same_candidates(kept, recorded)
+    if not same_candidates:
+        notes.append(f"{task.object_id}: the candidates planned again differ from the recorded")
+    grips = recorded.iloc[list(check.picked)]
+    outcome = run_trials(task.obj, _as_planned(grips, kept, task.object_id), config,
+                         config.dataset.trials, config.dataset.seed)
+    same = np.ones(len(grips), dtype=bool)
+    for name in OUTCOME_COLUMNS:
+        same &= np.asarray(outcome[name]) == grips[name].to_numpy()
+    notes += [f"{grip}: the outcome simulated again differs from the recorded"
+              for grip in grips["grip_id"][~same]]
+    return same_candidates, int(same.sum()), notes
+
+
+def _as_planned(grips: pd.DataFrame, kept: pd.DataFrame, object_id: str) -> pd.DataFrame:
+    """The recorded grips with the grip ids the generation simulated them under (the planner's
+    ``<contour name>/<local id>``; a per-grip draw scheme keys on it) and the dataset's object id
+    (the common draws' key)."""
+    owner = str(kept["object_id"].iloc[0]) if len(kept) else object_id
+    local = [str(g).removeprefix(f"{object_id}/") for g in grips["grip_id"]]
+    return grips.assign(grip_id=[f"{owner}/{g}" for g in local], object_id=object_id)
+
+
+def _same_candidates(kept: pd.DataFrame, recorded: pd.DataFrame) -> bool:
+    """Whether the re-planned kept grips equal the recorded ones, bit for bit, in order."""
+    numeric = list(DESCRIPTORS + FEATURES + INDEXES)
+    if len(kept) != len(recorded):
+        return False
+    a = kept[numeric].to_numpy(float)
+    b = recorded[numeric].to_numpy(float)
+    return bool(np.array_equal(a, b, equal_nan=True))
