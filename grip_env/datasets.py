@@ -51,7 +51,7 @@ def resolve_data(data: str | Path) -> Path:
 
 def _check_standard(folder: Path) -> None:
     """Raise unless ``folder`` holds a dataset of this code's label model."""
-    from grip_env.dataset import dataset_label_model
+    from grip_env.dataset import dataset_label_model, dataset_manifest
     from grip_env.dataset.manifest import MANIFEST_FILE
 
     if not (folder / MANIFEST_FILE).is_file():
@@ -61,3 +61,8 @@ def _check_standard(folder: Path) -> None:
     if found != LABEL_MODEL:
         raise ValueError(f"the shipped standard dataset was labelled by label model {found!r}, "
                          f"this grip-env's is {LABEL_MODEL!r}; regenerate it with: {REGENERATE}")
+    manifest = dataset_manifest(folder)
+    if not manifest.get("complete", False):
+        done, total = len(manifest["shards"]), len(manifest["objects"])
+        raise ValueError(f"the shipped standard dataset is unfinished ({done} of {total} objects "
+                         f"generated); finish it with: {REGENERATE}")
