@@ -25,7 +25,8 @@ from grip_env.sim import LABEL_MODEL, run_trial_outcomes
 from grip_env.sim.trial import PLAN_COLUMNS
 
 RECORDING = Path(__file__).parent / "data" / "golden_outcomes.json"
-OBJECTS = ("pentagon", "trapezoid", "rectangle", "hexagon")
+#: Polygons and two curved outlines (their simulated shapes are simplified).
+OBJECTS = ("pentagon", "trapezoid", "rectangle", "hexagon", "ellipse", "bean")
 GRIPS = 2
 TRIALS = 3
 SEED = 7

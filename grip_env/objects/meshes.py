@@ -29,6 +29,9 @@ from grip_env.config import ObjectsConfig
 SLIVER_MM2 = 1.0
 #: The silhouette is simplified within this distance (mm): far below the perception's pixel.
 SIMPLIFY_MM = 0.05
+#: Posed vertices are rounded to this grid (mm) before the outline is built: the rotation's last
+#: bits depend on the CPU's vector kernels (numpy's dispatch), and an outline must not.
+VERTEX_GRID_DECIMALS = 6
 #: Largest mesh file read.
 MAX_MESH_FILE_BYTES = 32_000_000
 
@@ -211,7 +214,8 @@ def silhouette(
     Raises:
         ValueError: the silhouette has several parts or a hole (naming ``name``).
     """
-    hulls = [MultiPoint(piece[:, :2]).convex_hull for piece in pieces_mm]
+    hulls = [MultiPoint(np.round(piece[:, :2], VERTEX_GRID_DECIMALS)).convex_hull
+             for piece in pieces_mm]
     union = shapely.unary_union([h.buffer(margin_mm, quad_segs=4) for h in hulls])
     parts = [g for g in getattr(union, "geoms", [union]) if g.area > SLIVER_MM2]
     if len(parts) != 1:

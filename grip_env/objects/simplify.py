@@ -15,6 +15,8 @@ contours; :func:`simplify_contour` returns it. Chords are also held to an area b
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import shapely
 from numpy.typing import NDArray
@@ -50,7 +52,7 @@ def simplify_contour(
     points = np.asarray(contour, dtype=float)
     if tolerance_mm == 0 or len(points) <= 4:
         return points.copy(), 0.0
-    far = int(np.argmax(np.linalg.norm(points - points[0], axis=1)))
+    far = int(np.argmax(_lengths(points - points[0])))
     first = points[: far + 1]
     second = np.vstack([points[far:], points[:1]])
     keep_first, dev_first = _douglas_peucker(first, tolerance_mm)
@@ -74,7 +76,7 @@ def _douglas_peucker(
             continue
         distances = _segment_distances(chain[start + 1 : stop], chain[start], chain[stop])
         worst = int(np.argmax(distances))
-        span = float(np.linalg.norm(chain[stop] - chain[start]))
+        span = float(_lengths(chain[stop] - chain[start]))
         shift = abs(_signed_area(chain[start : stop + 1])) / max(span, 1e-12)
         if distances[worst] > tolerance or shift > AREA_SHIFT * tolerance:
             split = start + 1 + worst
@@ -88,16 +90,27 @@ def _douglas_peucker(
 def _signed_area(points: NDArray[np.float64]) -> float:
     """Signed area of the polygon the points close (last joined back to first)."""
     x, y = points[:, 0], points[:, 1]
-    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+    return 0.5 * math.fsum(x * np.roll(y, -1) - np.roll(x, -1) * y)  # exactly rounded
 
 
 def _segment_distances(
     points: NDArray[np.float64], start: NDArray[np.float64], stop: NDArray[np.float64]
 ) -> NDArray[np.float64]:
+    """Each point's distance to the segment, in elementwise arithmetic only (see ``_lengths``)."""
     span = stop - start
-    length2 = float(span @ span)
-    t = np.clip((points - start) @ span / length2, 0.0, 1.0) if length2 > 0 else 0.0
-    return np.linalg.norm(points - (start + np.multiply.outer(t, span)), axis=1)
+    rel = points - start
+    length2 = float(span[0] * span[0] + span[1] * span[1])
+    along = rel[:, 0] * span[0] + rel[:, 1] * span[1]
+    t = np.clip(along / length2, 0.0, 1.0) if length2 > 0 else np.zeros(len(points))
+    return _lengths(rel - np.multiply.outer(t, span))
+
+
+def _lengths(vectors: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Euclidean lengths of (..., 2) vectors with elementwise operations only: a BLAS product or
+    a vectorised reduction rounds differently on another CPU, and a symmetric contour's tied
+    distances then keep other vertices there (the same dataset on any x86-64 machine)."""
+    x, y = vectors[..., 0], vectors[..., 1]
+    return np.sqrt(x * x + y * y)
 
 
 def _check_simple(simplified: NDArray[np.float64], tolerance_mm: float, name: str) -> None:
