@@ -146,3 +146,13 @@ def _shipped_finished() -> bool:
 def test_the_shipped_labels_are_what_the_code_produces():
     found = resimulate(datasets.standard_path(), 6, seed=0, workers=2)
     assert found.identical, found.differences
+
+
+def test_the_manifest_lists_each_generate_run_that_did_work(small):
+    """Its cost adds up across resumed runs; a rerun with nothing left to do adds none."""
+    sessions = json.loads((small / "manifest.json").read_text())["sessions"]
+    assert [(s["objects"], s["rows"], s["workers"]) for s in sessions] == [(2, 8, 1)]
+    assert sessions[0]["seconds"] > 0 and sessions[0]["label_model"] == LABEL_MODEL
+    objects = [o for o in load_object_set("default") if o.name in ("pentagon", "trapezoid")]
+    generate(SMALL, small, objects=objects, progress=False)
+    assert json.loads((small / "manifest.json").read_text())["sessions"] == sessions

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import shutil
 import time
+from datetime import UTC, datetime
 from pathlib import Path
 
 from grip_env.config import Config
@@ -42,6 +43,7 @@ from grip_env.dataset.manifest import (
     new_manifest,
     read_manifest,
     run_identity,
+    session_record,
     shard_records,
     write_manifest,
 )
@@ -216,6 +218,7 @@ def _run(
     workers: int, backend: str, address: str | None, progress: bool,
 ) -> None:
     started, rows, last_flush = time.perf_counter(), 0, 0.0
+    began, done = datetime.now(UTC), 0
     feature_cap = manifest["feature_cap"]
     with progress_bar(total, "generate", done=total - len(pending), enabled=progress) as bar:
         try:
@@ -231,9 +234,13 @@ def _run(
                         write_manifest(directory, manifest)
                         last_flush = time.perf_counter()
                 rows += record.rows
+                done += 1
                 bar.advance(1, info=f"{rows} grips, {rows / _elapsed(started):.1f} grips/s")
         finally:
             manifest["complete"] = len(manifest["shards"]) == total
+            if done:
+                manifest.setdefault("sessions", []).append(session_record(
+                    began, _elapsed(started), workers, backend, done, rows))
             try:
                 write_manifest(directory, manifest)
             except OSError:  # disk full: a shard the manifest on disk does not list goes

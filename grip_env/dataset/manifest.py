@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import os
 import platform
 import subprocess
 from datetime import UTC, datetime
@@ -194,6 +195,28 @@ def identity_differences(old: dict[str, Any], new: dict[str, Any], prefix: str =
     if isinstance(old, list) and isinstance(new, list) and len(old) + len(new) > 6:
         return [f"{prefix.rstrip('.')}: {len(old)} entries -> {len(new)} entries (differ)"]
     return [f"{prefix.rstrip('.')}: {old!r} -> {new!r}"]
+
+
+def session_record(started: datetime, seconds: float, workers: int, backend: str, objects: int,
+                   rows: int) -> dict[str, Any]:
+    """One ``generate`` run's share of a dataset (``manifest["sessions"]``): a resumed dataset
+    lists every run, so its cost (core-hours, grips per core-second) adds up across them."""
+    return {"started": started.isoformat(timespec="seconds"), "seconds": round(seconds, 1),
+            "workers": workers, "backend": backend, "objects": objects, "rows": rows,
+            "git_commit": _git_commit(), "label_model": LABEL_MODEL, "machine": _machine()}
+
+
+def _machine() -> str:
+    """The CPU model and the number of logical CPUs, e.g. ``AMD EPYC 7B13 x 2``."""
+    model = platform.processor() or platform.machine()
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return f"{model} x {os.cpu_count()}"
 
 
 def _versions() -> dict[str, str]:
