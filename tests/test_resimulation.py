@@ -9,6 +9,7 @@ import shutil
 from dataclasses import replace
 from pathlib import Path
 
+import numpy as np
 import pyarrow.parquet as pq
 import pytest
 from cli_runs import assert_refused, cli
@@ -16,10 +17,20 @@ from test_cli import grip_env_command
 
 from grip_env import datasets
 from grip_env.config import Config
-from grip_env.dataset import generate
-from grip_env.dataset.resimulation import _check_object, _sample, resimulate
+from grip_env.dataset import generate, load
+from grip_env.dataset.card import dataset_card
+from grip_env.dataset.manifest import read_manifest
+from grip_env.dataset.resimulation import (
+    _check_object,
+    _checks,
+    _retest_means,
+    _sample,
+    resimulate,
+    retest,
+)
 from grip_env.label_model import LABEL_MODEL
 from grip_env.objects import load_object_set
+from grip_env.sim import run_trial_outcomes
 
 #: Two named objects (a three-finger and a two-finger grip among them), few grips, one trial:
 #: the real job, perception on the render included.
@@ -156,3 +167,35 @@ def test_the_manifest_lists_each_generate_run_that_did_work(small):
     objects = [o for o in load_object_set("default") if o.name in ("pentagon", "trapezoid")]
     generate(SMALL, small, objects=objects, progress=False)
     assert json.loads((small / "manifest.json").read_text())["sessions"] == sessions
+
+
+# ------------------------------------------------------------------ test-retest and the card
+@pytest.mark.slow
+def test_the_retest_runs_new_draws_of_every_grip_of_the_sampled_objects(small):
+    found = retest(small, 2, seed=0)
+    assert (found.objects, found.grips) == (2, 8)
+    assert -1.0 <= found.interval[0] <= found.within <= found.interval[1] <= 1.0
+    check = _checks(small, read_manifest(small), load(small), ["pentagon"])[0]
+    fresh = run_trial_outcomes(check.task.obj, check.recorded.assign(object_id="pentagon"),
+                               SMALL, 1, 0, trial_offset=1)  # trial 1: the dataset ran trial 0
+    first = run_trial_outcomes(check.task.obj, check.recorded.iloc[:1].assign(
+        object_id="pentagon"), SMALL, 1, 0)
+    assert fresh["friction"].iloc[0] != first["friction"].iloc[0]  # other draws
+    np.testing.assert_array_equal(_retest_means(check), fresh["robustness"].to_numpy())
+
+
+@pytest.mark.parametrize("count", [0, -1, False])
+def test_a_retest_of_no_objects_is_refused(small, count):
+    with pytest.raises(ValueError, match="positive number of objects"):
+        retest(small, count)
+
+
+def test_the_card_reports_the_dataset_s_own_figures(small):
+    grips = load(small)
+    report = {"resimulation": {"grips": 3, "seed": 0, "summary": "RESIM"},
+              "retest": {"objects": 2, "seed": 0, "summary": "RETEST"}}
+    card = dataset_card(small, report)
+    assert card.startswith(f"# Dataset card: 8 grips on 2 objects (label model `{LABEL_MODEL}`)")
+    assert f"| named | 2 | 2 | 8 | {grips['success'].mean():.1%} |" in card
+    assert "RESIM" in card and "RETEST" in card and "Unfinished" not in card
+    assert ("core-hours" in card and "AMD" in card) or "x " in card

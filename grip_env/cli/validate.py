@@ -2,14 +2,17 @@
 
 from __future__ import annotations
 
+import json
+from dataclasses import asdict
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-from grip_env.cli.errors import user_errors
+from grip_env.cli.errors import checked, user_errors
 from grip_env.cli.notices import warn_label_model
 from grip_env.cli.options import dataset_folder
+from grip_env.cli.paths import output_file
 
 
 def validate(
@@ -20,8 +23,15 @@ def validate(
         min=1, help="also plan again a seeded sample of objects and simulate again this many of "
                     "their grips, with the dataset's own config and seeds (exact comparison)")
     ] = None,
-    seed: Annotated[int, typer.Option(min=0, help="seed of the --resimulate sample")] = 0,
-    workers: Annotated[int, typer.Option(min=1, help="worker processes for --resimulate")] = 2,
+    retest: Annotated[int | None, typer.Option(
+        min=1, help="also simulate every grip of this many seeded objects under new draws and "
+                    "report the within-object test-retest of the labels")
+    ] = None,
+    seed: Annotated[int, typer.Option(min=0, help="seed of the samples")] = 0,
+    workers: Annotated[int, typer.Option(min=1, help="worker processes for the samples")] = 2,
+    report: Annotated[Path | None, typer.Option(
+        help="write what --resimulate and --retest found to this JSON file (for the card)")
+    ] = None,
 ) -> None:
     """Check a dataset: schema, checksums, features and outcomes; with `--resimulate N`, that
     its candidates and labels are what this code makes.
@@ -48,21 +58,39 @@ def validate(
             typer.echo(f"  - {problem}")
         raise typer.Exit(code=1)
     typer.echo(f"{summary}: OK (schema, checksums, features, outcomes)")
+    if report is not None:
+        checked(lambda: output_file(report, ".json", "--report"))
+    found: dict[str, object] = {}
+    if retest is not None:
+        found["retest"] = _retest(directory, retest, seed, workers)
     if resimulate is not None:
-        _resimulate(directory, resimulate, seed, workers)
+        found["resimulation"] = _resimulate(directory, resimulate, seed, workers)
+    if report is not None:
+        report.write_text(json.dumps(found, indent=1), encoding="utf-8")
+    if resimulate is not None and found["resimulation"]["differences"]:
+        raise typer.Exit(code=1)
 
 
-def _resimulate(directory: Path, grips: int, seed: int, workers: int) -> None:
-    """Report the re-simulation; exit 1 when anything differs."""
+def _resimulate(directory: Path, grips: int, seed: int, workers: int) -> dict[str, object]:
+    """Report the re-simulation (every difference on its own line)."""
     with user_errors():
         from grip_env.dataset.resimulation import resimulate
 
         found = resimulate(directory, grips, seed=seed, workers=workers)
     typer.echo(found.summary())
-    if not found.identical:
-        for difference in found.differences:
-            typer.echo(f"  - {difference}")
-        raise typer.Exit(code=1)
+    for difference in found.differences:
+        typer.echo(f"  - {difference}")
+    return {"grips": grips, "seed": seed, "summary": found.summary(), **asdict(found)}
+
+
+def _retest(directory: Path, objects: int, seed: int, workers: int) -> dict[str, object]:
+    """Report the within-object test-retest."""
+    with user_errors():
+        from grip_env.dataset.resimulation import retest
+
+        found = retest(directory, objects, seed=seed, workers=workers)
+    typer.echo(found.summary())
+    return {"seed": seed, "summary": found.summary(), **asdict(found)}
 
 
 def register(app: typer.Typer) -> None:

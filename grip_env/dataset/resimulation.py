@@ -1,4 +1,5 @@
-"""``resimulate``: does a dataset hold what this code makes from its recipe?
+"""``resimulate``: does a dataset hold what this code makes from its recipe? ``retest``: do its
+labels rank one object's grips the same under new draws?
 
 A seeded sample of a dataset's objects is planned again (perception, synthesis and the kept-grip
 sampling, with the dataset's own config and object seeds) and a seeded sample of their recorded
@@ -173,3 +174,104 @@ def _same_candidates(kept: pd.DataFrame, recorded: pd.DataFrame) -> bool:
     a = kept[numeric].to_numpy(float)
     b = recorded[numeric].to_numpy(float)
     return bool(np.array_equal(a, b, equal_nan=True))
+
+
+#: Objects with fewer kept grips (or tied labels) give no within-object Spearman.
+MIN_RETEST_GRIPS = 4
+#: Bootstrap resamples (over objects) of the within-object retest's interval.
+BOOTSTRAP = 2000
+
+
+@dataclass
+class Retest:
+    """Within-object test-retest of a dataset's labels: the recorded mean robustness against
+    the mean over as many new trials (draws ``trials``..``2 trials - 1``)."""
+
+    objects: int
+    scored: int  # objects with at least MIN_RETEST_GRIPS grips and untied labels
+    grips: int
+    within: float  # mean over scored objects of the Spearman between recorded and retest
+    interval: tuple[float, float]  # 95 % bootstrap interval over objects
+    pooled: float  # Spearman over all retested grips
+
+    def summary(self) -> str:
+        low, high = self.interval
+        return (f"within-object retest {self.within:.2f} [{low:.2f}, {high:.2f}] over "
+                f"{self.scored} of {self.objects} objects ({self.grips} grips), pooled "
+                f"{self.pooled:.2f}")
+
+
+def retest(path: str | Path, objects: int, seed: int = 0, workers: int = 1) -> Retest:
+    """Simulate every recorded grip of a seeded sample of ``objects`` objects again under new
+    draws (trials ``T``..``2T - 1``) and compare the grips' order within each object.
+
+    Raises:
+        ValueError: ``objects`` is not a positive integer, or the dataset is unreadable.
+    """
+    if isinstance(objects, bool) or not isinstance(objects, int | np.integer) or objects < 1:
+        raise ValueError(f"--retest takes a positive number of objects, got {objects!r}")
+    directory = Path(path)
+    manifest = read_manifest(directory)
+    table = load(directory, allow_partial=True)
+    sizes = table.groupby("object_id", sort=False).size()
+    eligible = sizes.index[sizes >= MIN_RETEST_GRIPS].tolist()
+    rng = np.random.default_rng(seed)
+    chosen = [eligible[i] for i in rng.permutation(len(eligible))[: int(objects)]]
+    checks = _checks(directory, manifest, table, chosen)
+    if workers > 1 and len(checks) > 1:
+        with ProcessPoolExecutor(min(workers, len(checks))) as pool:
+            means = list(pool.map(_retest_means, checks))
+    else:
+        means = [_retest_means(check) for check in checks]
+    return _retest_figures(checks, means, seed)
+
+
+def _checks(directory: Path, manifest: dict, table: pd.DataFrame,
+            chosen: list[str]) -> list[_ObjectCheck]:
+    config = Config.model_validate(manifest["config"])
+    objects = {obj.name: obj for obj in load_objects(directory)}
+    seeds = {entry["object_id"]: entry["seed"] for entry in manifest["objects"]}
+    checks = []
+    for object_id in chosen:
+        rows = table[table["object_id"] == object_id].reset_index(drop=True)
+        task = ObjectTask(_index(manifest, object_id), object_id, objects[object_id], config,
+                          seeds[object_id])
+        checks.append(_ObjectCheck(task, rows, tuple(range(len(rows)))))
+    return checks
+
+
+def _retest_means(check: _ObjectCheck) -> np.ndarray:
+    """Each recorded grip's mean robustness over trials T..2T-1 (the same draws as a dataset
+    made with trial_offset T)."""
+    from grip_env.sim import run_trial_outcomes
+
+    config, trials = check.task.config, check.task.config.dataset.trials
+    grips = check.recorded.assign(object_id=check.task.object_id)
+    outcome = run_trial_outcomes(check.task.obj, grips.reset_index(drop=True), config, trials,
+                                 config.dataset.seed, trial_offset=trials)
+    return outcome.groupby("grip", sort=True)["robustness"].mean().to_numpy()
+
+
+def _retest_figures(checks: list[_ObjectCheck], means: list[np.ndarray], seed: int) -> Retest:
+    from scipy import stats
+
+    scores, recorded_all, retest_all = [], [], []
+    for check, again in zip(checks, means, strict=True):
+        recorded = check.recorded["robustness_mean"].to_numpy()
+        recorded_all.append(recorded)
+        retest_all.append(again)
+        if np.ptp(recorded) > 0 and np.ptp(again) > 0:
+            scores.append(float(stats.spearmanr(recorded, again).statistic))
+    scored = np.asarray(scores)
+    rng = np.random.default_rng(seed)
+    if len(scored):
+        boot = rng.choice(scored, (BOOTSTRAP, len(scored))).mean(axis=1)
+        interval = (float(np.quantile(boot, 0.025)), float(np.quantile(boot, 0.975)))
+        within = float(scored.mean())
+    else:
+        interval, within = (float("nan"), float("nan")), float("nan")
+    pooled = (float(stats.spearmanr(np.concatenate(recorded_all),
+                                    np.concatenate(retest_all)).statistic)
+              if checks else float("nan"))
+    return Retest(len(checks), len(scored), int(sum(len(c.recorded) for c in checks)), within,
+                  interval, pooled)

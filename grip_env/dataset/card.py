@@ -1,0 +1,188 @@
+"""A dataset card (``docs/dataset.md`` for the standard dataset), written from the dataset itself.
+
+    grip-env validate DIR --resimulate 100 --retest 40 --report R.json
+    python -m grip_env.dataset.card DIR --out docs/dataset.md --report R.json
+
+Every figure comes from the dataset's manifest and grips (and, when given, the report of a
+``grip-env validate`` run), so the card is re-made, never edited, when the
+dataset changes.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from grip_env.dataset.loading import load
+from grip_env.label_model import label_model_of
+
+#: The quantiles of mean robustness the card tabulates.
+QUANTILES = (0.1, 0.25, 0.5, 0.75, 0.9)
+
+
+def dataset_card(directory: str | Path, report: dict[str, Any] | None = None) -> str:
+    """The card of the (finished or partial) dataset in ``directory``, as Markdown."""
+    grips = load(directory, allow_partial=True)
+    manifest = grips.attrs["manifest"]
+    families = pd.Series({e["object_id"]: e["family"] for e in manifest["objects"]})
+    sections = [_heading(manifest, grips), _making(manifest, grips),
+                _composition(grips, families, manifest), _outcomes(grips, manifest),
+                _reliability(report), _limits(manifest), _licence()]
+    return "\n\n".join(sections) + "\n"
+
+
+def _heading(manifest: dict[str, Any], grips: pd.DataFrame) -> str:
+    done = len(manifest["shards"])
+    state = ("" if manifest.get("complete") else
+             f"\n\n**Unfinished:** {done} of {len(manifest['objects'])} objects generated so far; "
+             "every figure below is of those.")
+    return (f"# Dataset card: {len(grips):,} grips on "
+            f"{grips['object_id'].nunique():,} objects (label model "
+            f"`{label_model_of(manifest)}`){state}")
+
+
+def _making(manifest: dict[str, Any], grips: pd.DataFrame) -> str:
+    sessions = manifest.get("sessions", [])
+    wall_h = sum(s["seconds"] for s in sessions) / 3600
+    core_h = sum(s["seconds"] * s["workers"] for s in sessions) / 3600
+    commits = sorted({str(s["git_commit"])[:7] for s in sessions} or
+                     {str(manifest.get("git_commit"))[:7]})
+    machines = sorted({s["machine"] for s in sessions}) or ["unrecorded"]
+    rate = len(grips) / (core_h * 3600) if core_h else float("nan")
+    config = manifest["config"]
+    return "\n".join([
+        "## How it was made", "",
+        "    grip-env generate --config configs/standard.yaml --out DIR",
+        "",
+        f"- Commit {', '.join(commits)}; label model `{label_model_of(manifest)}`; run seed "
+        f"{manifest['seed']}; grip-env {manifest['package_version']}.",
+        f"- {manifest['trials']} trials a grip (common random numbers across an object's grips), "
+        f"at most {config['dataset']['max_grips_per_object']} grips an object, sampled "
+        f"`{config['dataset']['sampling']}` by Q_C; grips planned on the contour segmented from a "
+        f"{config['perception']['resolution_px']} px top-down render.",
+        f"- Cost: {wall_h:.2f} h of wall time over {len(sessions)} run(s), "
+        f"**{core_h:.2f} core-hours**, {rate:.2f} grips a core-second "
+        f"(workers × wall time, with perception); on {'; '.join(machines)}.",
+    ])
+
+
+def _composition(grips: pd.DataFrame, families: pd.Series, manifest: dict[str, Any]) -> str:
+    by_object = grips.groupby("object_id").size()
+    listed = families[[e["object_id"] for e in manifest["objects"]
+                       if e["object_id"] in manifest["shards"]]]
+    rows = ["## Objects and grips", "",
+            "| family | objects run | with grips | grips | success | mean robustness (g) |",
+            "| --- | --- | --- | --- | --- | --- |"]
+    for family in sorted(set(listed)):
+        ids = listed.index[listed == family]
+        mine = grips[grips["object_id"].isin(ids)]
+        rows.append(f"| {family} | {len(ids)} | {int(by_object.reindex(ids).notna().sum())} | "
+                    f"{len(mine):,} | {_share(mine['success'])} | "
+                    f"{mine['robustness_mean'].mean():.1f} |")
+    rows.append(f"| **all** | {len(listed)} | {by_object.size} | {len(grips):,} | "
+                f"{_share(grips['success'])} | {grips['robustness_mean'].mean():.1f} |")
+    skipped = manifest.get("skipped_objects", [])
+    if skipped:
+        rows += ["", f"{len(skipped)} meshes were refused by the mesh set (several parts, a "
+                 "hole, or no stable rest) and the next ones taken; the manifest lists why."]
+    return "\n".join(rows)
+
+
+def _outcomes(grips: pd.DataFrame, manifest: dict[str, Any]) -> str:
+    sim = manifest["config"]["sim"]
+    robustness = grips["robustness_mean"]
+    quantiles = np.quantile(robustness, QUANTILES) if len(grips) else [np.nan] * len(QUANTILES)
+    cap = float(sim["ramp_levels_g"][1])
+    return "\n".join([
+        "## Outcomes", "",
+        f"A grip's `success` is holding the {sim['reference_level_g']:g} g reference in at least "
+        f"half its trials; `robustness_mean` is the mean over its trials of the highest planar "
+        f"disturbance held in every direction ({sim['ramp_levels_g'][0]:g}–{cap:g} g).",
+        "",
+        f"- Success rate {_share(grips['success'])}; per-object success rates range "
+        f"{_per_object_range(grips)}.",
+        f"- Robustness: {_share(robustness == 0)} of grips drop the object in every trial, "
+        f"{_share(robustness >= cap)} hold the ramp's ceiling in every trial.",
+        "",
+        "| quantile | " + " | ".join(f"{q:.0%}" for q in QUANTILES) + " |",
+        "| --- |" + " --- |" * len(QUANTILES),
+        "| mean robustness (g) | " + " | ".join(f"{v:.1f}" for v in quantiles) + " |",
+    ])
+
+
+def _reliability(report: dict[str, Any] | None) -> str:
+    """From a ``grip-env validate --resimulate N --retest K --report R.json`` report."""
+    report = report or {}
+    lines = ["## Reliability", ""]
+    if "resimulation" in report:
+        found = report["resimulation"]
+        lines.append(f"- **Reproduced:** `grip-env validate --resimulate {found['grips']}` "
+                     f"(seed {found['seed']}): {found['summary']}.")
+    else:
+        lines.append("- Reproduction not measured yet: `grip-env validate --resimulate N DIR`.")
+    if "retest" in report:
+        found = report["retest"]
+        lines.append(f"- **Test-retest:** `grip-env validate --retest {found['objects']}` "
+                     f"(seed {found['seed']}; every grip of the sampled objects under new "
+                     f"draws): {found['summary']}.")
+    else:
+        lines.append("- Within-object test-retest not measured yet: `grip-env validate "
+                     "--retest K DIR`.")
+    return "\n".join(lines)
+
+
+def _limits(manifest: dict[str, Any]) -> str:
+    return "\n".join([
+        "## Known limits", "",
+        "- Planar objects: each is extruded from its outline (meshes from their resting "
+        "silhouette) and grasped in one plane; no 3-D grasps.",
+        f"- {manifest['trials']} trials a grip: `success_rate` is a binomial estimate of few "
+        "draws, and the ranking of one object's grips repeats at about 0.75, not 1.",
+        "- One simulated hand (the Barrett BH8-280 URDF with compliant pads and worm-gear "
+        "stops, BENCHMARKS.md), one friction and mass range: labels are the simulator's, "
+        "not a real hand's.",
+        "- The label's within-object ranking is bounded by near-equal grips (thumb variants "
+        "of one grasp) whose means differ by less than a ramp level.",
+        "- The labels belong to one label model; another grip-env warns about them, and a "
+        "change of the simulator that moves any outcome needs the dataset regenerated.",
+    ])
+
+
+def _licence() -> str:
+    return "\n".join([
+        "## Licence and citation", "",
+        "The dataset is released under the MIT licence, as grip-env. Its mesh objects are "
+        "silhouettes of `pybullet_data` models (zlib licence, the Bullet Physics SDK). Cite "
+        "grip-env ([CITATION.cff](../CITATION.cff)) and the paper whose measures its features "
+        "are (Chinellato et al., 2005; README).",
+    ])
+
+
+def _share(values: pd.Series) -> str:
+    return f"{float(np.mean(values)):.1%}" if len(values) else "n/a"
+
+
+def _per_object_range(grips: pd.DataFrame) -> str:
+    rates = grips.groupby("object_id")["success"].mean()
+    if rates.empty:
+        return "n/a"
+    return f"{rates.min():.0%}–{rates.max():.0%} (median {rates.median():.0%})"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description="Write a dataset's card.")
+    parser.add_argument("directory", type=Path)
+    parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument("--report", type=Path, help="a grip-env validate --report JSON")
+    args = parser.parse_args()
+    found = json.loads(args.report.read_text()) if args.report else None
+    args.out.write_text(dataset_card(args.directory, found), encoding="utf-8")
+
+
+if __name__ == "__main__":
+    main()
