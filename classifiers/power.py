@@ -33,19 +33,24 @@ import math
 import tempfile
 import time
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
 import pandas as pd
-from scipy.optimize import nnls
 
+from classifiers.half_widths import (
+    POWER_FILE,
+    TARGETS,
+    Law,
+    exponent,
+    fit_law,
+    objects_needed,
+    paired_bootstrap,
+)
 from grip_env.columns import FEATURES, ROBUSTNESS
 from grip_env.config import Config
 from grip_env.dataset.jobs import SUCCESS_THRESHOLD
 
-#: The three questions' half-width targets (issue 13).
-TARGETS: dict[str, float] = {"roc_auc": 0.05, "hand_difference": 0.02, "rl_minus_best_qc": 0.08}
 QUANTITIES: tuple[str, ...] = tuple(TARGETS)
 CLASSIFIER_QUANTITIES: tuple[str, ...] = ("roc_auc", "hand_difference")
 GROUP = "object_id"
@@ -136,20 +141,6 @@ def selector_half_width(table: pd.DataFrame, config: Config) -> tuple[float, flo
                             np.asarray(policies["best_qc"]["per_object"]), config.learning.seed)
 
 
-def paired_bootstrap(
-    a: np.ndarray, b: np.ndarray, seed: int, n_boot: int = 2000
-) -> tuple[float, float]:
-    """(mean, half-width) of the 95% percentile bootstrap of ``mean(a - b)`` over objects, with
-    the resamples :func:`classifiers.selector.evaluation.evaluate_selectors` draws."""
-    difference = np.asarray(a, float) - np.asarray(b, float)
-    if difference.size == 0:
-        raise ValueError("paired_bootstrap needs at least one object")
-    resamples = np.random.default_rng(seed).integers(difference.size,
-                                                     size=(n_boot, difference.size))
-    low, high = np.percentile(difference[resamples].mean(axis=1), [2.5, 97.5])
-    return float(difference.mean()), float((high - low) / 2.0)
-
-
 Measure = Callable[[pd.DataFrame, Config], dict[str, tuple[float, float]]]
 
 
@@ -210,64 +201,6 @@ def _measure(
                 + ", ".join(f"{q} ±{h:.3f}" for q, (_, h) in found.items())
                 + f" ({seconds:.0f} s)")
     return rows
-
-
-# ------------------------------------------------------------------------------------- law
-@dataclass(frozen=True)
-class Law:
-    """``h^2 = (a + b / t) / n``: half-width ``h`` at ``n`` objects and ``t`` trials per grip."""
-
-    a: float
-    b: float
-    points: int
-
-    def half_width(self, objects: float, trials: float = math.inf) -> float:
-        """The law's half-width at ``objects`` objects and ``trials`` trials per grip."""
-        return math.sqrt((self.a + self.b / trials) / objects)
-
-    def as_dict(self) -> dict[str, float]:
-        return asdict(self)
-
-
-def fit_law(objects: Sequence[float], trials: Sequence[float], half: Sequence[float]) -> Law:
-    """Least-squares fit of :class:`Law` on relative error (``h^2`` residuals divided by
-    ``h^2``), with ``a, b >= 0``. With a single trials value ``b`` is not identified and is 0
-    (the ``1/sqrt(n)`` law, ``a`` carrying the label noise at that trial count).
-
-    Raises:
-        ValueError: no finite positive half-width, or inputs of unequal length or non-positive.
-    """
-    n, t, h = (np.asarray(v, dtype=float) for v in (objects, trials, half))
-    if not n.shape == t.shape == h.shape:
-        raise ValueError(f"objects, trials, half have lengths {n.size}, {t.size}, {h.size}")
-    keep = np.isfinite(h) & (h > 0)
-    n, t, h = n[keep], t[keep], h[keep]
-    if h.size == 0:
-        raise ValueError("fit_law needs at least one finite positive half-width")
-    if (n <= 0).any() or (t <= 0).any():
-        raise ValueError("objects and trials must be positive")
-    design = np.column_stack([1.0 / n, 1.0 / (n * t)]) / (h**2)[:, None]
-    if np.unique(t).size == 1:
-        (a,), _ = nnls(design[:, :1], np.ones(h.size))
-        return Law(a=float(a), b=0.0, points=int(h.size))
-    (a, b), _ = nnls(design, np.ones(h.size))
-    return Law(a=float(a), b=float(b), points=int(h.size))
-
-
-def exponent(objects: Sequence[float], half: Sequence[float]) -> float:
-    """Fitted slope of ``log h`` against ``log n`` (the ``1/sqrt(n)`` law predicts −0.5)."""
-    n, h = np.asarray(objects, float), np.asarray(half, float)
-    keep = np.isfinite(h) & (h > 0)
-    if np.unique(n[keep]).size < 2:
-        return float("nan")
-    return float(np.polyfit(np.log(n[keep]), np.log(h[keep]), 1)[0])
-
-
-def objects_needed(law: Law, target: float, trials: float = math.inf) -> int:
-    """Fewest objects whose half-width :class:`Law` puts at or below ``target``."""
-    if not target > 0:
-        raise ValueError(f"target must be positive, got {target!r}")
-    return max(1, math.ceil((law.a + law.b / trials) / target**2 - 1e-9))
 
 
 def fit_curve(curve: pd.DataFrame) -> dict[str, Law]:
@@ -347,15 +280,13 @@ def run_power(
     selector_objects: Sequence[int] = (), selector_trials: Sequence[int] = (),
     source: dict[str, Any] | None = None, log: Callable[[str], None] = lambda _: None,
 ) -> dict[str, Any]:
-    """Measure the curve, fit it, write ``power.json`` and ``power.png`` to ``out_dir``; returns
-    the summary. The objects axis runs on the tables pooled (:func:`pool`), the trials axis on
-    the first table (all its trials); grids default to :func:`default_objects` and
-    :func:`default_trials`.
+    """Measure the curve, fit it, write ``power.json`` to ``out_dir`` (the report draws it:
+    :func:`classifiers.report.power.plot_power`); returns the summary. The objects axis runs on
+    the tables pooled (:func:`pool`), the trials axis on the first table (all its trials); grids
+    default to :func:`default_objects` and :func:`default_trials`.
     """
     import json
     from pathlib import Path
-
-    from classifiers.report.power import FIGURE_FILE, POWER_FILE, plot_power
 
     if not tables:
         raise ValueError("run_power needs at least one dataset")
@@ -383,7 +314,6 @@ def run_power(
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     (out / POWER_FILE).write_text(json.dumps(summary, indent=2, default=_plain))
-    plot_power(summary, out / FIGURE_FILE)
     return summary
 
 

@@ -55,7 +55,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
-from grip_env.config import SynthesisConfig
+from grip_env.config import DEFAULT_SYNTHESIS, SynthesisConfig
 from grip_env.features import force_line_from_deviations
 from grip_env.hand_geometry import (
     DISTAL_BEND_RAD,
@@ -138,7 +138,6 @@ APPROACH_GRAZE_MM = 1e-6
 Array = NDArray[np.float64]
 #: An extra test of the hand's reach: (n, 3) finger reaches -> (n,) whether the hand executes them.
 ReachTest = Callable[[Array], NDArray[np.bool_]]
-DEFAULT_SYNTHESIS = SynthesisConfig()
 
 
 @dataclass(frozen=True)

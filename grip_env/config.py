@@ -133,6 +133,10 @@ class SynthesisConfig(_Section):
     )
 
 
+#: The synthesis defaults, shared by every planner that is given no config.
+DEFAULT_SYNTHESIS = SynthesisConfig()
+
+
 class SimConfig(_Section):
     """PyBullet execution of one grip (figures and their sources: BENCHMARKS.md, "Simulator")."""
 

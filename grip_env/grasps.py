@@ -40,8 +40,7 @@ from itertools import combinations
 import numpy as np
 from numpy.typing import NDArray
 
-from grip_env.barrett import DEFAULT_SYNTHESIS
-from grip_env.config import SynthesisConfig
+from grip_env.config import DEFAULT_SYNTHESIS, SynthesisConfig
 from grip_env.hand_geometry import SPREAD_AXIS_OFFSET_MM
 from grip_env.objects import PlanarObject
 from grip_env.params import DEFAULT_PARAMS, GraspParams

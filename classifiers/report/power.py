@@ -21,19 +21,16 @@ import matplotlib.ticker as ticker
 import numpy as np
 import pandas as pd
 
+from classifiers.half_widths import FIGURE_FILE, POWER_FILE, TARGETS, Law, paired_bootstrap
 from classifiers.report.document import Report
 
 LABELS = {"roc_auc": "best model's ROC-AUC", "hand_difference": "hand features (paired ΔAUC)",
           "rl_minus_best_qc": "RL − best Q_C (held out)"}  # fmt: skip
-POWER_FILE = "power.json"
-FIGURE_FILE = "power.png"
 
 
 def study_half_widths(out: Path) -> dict[str, dict[str, float]]:
     """The three half-widths of a study folder's results: ``{quantity: {"objects", "trials",
     "estimate", "half_width"}}`` (a quantity is missing when its stage did not run)."""
-    from classifiers.power import paired_bootstrap
-
     found: dict[str, dict[str, float]] = {}
     metrics, ablation = _json(out / "classifiers" / "metrics.json"), _json(
         out / "ablation" / "ablation.json")
@@ -66,8 +63,6 @@ def _from_interval(value: dict[str, Any], objects: int) -> dict[str, float]:
 def plot_power(summary: dict[str, Any], path: Path) -> Path:
     """Half-width against objects (left, log-log) and against trials per grip (right), with the
     fitted laws (lines) and the targets (dotted)."""
-    from classifiers.power import Law
-
     curve = pd.DataFrame(summary["curve"])
     figure, (left, right) = plt.subplots(1, 2, figsize=(10, 4.2))
     for k, quantity in enumerate(q for q in LABELS if q in set(curve["quantity"])):
@@ -125,8 +120,6 @@ def _axis(axes: Any, rows: pd.DataFrame, axis: str, color: str, label: str, law:
 
 def power_section(report: Report, out: Path) -> None:
     """The study report's "Statistical power" section (see the module docstring)."""
-    from classifiers.power import TARGETS
-
     report.heading("Statistical power: how many objects and trials")
     measured = study_half_widths(out)
     trials = _study_trials(out)

@@ -38,14 +38,9 @@ def run_selector(
     ``model.zip``, ``tb/`` and ``learning_curve.png``; returns the report. Live training
     is still evaluated on the dataset's recorded outcomes.
     """
+    from classifiers.selector.data import check_grip_table
     from classifiers.selector.evaluation import evaluate_selectors
-    from classifiers.selector.training import (
-        CURVE_FILE,
-        MODEL_FILE,
-        check_grip_table,
-        check_policy,
-        train_selector,
-    )
+    from classifiers.selector.training import CURVE_FILE, MODEL_FILE, check_policy, train_selector
 
     check_policy(policy)
     table = check_grip_table(table_or_dir)

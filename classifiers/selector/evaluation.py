@@ -37,6 +37,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from classifiers.selector.data import check_grip_table
 from grip_env.config import Config
 from grip_env.dataset.split import held_out_objects
 from grip_env.envs.observation import CandidateSet, candidate_set
@@ -172,8 +173,6 @@ def evaluate_selectors(
         ``{"policies": {name: {metric: {"mean", "ci"}, "per_object": [...]}}, "split": {...},
         "max_attempts", "max_candidates", "interval"}``.
     """
-    from classifiers.selector.training import check_grip_table
-
     table = check_grip_table(data)
     ids = table["object_id"].astype(str)
     learning, selector = config.learning, config.selector

@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 import torch as th
 
+from classifiers.selector.data import check_grip_table
 from grip_env.config import Config
 from grip_env.envs.observation import CandidateSet
 
@@ -61,8 +62,6 @@ def run_selectors(
     ``"seeds"``), which is also written to ``out_dir/selector.json``."""
     from classifiers.candidate_scores import SCORES_FILE, training_seeds, write_scores
     from classifiers.selector import REPORT_FILE, run_selector
-    from classifiers.selector.training import check_grip_table
-
     table = check_grip_table(table)
     out = Path(out_dir)
     settings = config.selector

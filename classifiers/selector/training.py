@@ -38,6 +38,7 @@ from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.vec_env import DummyVecEnv
 
 import grip_env  # noqa: F401  (registers GripSelect-v0)
+from classifiers.selector.data import check_grip_table
 from classifiers.selector.plots import plot_learning_curve
 from classifiers.selector.policy import CandidateSetPolicy
 from grip_env.config import Config, SelectorConfig
@@ -47,7 +48,6 @@ ENV_ID = "GripSelect-v0"
 N_ENVS = SelectorConfig().n_envs
 MODEL_FILE = "model.zip"
 CURVE_FILE = "learning_curve.png"
-_OUTCOME_COLUMNS = ("success_rate", "successes")
 
 
 def check_policy(policy: str) -> str:
@@ -55,33 +55,6 @@ def check_policy(policy: str) -> str:
     if policy not in POLICIES:
         raise ValueError(f"policy must be one of {POLICIES}, got {policy!r}")
     return policy
-
-
-def check_grip_table(data: Any) -> pd.DataFrame:
-    """Load a dataset (directory or ``.parquet`` table) or take a DataFrame with outcomes."""
-    if isinstance(data, str | Path):
-        data = _read_table(Path(data))
-    if not isinstance(data, pd.DataFrame):
-        raise ValueError(f"data must be a dataset path or DataFrame, got {type(data).__name__}")
-    if not any(column in data.columns for column in _OUTCOME_COLUMNS):
-        raise ValueError(
-            "dataset has no outcome columns ('success_rate' or 'trials'/'successes'): "
-            "the selector learns from simulated outcomes (run grip-env generate first)"
-        )
-    if data.empty:
-        raise ValueError("dataset holds no grip")
-    return data
-
-
-def _read_table(path: Path) -> pd.DataFrame:
-    """A dataset directory (``grip_env.dataset.load``) or a bare Parquet grip table."""
-    if not path.exists():
-        raise ValueError(f"dataset not found: {path}")
-    if path.is_file() and path.suffix == ".parquet":
-        return pd.read_parquet(path)
-    from grip_env.dataset import load
-
-    return load(path)
 
 
 class RobustnessReward(gymnasium.Wrapper):

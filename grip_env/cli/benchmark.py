@@ -49,7 +49,7 @@ def benchmark(
         cfg = load_config(config)
         from classifiers.benchmark import benchmark_method
         from classifiers.benchmark.leaderboard import write_leaderboard
-        from classifiers.selector.training import check_grip_table
+        from classifiers.selector.data import check_grip_table
 
         warn_label_model(data)
         table = check_grip_table(data)

@@ -66,7 +66,9 @@ def power(
             ("selector_objects", selector_objects, "--selector-objects"),
             ("selector_trials", selector_trials, "--selector-trials"))}  # fmt: skip
         output_dir(out)
+        from classifiers.half_widths import FIGURE_FILE
         from classifiers.power import run_power
+        from classifiers.report.power import plot_power
         from grip_env.dataset import load
 
         tables = [load(path, allow_partial=partial) for path in data]
@@ -78,7 +80,8 @@ def power(
         for quantity, needed in summary["projection"].items():
             found = ", ".join(f"{n} at {t} trials" for t, n in needed.items())
             typer.echo(f"{quantity}: target {summary['targets'][quantity]} needs {found}")
-        typer.echo(f"wrote {out / 'power.json'}")
+        plot_power(summary, out / FIGURE_FILE)
+        typer.echo(f"wrote {out / 'power.json'} and {out / FIGURE_FILE}")
 
 
 def parse_sizes(text: str | None, option: str) -> tuple[int, ...]:
