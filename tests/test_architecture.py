@@ -36,6 +36,8 @@ ONLY: dict[str, set[str]] = {
 # every other unit -> the units it must never import (foundations are always allowed)
 FORBIDDEN: dict[str, set[str]] = {
     **{unit: NOT_GRIP_ENV_UPPER | PLANNING | {"classifiers"} for unit in GEOMETRY},
+    # objects come from polygons, masks and images; perception (the render) builds on them
+    "grip_env.objects": NOT_GRIP_ENV_UPPER | PLANNING | {"classifiers", "grip_env.perception"},
     **{unit: NOT_GRIP_ENV_UPPER | {"classifiers"} for unit in PLANNING},
     "grip_env.sim": {"grip_env.dataset", "grip_env.envs", "grip_env.cli", "grip_env.calibration",
                      "grip_env.drawing", "grip_env.pipeline", "grip_env.grasps",
@@ -193,3 +195,70 @@ def test_only_the_world_touches_the_pybullet_client():
     for name in ("hand.py", "trial.py", "disturbance.py", "execution.py", "uncertainty.py"):
         text = (sim / name).read_text()
         assert ".client" not in text and "import pybullet" not in text, name
+
+
+def _file_graph() -> dict[str, set[str]]:
+    """File -> the project files it imports (module level, deferred and TYPE_CHECKING alike)."""
+    files = {_module_name(p): str(p.relative_to(ROOT)) for root in ("grip_env", "classifiers")
+             for p in (ROOT / root).rglob("*.py")}
+    return {path: {files[m] for m in _direct_modules(path, files) if files[m] != path}
+            for path in files.values()}
+
+
+def _direct_modules(path: str, modules: dict[str, str]) -> set[str]:
+    """The project modules a file names: ``from pkg import sub`` names ``pkg.sub`` when that is
+    a module (its package's ``__init__`` runs first, as for any submodule, and is not counted),
+    else ``pkg``."""
+    file = ROOT / path
+    module = _module_name(file)
+    found = set()
+    for node in ast.walk(ast.parse(file.read_text())):
+        for name in _targets(node, module, file.name == "__init__.py"):
+            if name in modules:
+                found.add(name)
+            elif isinstance(node, ast.ImportFrom) and name.rsplit(".", 1)[0] in modules:
+                found.add(name.rsplit(".", 1)[0])
+    return found
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one file (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    found: list[list[str]] = []
+
+    def visit(node: str) -> None:
+        index[node] = low[node] = len(index)
+        stack.append(node)
+        for nxt in sorted(graph[node]):
+            if nxt not in index:
+                visit(nxt)
+                low[node] = min(low[node], low[nxt])
+            elif nxt in stack:
+                low[node] = min(low[node], index[nxt])
+        if low[node] == index[node]:
+            component = []
+            while True:
+                member = stack.pop()
+                component.append(member)
+                if member == node:
+                    break
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for node in sorted(graph):
+        if node not in index:
+            visit(node)
+    return found
+
+
+def test_no_file_imports_itself_through_others():
+    """No import cycle between files, deferred imports included (deferral hid the last three:
+    power <-> report/power, selector evaluation <-> training, barrett <-> grasps)."""
+    assert _cycles(_file_graph()) == []
+
+
+def test_the_cycle_check_finds_a_cycle():
+    graph = {"a.py": {"b.py"}, "b.py": {"c.py"}, "c.py": {"a.py"}, "d.py": {"a.py"}}
+    assert _cycles(graph) == [["a.py", "b.py", "c.py"]]

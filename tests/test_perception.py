@@ -309,8 +309,8 @@ def test_sharpening_restores_acute_tips_and_leaves_curves_alone() -> None:
 
 
 def _raw_perceived_contour(obj: PlanarObject) -> np.ndarray:
+    from grip_env.objects.masks import contour_from_mask, segment
     from grip_env.perception.render import object_coverage, render_mask
-    from grip_env.perception.segmentation import contour_from_mask, segment
 
     grey, mm_per_px, centre = render_mask(obj, PerceptionConfig(), 30.0, 0)
     coverage = object_coverage(grey, segment(grey))

@@ -13,6 +13,7 @@ from numpy.typing import ArrayLike, NDArray
 from shapely.geometry import Polygon
 
 from grip_env.objects.decomposition import ccw, exact_pieces
+from grip_env.objects.masks import contour_from_mask, mask_from_image_file, one_region
 from grip_env.objects.simulated import DEFAULT_TOLERANCE_MM, SimulatedShape, simulated_shape
 
 if TYPE_CHECKING:
@@ -56,8 +57,6 @@ class PlanarObject:
         Raises:
             ValueError: a bad or empty mask, or one with several parts or holes.
         """
-        from grip_env.perception.segmentation import contour_from_mask, one_region
-
         return cls(contour_from_mask(one_region(mask), mm_per_px), name=name, source="mask")
 
     @classmethod
@@ -65,8 +64,6 @@ class PlanarObject:
         cls, path: str | Path, mm_per_px: float, name: str | None = None
     ) -> PlanarObject:
         """An object from an image file showing it on a contrasting background."""
-        from grip_env.perception.segmentation import mask_from_image_file
-
         path = Path(path)
         return cls.from_mask(mask_from_image_file(path), mm_per_px, name=name or path.stem)
 

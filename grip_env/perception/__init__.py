@@ -1,10 +1,10 @@
 """Perception: from a polygon, a mask or a rendered image to contour, curvature and regions."""
 
+from grip_env.objects.masks import contour_from_mask, mask_from_image_file, segment
 from grip_env.perception.contour import resample_contour
 from grip_env.perception.curvature import signed_curvature
 from grip_env.perception.regions import MAX_ABS_RHO, Regions, find_regions
 from grip_env.perception.render import contour_error_mm, perceive, render_mask
-from grip_env.perception.segmentation import contour_from_mask, mask_from_image_file, segment
 
 __all__ = [
     "MAX_ABS_RHO",

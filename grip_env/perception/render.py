@@ -20,8 +20,8 @@ from scipy import ndimage
 
 from grip_env.config import PerceptionConfig
 from grip_env.objects import PlanarObject
+from grip_env.objects.masks import contour_from_mask, segment
 from grip_env.perception.corners import sharpen_corners
-from grip_env.perception.segmentation import contour_from_mask, segment
 
 if TYPE_CHECKING:
     from grip_env.sim.world import World

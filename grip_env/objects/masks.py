@@ -1,4 +1,6 @@
-"""Segmentation: grey image → object mask → sub-pixel outer contour in millimetres.
+"""Objects from masks and images: grey image → object mask → sub-pixel outer contour in mm.
+
+Perception (the render of an object, :mod:`grip_env.perception`) segments with these too.
 
 Pixel convention (shared with ``World.render_top_down``): the centre of pixel (row r, column c) of
 an H-row image lies at ``x = c * mm_per_px``, ``y = (H - 1 - r) * mm_per_px`` — the origin is the
