@@ -9,7 +9,7 @@ ROC-AUC when the feature is shuffled in the held-out fold,
 the model of each feature set, fitted on the training objects of the study's split, on its
 held-out objects (the RL selector's test objects; one split, so no interval; not the
 leave-one-feature-out sets). ``eps`` is the Ferrari–Canny ε of
-:mod:`grip_env.epsilon`, added when missing.
+:mod:`grip_env.planning.epsilon`, added when missing.
 
 When the table has the graded outcome, the regression task runs alongside on the same folds:
 one regressor (default ``"svr"``) of ``robustness_mean`` per feature set, scored by Spearman
@@ -63,7 +63,7 @@ from classifiers.regression import (
 from classifiers.threads import single_threaded
 from grip_env.columns import FEATURES
 from grip_env.config import Config, LearningConfig
-from grip_env.epsilon import EPSILON_COLUMN, add_epsilon
+from grip_env.planning.epsilon import EPSILON_COLUMN, add_epsilon
 from grip_env.progress import progress_bar
 
 REFERENCE = "all_twelve"

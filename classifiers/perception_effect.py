@@ -52,7 +52,7 @@ def _paired_best(
 ) -> tuple[pd.DataFrame, dict[str, float]]:
     """One row per object with grips on both plans: the two best grips' compared values."""
     from grip_env.objects.meshes import execution_height_mm
-    from grip_env.pipeline import candidates
+    from grip_env.planning.pipeline import candidates
     from grip_env.sim import run_trials
 
     rows, plan_s, sim_s = [], 0.0, 0.0

@@ -137,7 +137,7 @@ def fixed_friction_config(config: Config) -> Config:
 
 
 def _planned(obj: PlanarObject, config: Config) -> pd.DataFrame:
-    from grip_env.pipeline import candidates
+    from grip_env.planning.pipeline import candidates
 
     table = candidates(obj, config.grasp, config)
     table = table[np.isfinite(table["Q_C"].to_numpy(float))]

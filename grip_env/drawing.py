@@ -9,9 +9,9 @@ import pandas as pd
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from grip_env.barrett import spread_axes
 from grip_env.objects import PlanarObject
 from grip_env.perception.regions import Regions
+from grip_env.planning.barrett import spread_axes
 
 _FINGER_COLOURS = ("tab:blue", "tab:green", "tab:red")
 

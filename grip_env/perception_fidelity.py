@@ -39,7 +39,7 @@ def resolution_sweep(
     resolution sees the object at the same size in the image's frame (the default 256 px at
     1 mm/px covers a 247 mm field).
     """
-    from grip_env.pipeline import candidates
+    from grip_env.planning.pipeline import candidates
     from grip_env.sim.world import World
 
     config = config or Config()

@@ -41,7 +41,7 @@ def _object(name: str) -> PlanarObject:
 
 def plans() -> pd.DataFrame:
     """The golden grips, planned now (only ``--record`` plans; the test reads the recording)."""
-    from grip_env.pipeline import candidates
+    from grip_env.planning.pipeline import candidates
 
     rows = []
     for name in OBJECTS:

@@ -61,7 +61,7 @@ def install() -> None:
 
 def _install() -> None:
     import grip_env.dataset.shards as shards
-    import grip_env.pipeline as pipeline
+    import grip_env.planning.pipeline as pipeline
     import grip_env.sim as sim
 
     plan, simulate, write_atomically = pipeline.candidates, sim.run_trials, shards.write_atomically

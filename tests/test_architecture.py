@@ -18,8 +18,8 @@ ROOT = Path(__file__).resolve().parents[1]
 FOUNDATION = {"grip_env.params", "grip_env.columns", "grip_env.config", "grip_env.shutdown",
               "grip_env.hand_geometry", "grip_env.progress", "grip_env.label_model"}
 GEOMETRY = {"grip_env.objects", "grip_env.perception"}
-PLANNING = {"grip_env.barrett", "grip_env.finger", "grip_env.grasps", "grip_env.features",
-            "grip_env.epsilon", "grip_env.pipeline"}
+# the planning package, and the two public paths the design's contract keeps for it
+PLANNING = {"grip_env.planning", "grip_env.pipeline", "grip_env.features"}
 NOT_GRIP_ENV_UPPER = {"grip_env.sim", "grip_env.dataset", "grip_env.envs", "grip_env.cli",
                       "grip_env.calibration", "grip_env.drawing"}
 
@@ -39,12 +39,11 @@ FORBIDDEN: dict[str, set[str]] = {
     # objects come from polygons, masks and images; perception (the render) builds on them
     "grip_env.objects": NOT_GRIP_ENV_UPPER | PLANNING | {"classifiers", "grip_env.perception"},
     **{unit: NOT_GRIP_ENV_UPPER | {"classifiers"} for unit in PLANNING},
+    # the simulator takes the hand's kinematics from planning (finger, barrett: tested below)
     "grip_env.sim": {"grip_env.dataset", "grip_env.envs", "grip_env.cli", "grip_env.calibration",
-                     "grip_env.drawing", "grip_env.pipeline", "grip_env.grasps",
-                     "grip_env.features", "classifiers"},
+                     "grip_env.drawing", "grip_env.pipeline", "grip_env.features", "classifiers"},
     "grip_env.mesh_sets": {"grip_env.dataset", "grip_env.envs", "grip_env.cli",
-                           "grip_env.calibration", "grip_env.drawing", "grip_env.pipeline",
-                           "grip_env.grasps", "grip_env.features", "classifiers"},
+                           "grip_env.calibration", "grip_env.drawing", "classifiers"} | PLANNING,
     "grip_env.dataset": {"grip_env.envs", "grip_env.cli", "grip_env.calibration",
                          "grip_env.drawing", "classifiers"},
     "grip_env.calibration": {"grip_env.envs", "grip_env.cli", "classifiers"},
@@ -115,7 +114,7 @@ def package_imports() -> list[Import]:
 
 
 def _resolve(name: str) -> str | None:
-    """The unit of an imported name; ``from grip_env import barrett`` names grip_env.barrett."""
+    """The unit of an imported name; ``from grip_env import datasets`` names grip_env.datasets."""
     unit = unit_of(name)
     if unit == "grip_env" and "." in name:
         candidate = name.split(".")[1]
@@ -150,7 +149,7 @@ def test_no_import_goes_against_the_layers():
 
 
 @pytest.mark.parametrize(("unit", "target"), [
-    ("grip_env.features", "grip_env.sim"), ("grip_env.grasps", "grip_env.sim"),
+    ("grip_env.planning", "grip_env.sim"), ("grip_env.objects", "grip_env.perception"),
     ("grip_env.sim", "grip_env.dataset"), ("grip_env.dataset", "classifiers"),
 ])
 def test_the_named_rules_hold(unit, target):
@@ -164,7 +163,8 @@ def test_grip_env_loads_classifiers_only_inside_cli_commands():
 
 
 def test_the_rules_catch_a_wrong_import():
-    assert _forbidden(Import("grip_env/features.py", "grip_env.features", "grip_env.sim", 1, True))
+    assert _forbidden(Import("grip_env/planning/features.py", "grip_env.planning", "grip_env.sim",
+                             1, True))
     assert _forbidden(Import("grip_env/sim/x.py", "grip_env.sim", "grip_env.dataset", 1, False))
     assert not _forbidden(Import("grip_env/perception/render.py", "grip_env.perception",
                                  "grip_env.sim", 1, False))
@@ -187,6 +187,15 @@ def test_the_study_and_its_report_do_not_import_each_other():
     study = _imported_modules("classifiers/study.py")
     report = _imported_modules("classifiers/report/study_report.py")
     assert not ("classifiers.report.study_report" in study and "classifiers.study" in report)
+
+
+def test_the_simulator_takes_only_the_hand_s_kinematics_from_planning():
+    """Never the grasps, the measures or the candidate pipeline."""
+    sim = ROOT / "grip_env" / "sim"
+    taken = {".".join(m.split(".")[:3]) for path in sim.glob("*.py")
+             for m in _imported_modules(str(path.relative_to(ROOT)))
+             if m.startswith("grip_env.planning.")}
+    assert taken and taken <= {"grip_env.planning.finger", "grip_env.planning.barrett"}, taken
 
 
 def test_only_the_world_touches_the_pybullet_client():

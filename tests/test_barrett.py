@@ -9,7 +9,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from grip_env.barrett import (
+from grip_env.config import SynthesisConfig
+from grip_env.objects import PlanarObject
+from grip_env.objects.shapes import rectangle, regular_polygon
+from grip_env.params import GraspParams
+from grip_env.planning.barrett import (
     FINGER_REACH_MM,
     SPREAD_AXIS_OFFSET_MM,
     THUMB_REACH_MM,
@@ -20,11 +24,7 @@ from grip_env.barrett import (
     hand_axes,
     spread_axes,
 )
-from grip_env.config import SynthesisConfig
-from grip_env.grasps import Grasps
-from grip_env.objects import PlanarObject
-from grip_env.objects.shapes import rectangle, regular_polygon
-from grip_env.params import GraspParams
+from grip_env.planning.grasps import Grasps
 
 PARAMS = GraspParams()
 SYNTHESIS = SynthesisConfig(min_extension_mm=30.0, max_extension_mm=160.0, max_spread_rad=1.5,
@@ -266,7 +266,7 @@ def _meet(p, n, q, m):
 
 
 def test_two_finger_grasp_base_matches_the_hands_spread_axes():
-    from grip_env import barrett, grasps
+    from grip_env.planning import barrett, grasps
 
     assert grasps.HALF_FINGER_BASE_MM == barrett.SPREAD_AXIS_OFFSET_MM
 

@@ -15,7 +15,7 @@ import pytest
 from grip_env.config import Config
 from grip_env.mesh_sets import named_set
 from grip_env.objects import PlanarObject, load_object_set
-from grip_env.pipeline import candidates
+from grip_env.planning.pipeline import candidates
 from grip_env.sim import TrialScene, run_trial_outcomes, zero_noise
 from grip_env.sim.trial import grip_plans
 

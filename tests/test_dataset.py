@@ -37,9 +37,9 @@ from grip_env.dataset import (
 )
 from grip_env.dataset.files import sha256_of
 from grip_env.dataset.jobs import object_seeds
-from grip_env.features import compute_features
 from grip_env.objects import load_object_set
-from grip_env.pipeline import candidates
+from grip_env.planning.features import compute_features
+from grip_env.planning.pipeline import candidates
 
 CONFIG = Config().override(dataset={"trials": 4, "seed": 7, "max_grips_per_object": 5})
 TRIALS_SEEN: list[int] = []

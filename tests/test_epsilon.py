@@ -11,8 +11,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from classifiers.synthetic import synthetic_grips
-from grip_env.epsilon import add_epsilon, epsilon_quality
 from grip_env.params import GraspParams
+from grip_env.planning.epsilon import add_epsilon, epsilon_quality
 
 
 def grasp_row(points, normals, centroid=(0.0, 0.0), semi=(10.0, 10.0)) -> dict:

@@ -10,7 +10,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from grip_env.features import (
+from grip_env.objects import make_shape
+from grip_env.params import CONE_EDGE_TOLERANCE_RAD, GraspParams, outside_cone
+from grip_env.planning.features import (
     FEATURE_NAMES,
     INDEX_NAMES,
     OUTPUT_NAMES,
@@ -19,8 +21,6 @@ from grip_env.features import (
     features_from_arrays,
     force_line_from_deviations,
 )
-from grip_env.objects import make_shape
-from grip_env.params import CONE_EDGE_TOLERANCE_RAD, GraspParams, outside_cone
 from tests.benchmarks.reference_features import random_grip_table, reference_features
 
 PARAMS = GraspParams()
@@ -197,7 +197,7 @@ def test_cone_edge_is_decided_by_one_tolerance(excess: float, k: int) -> None:
 def test_force_exactly_on_the_cone_edge_counts_inside(scale: float, k: int) -> None:
     """F turned by arctan(mu) from N (delta equal to the edge up to rounding) gives k = 1, both
     in the features and in the thumb search's value; just beyond the tolerance gives k = 3."""
-    from grip_env.barrett import force_line_value
+    from grip_env.planning.barrett import force_line_value
 
     row = rotated_force(ideal_triangle_row(), 2, scale * NU)
     expected = 4 * k / 3 * scale**2

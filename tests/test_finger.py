@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from grip_env.finger import (
+from grip_env.planning.finger import (
     JOINT2_MAX,
     JOINT3_MAX,
     closing_sweep_depth,

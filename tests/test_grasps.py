@@ -10,11 +10,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from grip_env.config import SynthesisConfig
-from grip_env.grasps import END_FRACTION, HALF_FINGER_BASE_MM, Grasps, synthesize_grasps
 from grip_env.objects import PlanarObject, make_shape
 from grip_env.objects.shapes import rectangle
 from grip_env.params import GraspParams
 from grip_env.perception.regions import Regions
+from grip_env.planning.grasps import END_FRACTION, HALF_FINGER_BASE_MM, Grasps, synthesize_grasps
 
 PARAMS = GraspParams()
 ALL = SynthesisConfig(max_grasps=100_000)

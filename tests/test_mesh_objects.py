@@ -181,7 +181,7 @@ def test_moving_a_mesh_object_moves_its_mesh_and_turning_drops_it(box):
 
 def test_a_centred_grip_on_the_mesh_body_runs_as_on_its_extrusion(box):
     """A box mesh is its own extrusion: a centred grip holds on both alike."""
-    from grip_env.pipeline import candidates
+    from grip_env.planning.pipeline import candidates
     from grip_env.sim import run_trials
     from grip_env.sim.trial import TrialScene
 

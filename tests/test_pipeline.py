@@ -10,22 +10,22 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from grip_env.barrett import (
+from grip_env.columns import CANDIDATE_COLUMNS
+from grip_env.config import Config
+from grip_env.objects import PlanarObject, load_object_set, make_shape, procedural_objects
+from grip_env.objects.shapes import rectangle, regular_polygon
+from grip_env.params import GraspParams
+from grip_env.perception.regions import Regions, find_regions
+from grip_env.planning.barrett import (
     REACH_RANGES_MM,
     SPREAD_AXIS_OFFSET_MM,
     approach_clear,
     configurations,
     edge_start_mm,
 )
-from grip_env.columns import CANDIDATE_COLUMNS
-from grip_env.config import Config
-from grip_env.features import FEATURE_NAMES, OUTPUT_NAMES, features_from_arrays
-from grip_env.grasps import synthesize_grasps
-from grip_env.objects import PlanarObject, load_object_set, make_shape, procedural_objects
-from grip_env.objects.shapes import rectangle, regular_polygon
-from grip_env.params import GraspParams
-from grip_env.perception.regions import Regions, find_regions
-from grip_env.pipeline import candidates, descriptor_columns
+from grip_env.planning.features import FEATURE_NAMES, OUTPUT_NAMES, features_from_arrays
+from grip_env.planning.grasps import synthesize_grasps
+from grip_env.planning.pipeline import candidates, descriptor_columns
 
 PARAMS = GraspParams()
 CONFIG = Config().override(synthesis={"min_extension_mm": 15.0, "max_extension_mm": 160.0,
@@ -197,8 +197,8 @@ def test_params_and_config_grasp_are_one_source():
 
 
 def test_every_candidate_is_one_the_executor_reaches():
-    from grip_env.finger import finger_reaches
-    from grip_env.pipeline import _executable_test
+    from grip_env.planning.finger import finger_reaches
+    from grip_env.planning.pipeline import _executable_test
 
     for name in ("trapezoid", "rounded_rectangle"):
         table = candidates(make_shape(name))

@@ -1,6 +1,7 @@
 """Reach is physical: each planned contact is where the URDF finger, closed to it, puts its pad.
 
-The planner (``grip_env.barrett``) bounds each finger's reach from its own line origin (spread axis;
+The planner (``grip_env.planning.barrett``) bounds each finger's reach from its own line origin
+(spread axis;
 O for the thumb) by the coupled closing of the URDF finger. These tests close the URDF in PyBullet
 (``World`` + ``Hand``, joints set with ``resetJointState``, the distal link read back with
 ``getLinkState``) and compare where its pad (the sphere on the pad corner, read from the URDF)
@@ -14,14 +15,14 @@ import pandas as pd
 import pybullet
 import pytest
 
-from grip_env import barrett
-from grip_env.barrett import configurations
 from grip_env.config import Config
-from grip_env.finger import PAD_RADIUS_MM, pad_contact_in_plane
-from grip_env.grasps import synthesize_grasps
 from grip_env.objects import load_object_set
 from grip_env.perception.regions import find_regions
-from grip_env.pipeline import candidates, descriptor_columns
+from grip_env.planning import barrett
+from grip_env.planning.barrett import configurations
+from grip_env.planning.finger import PAD_RADIUS_MM, pad_contact_in_plane
+from grip_env.planning.grasps import synthesize_grasps
+from grip_env.planning.pipeline import candidates, descriptor_columns
 from grip_env.sim import hand as sim_hand
 from grip_env.sim.hand import Hand
 from grip_env.sim.world import World
@@ -193,7 +194,7 @@ def test_outside_the_closing_range_the_pad_corner_is_not_what_touches():
 
 
 def test_pad_angle_range_is_the_executors():
-    finger = pytest.importorskip("grip_env.finger")
+    finger = pytest.importorskip("grip_env.planning.finger")
     assert abs(barrett.PAD_ANGLE_RANGE_RAD[0] - finger.MIN_PAD_ANGLE) < 1e-12
     assert abs(barrett.DISTAL_BEND_RAD - finger.DISTAL_BEND_RAD) < 1e-12
     assert barrett.DISTAL_PAD_MM == finger.DISTAL_PAD_MM

@@ -13,7 +13,7 @@ from grip_env.config import Config
 from grip_env.objects import PlanarObject, load_object_set
 from grip_env.perception import Regions, find_regions, perceive
 from grip_env.perception_fidelity import endpoint_errors
-from grip_env.pipeline import candidates
+from grip_env.planning.pipeline import candidates
 
 CONFIG = Config()
 PIXEL_MM = CONFIG.perception.mm_per_px
@@ -41,7 +41,7 @@ def test_rendered_regions_match_the_polygon(obj: PlanarObject, seen) -> None:
 
 @pytest.mark.parametrize("obj", DEFAULT_OBJECTS, ids=lambda o: o.name)
 def test_best_grip_on_the_render_is_within_ten_percent(obj: PlanarObject, seen) -> None:
-    """The bean's fails without ``synthesis.focus_margin_mm`` (11.3 %, see grip_env.grasps)."""
+    """The bean's fails without ``synthesis.focus_margin_mm`` (11.3 %, see planning.grasps)."""
     true = candidates(obj, config=CONFIG)["Q_C"]
     perceived = candidates(seen[obj.name], config=CONFIG)["Q_C"]
     assert (len(true) == 0 and len(perceived) == 0) or (len(true) and len(perceived))

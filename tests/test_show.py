@@ -13,7 +13,7 @@ from grip_env.cli import _register_commands, app
 from grip_env.drawing import object_figure
 from grip_env.objects import make_shape, object_from_spec
 from grip_env.objects.shapes import rectangle
-from grip_env.pipeline import candidates
+from grip_env.planning.pipeline import candidates
 
 
 @pytest.fixture(scope="module")

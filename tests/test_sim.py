@@ -9,8 +9,8 @@ import pandas as pd
 import pytest
 
 from grip_env.config import Config
-from grip_env.finger import finger_reaches
 from grip_env.objects import PlanarObject, make_shape
+from grip_env.planning.finger import finger_reaches
 from grip_env.sim import (
     TrialNoise,
     render_trial_strip,

@@ -8,9 +8,9 @@ import pybullet
 import pytest
 
 from grip_env.config import Config
-from grip_env.finger import pad_contact_in_plane, planar_contacts
 from grip_env.objects import make_shape
-from grip_env.pipeline import candidates
+from grip_env.planning.finger import pad_contact_in_plane, planar_contacts
+from grip_env.planning.pipeline import candidates
 from grip_env.sim import (
     TrialNoise,
     TrialScene,
@@ -242,7 +242,7 @@ def _pad_corner(client, uid: int, link: int) -> np.ndarray:
 def test_contacts_lie_in_one_plane_within_the_allowed_rise():
     config = Config()
     grips = candidates(BOX, config=config)
-    from grip_env.finger import finger_reaches
+    from grip_env.planning.finger import finger_reaches
 
     sim = config.sim
     posture, found = planar_contacts(finger_reaches(grips), 30.0, sim.contact_plane_rise_mm,

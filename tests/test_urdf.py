@@ -6,8 +6,8 @@ import numpy as np
 import pybullet
 import pytest
 
-from grip_env import barrett
-from grip_env.finger import DISTAL_PAD_MM, fingertip_in_plane
+from grip_env.planning import barrett
+from grip_env.planning.finger import DISTAL_PAD_MM, fingertip_in_plane
 from grip_env.sim import HAND_URDF, World
 
 # URDF link indices: (spread link or None, proximal, distal) of URDF fingers 1, 2, 3 (thumb).

@@ -54,7 +54,7 @@ def score_frame(method: str, seed: int, candidates: pd.DataFrame, score: Any) ->
 
 def baseline_scores(candidates: pd.DataFrame, grasp: Any = None) -> pd.DataFrame:
     """Score tables of the analytic baselines (one run each)."""
-    from grip_env.epsilon import epsilon_quality
+    from grip_env.planning.epsilon import epsilon_quality
 
     oracle = candidates.assign(r=candidates.get("robustness_mean", 0.0)).sort_values(
         ["object_id", "success_rate", "r"], kind="mergesort")  # fmt: skip

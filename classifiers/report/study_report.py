@@ -117,7 +117,7 @@ def _feature_section(report: Report, table: pd.DataFrame, fig_dir: Path) -> None
 
 
 def _rank_section(report: Report, objects: list[PlanarObject], config: Config) -> None:
-    from grip_env.pipeline import candidates
+    from grip_env.planning.pipeline import candidates
 
     report.heading("Grasp ranks against configuration ranks (paper, section VII-A)")
     comparisons = []

@@ -119,7 +119,7 @@ def _draw(planar: PlanarObject, cfg: Config, grips: int, out: Path) -> Path:
     regions = find_regions(planar, cfg.perception, cfg.grasp)
     table = None
     if grips:
-        from grip_env.pipeline import candidates
+        from grip_env.planning.pipeline import candidates
 
         table = candidates(planar, cfg.grasp, cfg, regions=regions).head(grips)
     title = f"{planar.name}: {len(regions)} regions"
@@ -129,7 +129,7 @@ def _draw(planar: PlanarObject, cfg: Config, grips: int, out: Path) -> Path:
 
 
 def _render_trial(planar: PlanarObject, cfg: Config, seed: int, out: Path) -> Path:
-    from grip_env.pipeline import candidates
+    from grip_env.planning.pipeline import candidates
     from grip_env.sim import render_trial_strip
 
     table = candidates(planar, cfg.grasp, cfg)

@@ -21,7 +21,7 @@ from grip_env.dataset.pool import WorkerLost, WorkerPool, call_single_threaded
 BACKENDS = ("process", "ray")
 _IN_FLIGHT_PER_WORKER = 2
 _PRELOAD = (
-    "grip_env.dataset.jobs", "grip_env.dataset.pool", "grip_env.pipeline", "grip_env.sim",
+    "grip_env.dataset.jobs", "grip_env.dataset.pool", "grip_env.planning.pipeline", "grip_env.sim",
     "pyarrow",
 )
 #: Ray re-runs a task whose worker process died this many times before giving up.

@@ -66,7 +66,7 @@ def simulate_object(task: ObjectTask) -> pd.DataFrame:
     by the object's position in the run."""
     from grip_env.dataset.sampling import keep_grips
     from grip_env.objects.meshes import execution_height_mm
-    from grip_env.pipeline import candidates
+    from grip_env.planning.pipeline import candidates
     from grip_env.sim import run_trials
 
     config = task.config

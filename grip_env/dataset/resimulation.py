@@ -134,7 +134,7 @@ def _check_object(check: _ObjectCheck) -> tuple[bool, int, list[str]]:
     """(candidates identical, grips whose outcomes are identical, what differed)."""
     from grip_env.dataset.sampling import keep_grips
     from grip_env.objects.meshes import execution_height_mm
-    from grip_env.pipeline import candidates
+    from grip_env.planning.pipeline import candidates
     from grip_env.sim import run_trials
 
     task, recorded, config = check.task, check.recorded, check.task.config

@@ -131,7 +131,7 @@ def _row_problems(
 
 
 def _feature_problems(name: str, grips: pd.DataFrame, params: GraspParams) -> list[str]:
-    from grip_env.features import compute_features
+    from grip_env.planning.features import compute_features
 
     try:
         expected = compute_features(grips, params)

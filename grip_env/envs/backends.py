@@ -125,7 +125,7 @@ class LiveBackend:
         self.feature_cap: float | None = config.grasp.feature_cap
 
     def candidates(self, object_id: str) -> pd.DataFrame:
-        from grip_env.pipeline import candidates
+        from grip_env.planning.pipeline import candidates
 
         return candidates(self._objects[object_id], self._config.grasp, self._config)
 

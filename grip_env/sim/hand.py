@@ -53,7 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from grip_env.config import SimConfig
-from grip_env.finger import (
+from grip_env.planning.finger import (
     COUPLING,
     JOINT3_MAX,
     KNUCKLE_HEIGHT_MM,
@@ -66,7 +66,7 @@ from grip_env.sim.world import MM, World
 #: The hand's URDF, package data (a file on disk in a wheel or an editable install alike).
 HAND_URDF = Path(str(files("grip_env") / "assets" / "barrett_bh8_280.urdf"))
 
-# The finger's geometry is grip_env.hand_geometry's (as in the URDF), through grip_env.finger.
+# The finger's geometry is grip_env.hand_geometry's (as in the URDF), through planning.finger.
 GEAR_FACTOR = 5.0  # joint 3's gear-train torque before breakaway, relative to tau3
 GEAR_GAIN = 0.5  # position gain of the gear train (stiff, still stable at 240 Hz)
 ARM_GAIN = 1.0  # the arm's joints reach their targets in one step (within their force)

@@ -24,12 +24,17 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from grip_env.config import Config
-from grip_env.finger import ContactPosture, finger_reaches, opening_posture, planar_contacts
 from grip_env.objects import PlanarObject
 from grip_env.objects.meshes import (
     executes_on_mesh,
     execution_height_mm,
     pose_mass_properties,
+)
+from grip_env.planning.finger import (
+    ContactPosture,
+    finger_reaches,
+    opening_posture,
+    planar_contacts,
 )
 from grip_env.sim import pose
 from grip_env.sim.disturbance import RampProbe, reaches, robustness

@@ -86,7 +86,7 @@ def shard_write_seconds(rows: pd.DataFrame, repeats: int = 50) -> float:
 
 def planning_seconds(objects: int = 20) -> float:
     """Seconds per object of planning alone (candidates on the true contour), one core."""
-    from grip_env.pipeline import candidates
+    from grip_env.planning.pipeline import candidates
 
     shapes = procedural_objects(objects, 1)
     started = time.perf_counter()

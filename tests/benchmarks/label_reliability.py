@@ -28,7 +28,7 @@ from scipy import stats
 from grip_env.config import Config
 from grip_env.dataset.sampling import keep_grips
 from grip_env.objects import PlanarObject, load_object_set, procedural_objects
-from grip_env.pipeline import candidates
+from grip_env.planning.pipeline import candidates
 from grip_env.sim import run_trial_outcomes
 
 #: (name, uncertainty overrides).

@@ -27,7 +27,7 @@ from grip_env.dataset.catalog import resolve_objects
 from grip_env.dataset.jobs import ObjectTask, object_seeds, planning_contour
 from grip_env.dataset.sampling import keep_grips
 from grip_env.objects.meshes import execution_height_mm
-from grip_env.pipeline import candidates
+from grip_env.planning.pipeline import candidates
 
 STAGES = ("outline", "perceived", "candidates", "kept")
 

@@ -1,6 +1,7 @@
 """Plain per-grip Python version of the twelve features, and random grip tables to test with.
 
-Written independently of ``grip_env.features`` (law of cosines, explicit loops, ``math`` only) so
+Written independently of ``grip_env.planning.features`` (law of cosines, explicit loops,
+``math`` only) so
 that the two can check each other; it is also the slow side of the feature benchmark.
 """
 
@@ -12,8 +13,8 @@ import numpy as np
 import pandas as pd
 
 from grip_env.columns import DESCRIPTORS
-from grip_env.features import OUTPUT_NAMES
 from grip_env.params import GraspParams
+from grip_env.planning.features import OUTPUT_NAMES
 
 
 def reference_features(table: pd.DataFrame, params: GraspParams) -> pd.DataFrame:

@@ -58,7 +58,7 @@ import pandas as pd
 
 from grip_env.config import Config
 from grip_env.objects import load_object_set, make_shape
-from grip_env.pipeline import candidates
+from grip_env.planning.pipeline import candidates
 from grip_env.sim import TrialResult, TrialScene, grip_plans
 from grip_env.sim.execution import grip_keys
 from grip_env.sim.uncertainty import (

@@ -13,7 +13,7 @@ from grip_env.config import Config
 from grip_env.objects import load_object_set
 from grip_env.params import GraspParams
 from grip_env.perception.regions import find_regions
-from grip_env.pipeline import candidates
+from grip_env.planning.pipeline import candidates
 
 CONFIG = Config()
 PARAMS = GraspParams()

@@ -12,7 +12,7 @@ import pytest
 
 from classifiers.models import MODEL_NAMES, make_model
 from classifiers.synthetic import synthetic_grips
-from grip_env.epsilon import epsilon_quality
+from grip_env.planning.epsilon import epsilon_quality
 
 pytestmark = pytest.mark.slow
 

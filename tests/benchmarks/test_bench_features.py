@@ -11,8 +11,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from grip_env.features import OUTPUT_NAMES, REQUIRED_COLUMNS, compute_features, features_from_arrays
 from grip_env.params import GraspParams
+from grip_env.planning.features import (
+    OUTPUT_NAMES,
+    REQUIRED_COLUMNS,
+    compute_features,
+    features_from_arrays,
+)
 from tests.benchmarks.reference_features import random_grip_table, reference_features
 
 VECTORISED_ROWS = 100_000

@@ -56,7 +56,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from grip_env.config import DEFAULT_SYNTHESIS, SynthesisConfig
-from grip_env.features import force_line_from_deviations
 from grip_env.hand_geometry import (
     DISTAL_BEND_RAD,
     DISTAL_LINK_MM,
@@ -72,10 +71,11 @@ from grip_env.hand_geometry import (
     pad_contact_in_plane,
 )
 from grip_env.params import DEFAULT_PARAMS, GraspParams
+from grip_env.planning.features import force_line_from_deviations
 
 if TYPE_CHECKING:
-    from grip_env.grasps import Grasps
     from grip_env.objects import PlanarObject
+    from grip_env.planning.grasps import Grasps
 
 
 def fingertip_reach(joint2: NDArray, knuckle_mm: float = KNUCKLE_RADIAL_MM) -> NDArray:

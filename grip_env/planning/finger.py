@@ -16,9 +16,9 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import NDArray
 
-from grip_env import barrett
 from grip_env import hand_geometry as hg
 from grip_env.hand_geometry import fingertip_in_plane, pad_contact_in_plane
+from grip_env.planning import barrett
 
 KNUCKLE_RADIUS_MM = hg.KNUCKLE_RADIAL_MM  # knuckle from the finger's line origin (S_i or O)
 KNUCKLE_HEIGHT_MM = hg.KNUCKLE_HEIGHT_MM
