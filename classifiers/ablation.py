@@ -61,15 +61,13 @@ from classifiers.regression import (
     summarise_regression,
 )
 from classifiers.threads import single_threaded
-from grip_env.columns import FEATURES
+from grip_env.columns import FEATURES, GRASP_FEATURES, HAND_FEATURES, SHARED_FEATURES
 from grip_env.config import Config, LearningConfig
 from grip_env.planning.epsilon import EPSILON_COLUMN, add_epsilon
 from grip_env.progress import progress_bar
 
 REFERENCE = "all_twelve"
-SHARED = ("S1", "S2", "S3", "S4")
-GRASP = ("G1", "G2")
-HAND = ("C1", "C2", "C3", "C4", "C5", "C6")
+SHARED, GRASP, HAND = SHARED_FEATURES, GRASP_FEATURES, HAND_FEATURES
 
 
 _LEAVE_ONE_OUT = frozenset(f"without_{feature}" for feature in FEATURES)

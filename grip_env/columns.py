@@ -16,7 +16,11 @@ CURVATURES = ("rho1", "rho2", "rho3")
 FOCI = ("cg_x", "cg_y", "cc_x", "cc_y")
 HAND = ("e1", "e2", "e3", "spread", "hand_x", "hand_y", "hand_yaw")
 OBJECT = ("area", "centroid_x", "centroid_y", "semi_major", "semi_minor")
-FEATURES = ("S1", "S2", "S3", "S4", "G1", "G2", "C1", "C2", "C3", "C4", "C5", "C6")
+#: The twelve features by group: shared (S), of the ideal grasp (G), of the hand (C).
+SHARED_FEATURES = ("S1", "S2", "S3", "S4")
+GRASP_FEATURES = ("G1", "G2")
+HAND_FEATURES = ("C1", "C2", "C3", "C4", "C5", "C6")
+FEATURES = SHARED_FEATURES + GRASP_FEATURES + HAND_FEATURES
 INDEXES = ("Q_G", "Q_C")
 OUTCOMES = ("trials", "successes", "success_rate", "success")
 #: Graded outcome: the highest disturbance (g) held per trial, mean and spread over trials.

@@ -12,9 +12,9 @@ import numpy as np
 import pandas as pd
 from scipy.stats import spearmanr
 
-from grip_env.columns import FEATURES
+from grip_env.columns import FEATURES, HAND_FEATURES, SHARED_FEATURES
 
-CORRELATION_COLUMNS = ("C1", "C2", "C3", "C4", "C5", "C6", "S1", "S2", "S3", "S4", "Q_C")
+CORRELATION_COLUMNS = (*HAND_FEATURES, *SHARED_FEATURES, "Q_C")
 
 
 def feature_correlations(table: pd.DataFrame, method: str = "spearman") -> pd.DataFrame:

@@ -15,12 +15,12 @@ from typing import TYPE_CHECKING, Any
 from grip_env.envs.registration import ENV_IDS, register_envs
 
 if TYPE_CHECKING:
+    from grip_env.dataset.split import objects_in_split, split_objects
     from grip_env.envs.accept import GripAcceptEnv
     from grip_env.envs.backends import LiveBackend, OutcomeBackend, ReplayBackend
     from grip_env.envs.core import GripEnvBase
     from grip_env.envs.observation import NORMALIZATIONS, CandidateSet, FeatureScaler
     from grip_env.envs.select import GripSelectEnv
-    from grip_env.envs.split import objects_in_split, split_objects
 
 _LAZY = {
     "GripAcceptEnv": "accept",
@@ -32,8 +32,9 @@ _LAZY = {
     "CandidateSet": "observation",
     "FeatureScaler": "observation",
     "GripSelectEnv": "select",
-    "objects_in_split": "split",
-    "split_objects": "split",
+    # the split by object is the dataset layer's (one split for envs, learners and selector)
+    "objects_in_split": "grip_env.dataset.split",
+    "split_objects": "grip_env.dataset.split",
 }
 
 __all__ = [
@@ -56,4 +57,5 @@ __all__ = [
 def __getattr__(name: str) -> Any:
     if name not in _LAZY:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(import_module(f"grip_env.envs.{_LAZY[name]}"), name)
+    module = _LAZY[name]
+    return getattr(import_module(module if "." in module else f"grip_env.envs.{module}"), name)

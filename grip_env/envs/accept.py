@@ -90,19 +90,10 @@ class GripAcceptEnv(GripEnvBase):
         self._shown: int | None = None
         self._outcome: bool | None = None
 
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[Observation, dict[str, Any]]:
-        """Start an episode on a new object and show its first candidate."""
-        super().reset(seed=seed)
-        found = self._found = self._episode_candidates(options)
-        self._slots = self._shuffled_slots(found.count)
-        self._position, self._attempts, self._outcome = 0, 0, None
+    def _start_episode(self, found: CandidateSet) -> None:
+        """Show the episode's first candidate."""
+        self._position = 0
         self._shown = int(self._slots[0])
-        if self.render_mode == "human":
-            self.render()
-        info = {"object_id": found.object_id, "candidates": found.count, "attempts": 0}
-        return self._observation(), info
 
     def step(self, action: Any) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
         """Skip (0) or execute (1) the current candidate."""

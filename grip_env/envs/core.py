@@ -18,6 +18,7 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from grip_env.config import Config, load_config
+from grip_env.dataset.split import objects_in_split
 from grip_env.envs.backends import LiveBackend, ObjectsArg, OutcomeBackend, ReplayBackend
 from grip_env.envs.observation import (
     CandidateSet,
@@ -27,7 +28,6 @@ from grip_env.envs.observation import (
     raw_features,
 )
 from grip_env.envs.rendering import RENDER_STYLES, HumanWindow, SceneCamera, draw_candidates
-from grip_env.envs.split import objects_in_split
 
 CANDIDATE_ORDERS: tuple[str, ...] = ("q_c", "shuffled")
 _BACKEND_MEMBERS = ("object_ids", "feature_cap", "candidates", "contour", "execute", "close")
@@ -123,6 +123,29 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         return backend
 
     # ------------------------------------------------------------------ episodes
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, NDArray[Any]], dict[str, Any]]:
+        """Start an episode on a new object (``options={"object_id": ...}`` picks it);
+        ``info`` has ``object_id``, ``candidates`` and ``attempts``."""
+        super().reset(seed=seed)
+        found = self._found = self._episode_candidates(options)
+        self._slots = self._shuffled_slots(found.count)
+        self._attempts, self._outcome = 0, None
+        self._start_episode(found)
+        if self.render_mode == "human":
+            self.render()
+        info = {"object_id": found.object_id, "candidates": found.count, "attempts": 0}
+        return self._observation(), info
+
+    def _start_episode(self, found: CandidateSet) -> None:
+        """Set the environment's own episode state for ``found`` (subclasses)."""
+        raise NotImplementedError
+
+    def _observation(self) -> dict[str, NDArray[Any]]:
+        """The current observation (subclasses)."""
+        raise NotImplementedError
+
     def _episode_candidates(self, options: dict[str, Any] | None) -> CandidateSet:
         """The episode's object: ``options["object_id"]`` if given, else a uniform draw."""
         options = dict(options or {})

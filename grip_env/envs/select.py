@@ -118,21 +118,13 @@ class GripSelectEnv(GripEnvBase):
         self._chosen: int | None = None
         self._outcome: bool | None = None
 
-    def reset(
-        self, *, seed: int | None = None, options: dict[str, Any] | None = None
-    ) -> tuple[Observation, dict[str, Any]]:
-        """Start an episode on a new object; ``info`` has ``object_id`` and ``candidates``."""
-        super().reset(seed=seed)
-        found = self._found = self._episode_candidates(options)
-        self._slots = slots = self._shuffled_slots(found.count)
+    def _start_episode(self, found: CandidateSet) -> None:
+        """Lay the episode's candidates out in their (shuffled) slots."""
+        slots = self._slots
         self._features = found.features if slots is self._identity else found.features[slots]
         self._mask = found.mask.copy()
         self._remaining = found.count
-        self._attempts, self._chosen, self._outcome = 0, None, None
-        if self.render_mode == "human":
-            self.render()
-        info = {"object_id": found.object_id, "candidates": found.count, "attempts": 0}
-        return self._observation(), info
+        self._chosen = None
 
     def step(self, action: Any) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
         """Execute the candidate in slot ``action``."""
