@@ -15,7 +15,7 @@ import pandas as pd
 from grip_env.config import Config
 from grip_env.objects import PlanarObject
 from grip_env.perception.regions import Regions, find_regions
-from grip_env.perception.render import image_scale, perceive
+from grip_env.sim.camera import image_scale, perceive
 
 
 def endpoint_errors(true: Regions, perceived: Regions) -> np.ndarray:

@@ -54,8 +54,8 @@ FORBIDDEN: dict[str, set[str]] = {
     "grip_env": {"classifiers", "grip_env.cli"},
     "classifiers": {"grip_env.cli"},
 }
-# The one sanctioned exception: perception's top-down camera is the simulator's World.
-EXCEPTIONS = {("grip_env/perception/render.py", "grip_env.sim")}
+# No exception: the camera (render, then segment) is the simulator's (grip_env.sim.camera).
+EXCEPTIONS: set[tuple[str, str]] = set()
 
 
 @dataclass(frozen=True)
@@ -166,8 +166,10 @@ def test_the_rules_catch_a_wrong_import():
     assert _forbidden(Import("grip_env/planning/features.py", "grip_env.planning", "grip_env.sim",
                              1, True))
     assert _forbidden(Import("grip_env/sim/x.py", "grip_env.sim", "grip_env.dataset", 1, False))
-    assert not _forbidden(Import("grip_env/perception/render.py", "grip_env.perception",
-                                 "grip_env.sim", 1, False))
+    assert _forbidden(Import("grip_env/perception/regions.py", "grip_env.perception",
+                             "grip_env.sim", 1, False))
+    assert not _forbidden(Import("grip_env/sim/camera.py", "grip_env.sim", "grip_env.perception",
+                                 1, True))
 
 
 def _imported_modules(path: str) -> set[str]:

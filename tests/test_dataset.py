@@ -466,7 +466,7 @@ def test_real_job_same_dataset_from_one_and_two_workers(tmp_path: Path) -> None:
 def test_real_job_plans_on_perceived_contour(tmp_path: Path) -> None:
     from grip_env.dataset import load_perceived_objects
     from grip_env.objects import make_shape
-    from grip_env.perception import perceive
+    from grip_env.sim.camera import perceive
 
     config = REAL.override(perception={"source": "render"})
     seen_dir = generate(config, tmp_path / "d", objects="rectangle", workers=1, progress=False)

@@ -20,7 +20,7 @@ import pytest
 from grip_env.config import Config
 from grip_env.mesh_sets import mesh_object, random_urdf_meshes
 from grip_env.objects import load_object_set
-from grip_env.perception.render import perceive
+from grip_env.sim.camera import perceive
 
 OLDER_CPU = {"NPY_DISABLE_CPU_FEATURES": "X86_V3", "OPENBLAS_CORETYPE": "Nehalem"}
 

@@ -14,13 +14,12 @@ from grip_env.perception import (
     contour_error_mm,
     contour_from_mask,
     mask_from_image_file,
-    perceive,
-    render_mask,
     resample_contour,
     segment,
     signed_curvature,
 )
 from grip_env.perception.curvature import contour_derivatives
+from grip_env.sim.camera import perceive, render_mask
 
 # ----------------------------------------------------------------------------- masks
 
@@ -310,7 +309,7 @@ def test_sharpening_restores_acute_tips_and_leaves_curves_alone() -> None:
 
 def _raw_perceived_contour(obj: PlanarObject) -> np.ndarray:
     from grip_env.objects.masks import contour_from_mask, segment
-    from grip_env.perception.render import object_coverage, render_mask
+    from grip_env.sim.camera import object_coverage, render_mask
 
     grey, mm_per_px, centre = render_mask(obj, PerceptionConfig(), 30.0, 0)
     coverage = object_coverage(grey, segment(grey))

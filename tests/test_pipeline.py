@@ -270,7 +270,7 @@ def test_scaling_keeps_scale_free_grasp_features(scale):
 
 
 def test_perceived_object():
-    from grip_env.perception.render import perceive
+    from grip_env.sim.camera import perceive
 
     obj = make_shape("trapezoid")
     seen = perceive(obj, CONFIG.perception)

@@ -11,7 +11,8 @@ from grip_env import GraspParams
 from grip_env.config import PerceptionConfig
 from grip_env.objects import PlanarObject, load_object_set, make_shape
 from grip_env.objects.shapes import rectangle, regular_polygon, star
-from grip_env.perception import MAX_ABS_RHO, Regions, find_regions, perceive
+from grip_env.perception import MAX_ABS_RHO, Regions, find_regions
+from grip_env.sim.camera import perceive
 
 CONFIG = PerceptionConfig()
 PARAMS = GraspParams()

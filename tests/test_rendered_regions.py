@@ -11,9 +11,10 @@ import pytest
 
 from grip_env.config import Config
 from grip_env.objects import PlanarObject, load_object_set
-from grip_env.perception import Regions, find_regions, perceive
+from grip_env.perception import Regions, find_regions
 from grip_env.perception_fidelity import endpoint_errors
 from grip_env.planning.pipeline import candidates
+from grip_env.sim.camera import perceive
 
 CONFIG = Config()
 PIXEL_MM = CONFIG.perception.mm_per_px

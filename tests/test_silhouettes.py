@@ -23,8 +23,9 @@ from grip_env.dataset.catalog import DatasetObject, objects_table
 from grip_env.objects import PlanarObject, load_object_set, object_from_spec, procedural_objects
 from grip_env.objects.decomposition import MAX_PIECES
 from grip_env.objects.simulated import DEFAULT_TOLERANCE_MM
-from grip_env.perception import contour_error_mm, find_regions, perceive
+from grip_env.perception import contour_error_mm, find_regions
 from grip_env.planning.pipeline import candidates
+from grip_env.sim.camera import perceive
 from grip_env.sim.world import World
 
 DATA = Path(__file__).parent / "data"

@@ -90,7 +90,7 @@ def planning_contour(task: ObjectTask, world: World | None = None) -> PlanarObje
     the task's perception seed) when ``plans_on_render``, else the true object."""
     if not plans_on_render(task.config):
         return task.obj
-    from grip_env.perception.render import perceive
+    from grip_env.sim.camera import perceive
 
     config = task.config
     return perceive(task.obj, config.perception, config.objects.thickness_mm,

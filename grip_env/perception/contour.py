@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import numpy as np
+import shapely
 from numpy.typing import ArrayLike, NDArray
+
+from grip_env.objects import PlanarObject
 
 
 def resample_contour(contour: ArrayLike, spacing_mm: float = 1.0) -> NDArray[np.float64]:
@@ -35,3 +38,10 @@ def resample_contour(contour: ArrayLike, spacing_mm: float = 1.0) -> NDArray[np.
     count = max(3, round(perimeter / spacing_mm))
     s = np.arange(count) * (perimeter / count)
     return np.column_stack([np.interp(s, arc, closed[:, 0]), np.interp(s, arc, closed[:, 1])])
+
+
+def contour_error_mm(true_obj: PlanarObject, perceived_obj: PlanarObject) -> float:
+    """Symmetric Hausdorff distance between two objects' contours (mm)."""
+    true_ring = shapely.LinearRing(true_obj.contour)
+    perceived_ring = shapely.LinearRing(perceived_obj.contour)
+    return float(shapely.hausdorff_distance(true_ring, perceived_ring, densify=0.05))

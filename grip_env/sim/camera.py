@@ -1,4 +1,5 @@
-"""Top-down PyBullet view of an object on the table, and the object as perception sees it.
+"""The camera: a top-down PyBullet view of an object on the table, and the object as the robot
+perceives it (render, then segment with :mod:`grip_env.perception`).
 
 The camera looks straight down on the object's top face (scale ``mm_per_px`` holds on that plane).
 Pixel (row r, column c) of an n-pixel image centred on ``centre_mm`` looks at
@@ -11,10 +12,7 @@ If the object does not fit in the image (with a margin of ``_MARGIN_PX`` pixels 
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
-import shapely
 from numpy.typing import NDArray
 from scipy import ndimage
 
@@ -22,9 +20,7 @@ from grip_env.config import PerceptionConfig
 from grip_env.objects import PlanarObject
 from grip_env.objects.masks import contour_from_mask, segment
 from grip_env.perception.corners import sharpen_corners
-
-if TYPE_CHECKING:
-    from grip_env.sim.world import World
+from grip_env.sim.world import World
 
 _MARGIN_PX = 4  # background pixels kept around the object on each side
 _CAMERA_HEIGHT_MM = 20_000.0
@@ -54,8 +50,6 @@ def render_mask(
     low, high = obj.contour.min(axis=0), obj.contour.max(axis=0)
     centre = (low + high) / 2.0
     mm_per_px = image_scale(obj, config)
-    from grip_env.sim.world import World  # pybullet is loaded only when rendering
-
     own_world = world is None
     world = World() if own_world else world
     try:
@@ -116,10 +110,3 @@ def object_coverage(grey: NDArray, mask: NDArray[np.bool_]) -> NDArray[np.float6
     inside, outside = np.median(grey[mask]), np.median(grey[~near])
     coverage = np.clip((grey - outside) / (inside - outside), 0.0, 1.0)
     return np.where(near, coverage, 0.0)
-
-
-def contour_error_mm(true_obj: PlanarObject, perceived_obj: PlanarObject) -> float:
-    """Symmetric Hausdorff distance between two objects' contours (mm)."""
-    true_ring = shapely.LinearRing(true_obj.contour)
-    perceived_ring = shapely.LinearRing(perceived_obj.contour)
-    return float(shapely.hausdorff_distance(true_ring, perceived_ring, densify=0.05))
