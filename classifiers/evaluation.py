@@ -16,6 +16,7 @@ interval is the corrected resampled t-interval of Nadeau & Bengio (2003):
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -183,23 +184,77 @@ def family_holdout_metrics(
     return result
 
 
-def cross_validate_models(
-    table: pd.DataFrame,
-    models: Sequence[str] | Mapping[str, BaseEstimator],
-    features: Sequence[str] = FEATURES,
-    config: LearningConfig | None = None,
-) -> pd.DataFrame:
-    """Per-fold metrics: one row per (model, repeat, fold) with the columns of ``METRICS``.
+Bounds = Mapping[str, tuple[float, float]]
+Models = Sequence[str] | Mapping[str, BaseEstimator]
 
-    ``models`` is a list of registry names (built with ``make_model(name, seed, features)`` for
+
+@dataclass(frozen=True)
+class Task:
+    """What a grouped cross-validation learns and how it scores one fold: classification,
+    regression of the graded outcome and ranking are values of this, run by one engine
+    (:func:`cross_validate`)."""
+
+    metrics: tuple[str, ...]
+    target: Callable[[pd.DataFrame], np.ndarray]  # the fitted target, from the table
+    make: Callable[[str, int, Sequence[str]], BaseEstimator]  # registry name, seed, features
+    score: Callable[[BaseEstimator, pd.DataFrame], Mapping[str, float]]  # one test fold
+    bounds: Bounds | None = None  # what each metric can take (summaries are clipped to it)
+    difference_bounds: Bounds | None = None  # the same for paired differences
+
+
+def cross_validate(table: pd.DataFrame, task: Task, models: Models,
+                   features: Sequence[str] = FEATURES,
+                   config: LearningConfig | None = None) -> pd.DataFrame:
+    """Per-fold metrics of ``task``: one row per (model, repeat, fold).
+
+    ``models`` is a list of registry names (built with ``task.make(name, seed, features)`` for
     each repeat's seed) or a mapping of name → estimator (cloned for each fold).
     """
     config = config or LearningConfig()
     check_dataset(table, features, config.folds)
     table = table.reset_index(drop=True)
-    labels = table[LABEL_COLUMN].to_numpy().astype(bool)
-    return grouped_cv(table, labels, lambda seed: _fresh_models(models, seed, features),
-                      fold_metrics, config)
+    return grouped_cv(table, task.target(table),
+                      lambda seed: fresh_models(task, models, seed, features), task.score, config)
+
+
+def fresh_models(task: Task, models: Models, seed: int,
+                 features: Sequence[str]) -> dict[str, BaseEstimator]:
+    """Unfitted estimators for one repeat: clones of given ones, or the registry's."""
+    if isinstance(models, Mapping):
+        return {name: clone(model) for name, model in models.items()}
+    return {name: task.make(name, seed, features) for name in models}
+
+
+def summarise_task(per_fold: pd.DataFrame, task: Task, folds: int) -> dict[str, Any]:
+    """Mean and corrected 95% interval of each of the task's metrics, per model."""
+    return summarise_metrics(per_fold, task.metrics, folds, task.bounds)
+
+
+def against_baselines(per_fold: pd.DataFrame, task: Task, folds: int,
+                      baselines: Sequence[str] = ("rank_qc", "rank_qg")) -> dict[str, Any]:
+    """Every model's paired per-fold difference to each rank baseline run beside it."""
+    by_model = {name: group.drop(columns="model") for name, group in per_fold.groupby("model")}
+    return {
+        name: {f"vs_{base}": paired_metrics(frame, by_model[base], task.metrics, folds,
+                                            task.difference_bounds)
+               for base in baselines if base in by_model and base != name}
+        for name, frame in by_model.items()
+    }  # fmt: skip
+
+
+def _labels(table: pd.DataFrame) -> np.ndarray:
+    return table[LABEL_COLUMN].to_numpy().astype(bool)
+
+
+#: Grip success: the classifiers' task.
+CLASSIFICATION = Task(METRICS, _labels, make_model, fold_metrics)
+
+
+def cross_validate_models(table: pd.DataFrame, models: Models,
+                          features: Sequence[str] = FEATURES,
+                          config: LearningConfig | None = None) -> pd.DataFrame:
+    """Per-fold classification metrics: one row per (model, repeat, fold) with ``METRICS``."""
+    return cross_validate(table, CLASSIFICATION, models, features, config)
 
 
 def grouped_cv(
@@ -252,9 +307,6 @@ def evaluate_models(
 def summarise(per_fold: pd.DataFrame, folds: int) -> dict[str, dict[str, dict[str, Any]]]:
     """Mean and corrected 95% t-interval of each classification metric, per model."""
     return summarise_metrics(per_fold, METRICS, folds)
-
-
-Bounds = Mapping[str, tuple[float, float]]
 
 
 def summarise_metrics(per_fold: pd.DataFrame, metrics: Sequence[str], folds: int,
@@ -345,11 +397,3 @@ def grouped_search(
     search = GridSearchCV(model, dict(grid), scoring=scoring, cv=GroupKFold(n_splits=folds))
     labels = table[LABEL_COLUMN].to_numpy().astype(bool)
     return search.fit(table, labels, groups=table[GROUP_COLUMN].to_numpy())
-
-
-def _fresh_models(
-    models: Sequence[str] | Mapping[str, BaseEstimator], seed: int, features: Sequence[str]
-) -> dict[str, BaseEstimator]:
-    if isinstance(models, Mapping):
-        return {name: clone(model) for name, model in models.items()}
-    return {name: make_model(name, seed, features) for name in models}

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from lightgbm import LGBMRanker
-from sklearn.base import BaseEstimator, clone
+from sklearn.base import BaseEstimator
 from sklearn.metrics import roc_auc_score
 from sklearn.pipeline import Pipeline
 from sklearn.utils.validation import check_is_fitted
@@ -41,8 +41,10 @@ from classifiers.baselines import ColumnSelector, RandomRegressor, RankingRegres
 from classifiers.evaluation import (
     GROUP_COLUMN,
     LABEL_COLUMN,
-    check_dataset,
-    grouped_cv,
+    Models,
+    Task,
+    against_baselines,
+    cross_validate,
     paired_metrics,
     summarise_metrics,
 )
@@ -189,21 +191,19 @@ def _nanmean(values: Sequence[float]) -> float:
     return float(np.nanmean(values)) if np.isfinite(values).any() else float("nan")
 
 
-def cross_validate_rankers(
-    table: pd.DataFrame,
-    models: Sequence[str] | Mapping[str, BaseEstimator],
-    features: Sequence[str] = FEATURES,
-    config: LearningConfig | None = None,
-    sim: SimConfig | None = None,
-) -> pd.DataFrame:
+def ranking_task(sim: SimConfig | None = None) -> Task:
+    """Ranking an object's grips by their relevance (:func:`relevance` under ``sim``)."""
+    return Task(RANKING_METRICS, lambda table: relevance(table, sim), make_ranker,
+                ranking_fold_metrics, _BOUNDS)
+
+
+def cross_validate_rankers(table: pd.DataFrame, models: Models,
+                           features: Sequence[str] = FEATURES,
+                           config: LearningConfig | None = None,
+                           sim: SimConfig | None = None) -> pd.DataFrame:
     """Per-fold ranking metrics on the classifiers' grouped folds: a row per (model, repeat,
     fold). Folds are whole objects, so every query group is entirely in train or in test."""
-    config = config or LearningConfig()
-    check_dataset(table, features, config.folds)
-    table = table.reset_index(drop=True)
-    grades = relevance(table, sim)
-    return grouped_cv(table, grades, lambda seed: _fresh(models, seed, features),
-                      ranking_fold_metrics, config)
+    return cross_validate(table, ranking_task(sim), models, features, config)
 
 
 def summarise_ranking(per_fold: pd.DataFrame, folds: int) -> dict[str, dict[str, Any]]:
@@ -228,26 +228,14 @@ def evaluate_rankers(
     """The ``ranking.json`` content: summaries and paired differences to the rank baselines."""
     config = config or LearningConfig()
     per_fold = cross_validate_rankers(table, models, features, config, sim)
-    by_model = {name: group.drop(columns="model") for name, group in per_fold.groupby("model")}
-    against = {
-        name: {f"vs_{base}": paired_ranking_difference(frame, by_model[base], config.folds)
-               for base in BASELINES if base in by_model and base != name}
-        for name, frame in by_model.items()
-    }  # fmt: skip
     return {
         "relevance": "robustness_mean in ramp levels reached (0..), linear gain"
         if TARGET_COLUMN in table.columns else "successful trials (0..trials), linear gain",
         "models": summarise_ranking(per_fold, config.folds),
-        "paired_difference": against,
+        "paired_difference": against_baselines(per_fold, ranking_task(sim), config.folds,
+                                               BASELINES),
         "cv": {"folds": config.folds, "repeats": config.repeats,
                "seeds": [config.seed + r for r in range(config.repeats)], "groups": GROUP_COLUMN,
                "query_groups": "one object's grips", "features": list(features),
                "n_grips": len(table), "n_objects": int(table[GROUP_COLUMN].nunique())},
     }  # fmt: skip
-
-
-def _fresh(models: Sequence[str] | Mapping[str, BaseEstimator], seed: int,
-           features: Sequence[str]) -> dict[str, BaseEstimator]:
-    if isinstance(models, Mapping):
-        return {name: clone(model) for name, model in models.items()}
-    return {name: make_ranker(name, seed, features) for name in models}

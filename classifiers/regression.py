@@ -23,13 +23,15 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from scipy.stats import spearmanr
-from sklearn.base import BaseEstimator, clone
+from sklearn.base import BaseEstimator
 from sklearn.metrics import mean_absolute_error, r2_score
 
 from classifiers.evaluation import (
     GROUP_COLUMN,
-    check_dataset,
-    grouped_cv,
+    Models,
+    Task,
+    against_baselines,
+    cross_validate,
     paired_metrics,
     summarise_metrics,
 )
@@ -86,20 +88,21 @@ def regression_fold_metrics(model: BaseEstimator, test: pd.DataFrame) -> dict[st
     }
 
 
-def cross_validate_regressors(
-    table: pd.DataFrame,
-    models: Sequence[str] | Mapping[str, BaseEstimator],
-    features: Sequence[str] = FEATURES,
-    config: LearningConfig | None = None,
-) -> pd.DataFrame:
-    """Per-fold metrics: one row per (model, repeat, fold) with ``REGRESSION_METRICS``."""
-    config = config or LearningConfig()
-    check_dataset(table, features, config.folds)
+def _target(table: pd.DataFrame) -> np.ndarray:
     check_target(table)
-    table = table.reset_index(drop=True)
-    target = table[TARGET_COLUMN].to_numpy(float)
-    return grouped_cv(table, target, lambda seed: _fresh(models, seed, features),
-                      regression_fold_metrics, config)
+    return table[TARGET_COLUMN].to_numpy(float)
+
+
+#: The graded outcome: the regressors' task.
+REGRESSION = Task(REGRESSION_METRICS, _target, make_regressor, regression_fold_metrics, _BOUNDS,
+                  _DIFFERENCE_BOUNDS)
+
+
+def cross_validate_regressors(table: pd.DataFrame, models: Models,
+                              features: Sequence[str] = FEATURES,
+                              config: LearningConfig | None = None) -> pd.DataFrame:
+    """Per-fold metrics: one row per (model, repeat, fold) with ``REGRESSION_METRICS``."""
+    return cross_validate(table, REGRESSION, models, features, config)
 
 
 def summarise_regression(per_fold: pd.DataFrame, folds: int) -> dict[str, dict[str, Any]]:
@@ -123,16 +126,10 @@ def evaluate_regressors(
     """The ``regression.json`` content: summaries, paired differences to the rank baselines."""
     config = config or LearningConfig()
     per_fold = cross_validate_regressors(table, models, features, config)
-    by_model = {name: group.drop(columns="model") for name, group in per_fold.groupby("model")}
-    against = {
-        name: {f"vs_{base}": paired_regression_difference(frame, by_model[base], config.folds)
-               for base in BASELINES if base in by_model and base != name}
-        for name, frame in by_model.items()
-    }  # fmt: skip
     return {
         "target": TARGET_COLUMN,
         "models": summarise_regression(per_fold, config.folds),
-        "paired_difference": against,
+        "paired_difference": against_baselines(per_fold, REGRESSION, config.folds, BASELINES),
         "cv": {
             "folds": config.folds, "repeats": config.repeats,
             "seeds": [config.seed + r for r in range(config.repeats)],
@@ -142,10 +139,3 @@ def evaluate_regressors(
             "n_objects": int(table[GROUP_COLUMN].nunique()),
         },
     }  # fmt: skip
-
-
-def _fresh(models: Sequence[str] | Mapping[str, BaseEstimator], seed: int,
-           features: Sequence[str]) -> dict[str, BaseEstimator]:
-    if isinstance(models, Mapping):
-        return {name: clone(model) for name, model in models.items()}
-    return {name: make_regressor(name, seed, features) for name in models}
