@@ -281,7 +281,7 @@ def test_selector_trained_on_robustness_reports_first_pick_robustness(grips, sma
 
 def test_training_baselines_are_the_expected_episode_rewards(grips, small_config):
     from classifiers.selector.evaluation import training_baselines
-    from grip_env.envs.split import split_objects
+    from grip_env.dataset.split import split_objects
 
     one = small_config.override(selector={"max_attempts": 1})
     lines = training_baselines(grips, one)
