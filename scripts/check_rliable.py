@@ -1,4 +1,5 @@
-r"""Cross-check of classifiers.benchmark.aggregate against rliable (not a grip-env dependency).
+r"""Cross-check of classifiers.experiments.benchmark.aggregate against rliable (not a grip-env
+dependency).
 
 rliable 1.2.0 needs arch, which pulls statsmodels; install them aside, not into the venv:
 
@@ -19,7 +20,7 @@ import numpy as np
 from rliable import library as rly
 from rliable import metrics
 
-from classifiers.benchmark import aggregate as ours
+from classifiers.experiments.benchmark import aggregate as ours
 
 REPS = 20_000
 

@@ -7,8 +7,8 @@ import json
 import pandas as pd
 import pytest
 
-from classifiers.ablation import REFERENCE, ablation_study, feature_sets, run_ablation
-from classifiers.synthetic import synthetic_grips
+from classifiers.evaluation.synthetic import synthetic_grips
+from classifiers.experiments.ablation import REFERENCE, ablation_study, feature_sets, run_ablation
 from grip_env.columns import FEATURES
 from grip_env.config import Config
 from grip_env.dataset import held_out_objects

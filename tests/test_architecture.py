@@ -186,9 +186,10 @@ def _imported_modules(path: str) -> set[str]:
 
 
 def test_the_study_and_its_report_do_not_import_each_other():
-    study = _imported_modules("classifiers/study.py")
+    study = _imported_modules("classifiers/experiments/study.py")
     report = _imported_modules("classifiers/report/study_report.py")
-    assert not ("classifiers.report.study_report" in study and "classifiers.study" in report)
+    assert not ("classifiers.report.study_report" in study
+                and "classifiers.experiments.study" in report)
 
 
 def test_the_simulator_takes_only_the_hand_s_kinematics_from_planning():
@@ -273,3 +274,31 @@ def test_no_file_imports_itself_through_others():
 def test_the_cycle_check_finds_a_cycle():
     graph = {"a.py": {"b.py"}, "b.py": {"c.py"}, "c.py": {"a.py"}, "d.py": {"a.py"}}
     assert _cycles(graph) == [["a.py", "b.py", "c.py"]]
+
+
+#: classifiers/ by kind, bottom to top: estimators, the evaluation engine, the experiments that
+#: write result files, and the report that reads them.
+CLASSIFIER_LAYERS = ("learners", "evaluation", "experiments", "report")
+#: The study is the main job: it runs the experiments, then has the report drawn.
+CLASSIFIER_EXCEPTIONS = {("classifiers/experiments/study.py", "report")}
+
+
+def _classifier_layer(module: str) -> str | None:
+    parts = module.split(".")
+    return parts[1] if parts[0] == "classifiers" and len(parts) > 2 else None
+
+
+def test_classifiers_are_laid_out_by_kind_and_import_down():
+    loose = [p.name for p in (ROOT / "classifiers").glob("*.py") if p.name != "__init__.py"]
+    assert loose == [], "modules loose at the top of classifiers/"
+    wrong = []
+    for path in sorted((ROOT / "classifiers").rglob("*.py")):
+        rel = str(path.relative_to(ROOT))
+        layer = _classifier_layer(_module_name(path) + ".x")
+        for module in _imported_modules(rel):
+            target = _classifier_layer(module)
+            if (layer in CLASSIFIER_LAYERS and target in CLASSIFIER_LAYERS
+                    and CLASSIFIER_LAYERS.index(target) > CLASSIFIER_LAYERS.index(layer)
+                    and (rel, target) not in CLASSIFIER_EXCEPTIONS):
+                wrong.append(f"{rel} imports {module}")
+    assert not wrong, "\n".join(wrong)

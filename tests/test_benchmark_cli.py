@@ -12,9 +12,9 @@ import pytest
 import skops.io as sio
 from cli_runs import assert_refused, cli
 
-from classifiers.benchmark.split import STANDARD_SPLIT, STANDARD_TEST_OBJECTS
-from classifiers.models import make_model
-from classifiers.synthetic import synthetic_grips
+from classifiers.evaluation.synthetic import synthetic_grips
+from classifiers.experiments.benchmark.split import STANDARD_SPLIT, STANDARD_TEST_OBJECTS
+from classifiers.learners.models import make_model
 
 METHODS = textwrap.dedent("""
     import numpy as np
@@ -109,7 +109,7 @@ def test_bad_functions_are_refused_and_nothing_written(
 
 
 def test_each_version_pins_the_split_of_its_default_objects() -> None:
-    from classifiers.benchmark.split import DEFAULT_OBJECTS, STANDARD_SPLITS
+    from classifiers.experiments.benchmark.split import DEFAULT_OBJECTS, STANDARD_SPLITS
     from grip_env.dataset.split import split_objects
 
     assert set(DEFAULT_OBJECTS) == set(STANDARD_SPLITS)
@@ -165,7 +165,7 @@ def _ppo_zip(folder: Path) -> Path:
     """An untrained plain PPO (no masks) with the stock multi-input policy, K = 64."""
     from stable_baselines3 import PPO
 
-    from classifiers.selector.training import make_selector_env
+    from classifiers.experiments.selector.training import make_selector_env
     from grip_env.config import Config
 
     env = make_selector_env(synthetic_grips(n_objects=6, grips=(4, 6), seed=2), Config(),
@@ -178,7 +178,7 @@ def _ppo_zip(folder: Path) -> Path:
 
 def _sb3_zip(folder: Path, candidates: int) -> Path:
     """An untrained MaskablePPO with the selector's policy on GripSelect-v0 (K candidates)."""
-    from classifiers.selector.training import make_selector_env, make_selector_model
+    from classifiers.experiments.selector.training import make_selector_env, make_selector_model
     from grip_env.config import Config
 
     config = Config().override(selector={"max_candidates": candidates})

@@ -6,17 +6,17 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from classifiers.benchmark.aggregate import (
+from classifiers.experiments.benchmark.aggregate import (
     iqm,
     performance_profile,
     probability_of_improvement,
     stratified_bootstrap,
 )
-from classifiers.benchmark.aggregate import mean as mean_score
-from classifiers.benchmark.leaderboard import build_leaderboard, leaderboard_markdown
-from classifiers.benchmark.methods import baseline_scores, choice_scores
-from classifiers.benchmark.selection import selection_metrics
-from classifiers.selector.evaluation import attempt_metrics, random_metrics
+from classifiers.experiments.benchmark.aggregate import mean as mean_score
+from classifiers.experiments.benchmark.leaderboard import build_leaderboard, leaderboard_markdown
+from classifiers.experiments.benchmark.methods import baseline_scores, choice_scores
+from classifiers.experiments.benchmark.selection import selection_metrics
+from classifiers.experiments.selector.evaluation import attempt_metrics, random_metrics
 
 LOG3 = np.log2(3.0)
 
@@ -174,7 +174,7 @@ def _plain() -> dict[str, float]:
 
 
 def test_report_and_readme_show_the_leaderboard_and_its_verdict(tmp_path) -> None:
-    from classifiers.benchmark.leaderboard import write_leaderboard
+    from classifiers.experiments.benchmark.leaderboard import write_leaderboard
     from classifiers.report.document import Report
     from classifiers.report.readme import _leaderboard_lines
     from classifiers.report.study_report import _benchmark_section
@@ -199,7 +199,7 @@ def test_success_within_k_is_what_grip_accept_earns_executing_the_top_k(attempts
     import gymnasium
 
     import grip_env  # noqa: F401  (registers the environments)
-    from classifiers.synthetic import synthetic_grips
+    from classifiers.evaluation.synthetic import synthetic_grips
     from grip_env.envs.observation import best_candidates
 
     table = synthetic_grips(n_objects=2, grips=(8, 8), trials=4, seed=0)
@@ -229,9 +229,9 @@ def test_success_within_k_is_what_grip_accept_earns_executing_the_top_k(attempts
 
 
 def test_study_benchmark_reads_the_learners_per_seed_score_files(tmp_path) -> None:
-    from classifiers.benchmark import study_benchmark
-    from classifiers.benchmark.split import candidate_sets, candidate_table, study_split
-    from classifiers.synthetic import synthetic_grips
+    from classifiers.evaluation.synthetic import synthetic_grips
+    from classifiers.experiments.benchmark import study_benchmark
+    from classifiers.experiments.benchmark.split import candidate_sets, candidate_table, study_split
     from grip_env.config import Config
 
     table = synthetic_grips(n_objects=16, grips=(5, 9), seed=3)

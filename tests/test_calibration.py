@@ -11,7 +11,7 @@ import pytest
 from scipy import stats
 from typer.testing import CliRunner
 
-from classifiers.synthetic import synthetic_grips
+from classifiers.evaluation.synthetic import synthetic_grips
 from grip_env.calibration import (
     BOXES_MM,
     WITHIN_SCORED,
@@ -356,7 +356,7 @@ def test_calibration_runs_on_the_configured_backend(monkeypatch):
 def test_the_study_recomputes_its_calibration_when_the_calibration_sizes_change(monkeypatch):
     import functools
 
-    from classifiers.study import stage_key
+    from classifiers.experiments.study import stage_key
 
     before = stage_key("calibration", Config(), "0" * 64)
     assert stage_key("calibration", Config(), "0" * 64) == before

@@ -7,12 +7,17 @@ import pandas as pd
 import pytest
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
-from classifiers.evaluation import cross_validate_models, evaluate_models, grouped_folds, top1
-from classifiers.models import MODEL_NAMES, REGRESSOR_NAMES, make_model, make_regressor
-from classifiers.persistence import load_model, save_model
-from classifiers.regression import evaluate_regressors, regression_fold_metrics, spearman
-from classifiers.synthetic import synthetic_grips
-from classifiers.torch_mlp import TorchMLPClassifier, TorchMLPRegressor
+from classifiers.evaluation.cross_validation import (
+    cross_validate_models,
+    evaluate_models,
+    grouped_folds,
+    top1,
+)
+from classifiers.evaluation.regression import evaluate_regressors, regression_fold_metrics, spearman
+from classifiers.evaluation.synthetic import synthetic_grips
+from classifiers.learners.models import MODEL_NAMES, REGRESSOR_NAMES, make_model, make_regressor
+from classifiers.learners.persistence import load_model, save_model
+from classifiers.learners.torch_mlp import TorchMLPClassifier, TorchMLPRegressor
 from grip_env.config import LearningConfig
 
 FAST = {"mlp_torch": {"model__max_epochs": 30}, "mlp_sklearn": {"model__max_iter": 60}}
@@ -134,6 +139,28 @@ def test_saved_models_reload_and_predict_the_same(synthetic_grips_table, tmp_pat
     np.testing.assert_array_equal(loaded.predict_proba(table), model.predict_proba(table))
     assert info["dataset_sha256"] == "abc" and info["name"] == name
     assert not list(tmp_path.glob("*.pkl"))
+
+
+@pytest.mark.parametrize("name", ["rank_qc", "hgb"])
+def test_a_model_saved_before_the_learners_moved_still_loads(synthetic_grips_table, tmp_path,
+                                                            name):
+    """Files written when the trusted types lived in classifiers.baselines / .threads."""
+    import zipfile
+
+    table = synthetic_grips_table
+    model = fast_model(name).fit(table, table["success"])
+    save_model(model, tmp_path, name)
+    path = tmp_path / f"{name}.skops"
+    with zipfile.ZipFile(path) as old:
+        members = {item: old.read(item) for item in old.namelist()}
+    schema = members["schema.json"].decode()
+    assert "classifiers.learners." in schema
+    members["schema.json"] = schema.replace("classifiers.learners.", "classifiers.").encode()
+    with zipfile.ZipFile(path, "w") as rewritten:
+        for item, data in members.items():
+            rewritten.writestr(item, data)
+    loaded, _ = load_model(tmp_path, name)
+    np.testing.assert_array_equal(loaded.predict_proba(table), model.predict_proba(table))
 
 
 def test_learned_models_beat_random_on_learnable_data(synthetic_grips_table):
@@ -286,7 +313,7 @@ def test_regression_needs_the_graded_outcome(synthetic_grips_table):
 
 
 def test_study_stage_keys_follow_only_what_each_stage_depends_on():
-    from classifiers.study import stage_key
+    from classifiers.experiments.study import stage_key
     from grip_env.config import Config
 
     base = Config()

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from classifiers.models import MODEL_NAMES, make_model
-from classifiers.persistence import load_model, save_model
+from classifiers.learners.models import MODEL_NAMES, make_model
+from classifiers.learners.persistence import load_model, save_model
 from grip_env.envs import split_objects
 
 

@@ -43,7 +43,7 @@ def test_help_lists_the_choices(command, choices):
 
 
 def test_model_names_in_help_are_the_learning_packages():
-    from classifiers.models import MODEL_NAMES
+    from classifiers.learners.models import MODEL_NAMES
     from grip_env.cli.options import MODEL_NAMES_HELP
 
     assert MODEL_NAMES_HELP.split(", ") == list(MODEL_NAMES)

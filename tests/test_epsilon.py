@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from classifiers.synthetic import synthetic_grips
+from classifiers.evaluation.synthetic import synthetic_grips
 from grip_env.params import GraspParams
 from grip_env.planning.epsilon import add_epsilon, epsilon_quality
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 import pandas as pd
 import pytest
 
-from classifiers.evaluation import family_holdout_metrics, object_families
-from classifiers.models import make_model
-from classifiers.synthetic import synthetic_grips
+from classifiers.evaluation.cross_validation import family_holdout_metrics, object_families
+from classifiers.evaluation.synthetic import synthetic_grips
+from classifiers.learners.models import make_model
 
 
 @pytest.fixture(scope="module")

@@ -21,8 +21,8 @@ from cli_runs import assert_refused, cli
 from generate_runs import write_config
 from test_dataset import toy_job
 
-from classifiers.benchmark.split import STANDARD_TEST_OBJECTS
-from classifiers.synthetic import synthetic_grips
+from classifiers.evaluation.synthetic import synthetic_grips
+from classifiers.experiments.benchmark.split import STANDARD_TEST_OBJECTS
 from grip_env.config import Config
 from grip_env.dataset import ObjectTask, generate, with_outcomes
 from grip_env.label_model import LABEL_MODEL, UNRECORDED
@@ -144,7 +144,7 @@ def test_benchmark_warns_and_still_runs(standard, variant, tmp_path):
 
 @pytest.mark.parametrize("variant", ["other", "unrecorded"])
 def test_study_refuses_a_dataset_of_another_label_model(toy, variant, tmp_path):
-    from classifiers.study import run_study
+    from classifiers.experiments.study import run_study
 
     out = tmp_path / "study"
     shutil.copytree(toy[variant], out / "dataset")
@@ -158,7 +158,7 @@ def test_study_refuses_a_dataset_of_another_label_model(toy, variant, tmp_path):
 
 
 def test_study_accepts_this_label_model_and_a_new_folder(toy, tmp_path):
-    from classifiers.study import check_label_model
+    from classifiers.experiments.study import check_label_model
 
     check_label_model(toy["current"])
     check_label_model(tmp_path / "nothing yet")

@@ -6,24 +6,22 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from classifiers.candidate_scores import (
+from classifiers.evaluation.cross_validation import cross_validate_models, grouped_folds
+from classifiers.evaluation.ranking import (
+    cross_validate_rankers,
+)
+from classifiers.evaluation.regression import cross_validate_regressors
+from classifiers.evaluation.synthetic import synthetic_grips
+from classifiers.experiments.candidate_scores import (
     SCORE_COLUMNS,
     held_out_candidates,
     learner_scores,
     score_frame,
     training_seeds,
 )
-from classifiers.evaluation import cross_validate_models, grouped_folds
-from classifiers.models import make_model, make_regressor
-from classifiers.persistence import load_model, save_model
-from classifiers.ranking import (
-    GroupedRanker,
-    cross_validate_rankers,
-    make_ranker,
-    relevance,
-)
-from classifiers.regression import cross_validate_regressors
-from classifiers.synthetic import synthetic_grips
+from classifiers.learners.models import make_model, make_regressor
+from classifiers.learners.persistence import load_model, save_model
+from classifiers.learners.ranking import GroupedRanker, make_ranker, relevance
 from grip_env.config import Config, LearningConfig, SimConfig
 
 CV = LearningConfig(folds=3, repeats=1)

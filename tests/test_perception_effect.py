@@ -9,7 +9,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from classifiers.perception_effect import COMPARED, paired_differences, run_perception_effect
+from classifiers.experiments.perception_effect import (
+    COMPARED,
+    paired_differences,
+    run_perception_effect,
+)
 from grip_env.config import Config
 
 

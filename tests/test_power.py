@@ -10,10 +10,10 @@ import pandas as pd
 import pytest
 from cli_runs import assert_refused, cli
 
-from classifiers import power
+from classifiers.evaluation.synthetic import synthetic_grips
+from classifiers.experiments import power
 from classifiers.report.document import Report
 from classifiers.report.power import plot_power, power_section
-from classifiers.synthetic import synthetic_grips
 
 
 @pytest.fixture(scope="module")

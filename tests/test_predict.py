@@ -16,8 +16,8 @@ from cli_runs import assert_refused, cli
 from sklearn.base import BaseEstimator
 from sklearn.pipeline import Pipeline
 
-from classifiers.baselines import ColumnSelector
-from classifiers.persistence import load_model
+from classifiers.learners.baselines import ColumnSelector
+from classifiers.learners.persistence import load_model
 from grip_env.columns import FEATURES
 from grip_env.dataset import load
 

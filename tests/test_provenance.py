@@ -7,8 +7,8 @@ import importlib.metadata
 
 import pytest
 
-from classifiers import study
-from classifiers.study import (
+from classifiers.experiments import study
+from classifiers.experiments.study import (
     QUICK_OVERRIDES,
     describe_quick,
     quick_overrides,

@@ -112,8 +112,8 @@ def _calibration_trials() -> pd.DataFrame:
 def test_calibration_report_states_every_check_with_its_figures(tmp_path):
     from dataclasses import asdict
 
+    from classifiers.evaluation.synthetic import synthetic_grips
     from classifiers.report.calibration import write_calibration
-    from classifiers.synthetic import synthetic_grips
     from grip_env.calibration import (
         CalibrationSettings,
         cone_check,
@@ -165,7 +165,8 @@ def test_correlations_are_spearman_unless_asked():
 
 
 def test_report_package_never_imports_the_study_that_drives_it():
-    """classifiers.study calls the report; the report must not import classifiers.study back."""
+    """classifiers.experiments.study calls the report; the report must not import
+    classifiers.experiments.study back."""
     import ast
     from pathlib import Path
 
@@ -175,7 +176,7 @@ def test_report_package_never_imports_the_study_that_drives_it():
         tree = ast.parse(path.read_text())
         imported = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
         imported |= {a.name for n in ast.walk(tree) if isinstance(n, ast.Import) for a in n.names}
-        assert "classifiers.study" not in imported, path.name
+        assert "classifiers.experiments.study" not in imported, path.name
 
 
 def _stored_run(out):

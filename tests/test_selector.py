@@ -16,16 +16,16 @@ from sb3_contrib import MaskablePPO
 from stable_baselines3.common.vec_env import DummyVecEnv
 from typer.testing import CliRunner
 
-from classifiers.selector import REPORT_FILE, run_selector
-from classifiers.selector.evaluation import attempt_metrics, random_metrics
-from classifiers.selector.policy import CandidateSetPolicy, masked_pool
-from classifiers.selector.training import (
+from classifiers.evaluation.synthetic import synthetic_grips
+from classifiers.experiments.selector import REPORT_FILE, run_selector
+from classifiers.experiments.selector.evaluation import attempt_metrics, random_metrics
+from classifiers.experiments.selector.policy import CandidateSetPolicy, masked_pool
+from classifiers.experiments.selector.training import (
     make_selector_env,
     make_selector_model,
     torch_threads,
     train_selector,
 )
-from classifiers.synthetic import synthetic_grips
 from grip_env.config import load_config
 
 K, F = 6, 3
@@ -280,7 +280,7 @@ def test_selector_trained_on_robustness_reports_first_pick_robustness(grips, sma
 
 
 def test_training_baselines_are_the_expected_episode_rewards(grips, small_config):
-    from classifiers.selector.evaluation import training_baselines
+    from classifiers.experiments.selector.evaluation import training_baselines
     from grip_env.dataset.split import split_objects
 
     one = small_config.override(selector={"max_attempts": 1})

@@ -8,9 +8,9 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from classifiers.candidate_scores import SCORE_COLUMNS
-from classifiers.selector.seeds import run_selectors
-from classifiers.synthetic import synthetic_grips
+from classifiers.evaluation.synthetic import synthetic_grips
+from classifiers.experiments.candidate_scores import SCORE_COLUMNS
+from classifiers.experiments.selector.seeds import run_selectors
 from grip_env.config import load_config
 
 

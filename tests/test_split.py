@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from classifiers.synthetic import synthetic_grips
-from classifiers.training import held_out_scores
+from classifiers.evaluation.synthetic import synthetic_grips
+from classifiers.experiments.training import held_out_scores
 from grip_env.config import Config
 from grip_env.dataset import held_out_objects, split_objects, split_table
 from grip_env.envs import GripSelectEnv

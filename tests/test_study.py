@@ -26,7 +26,7 @@ QUICK_MODELS = ["logreg", "knn", "rank_qc", "random"]
 @pytest.mark.parametrize("key, value", [("ablation_model", "forest"), ("models", ("svm", "nope")),
                                         ("regressors", ("svr2",)), ("rankers", ("ndcg",))])
 def test_an_unknown_learner_is_refused_before_the_dataset(tmp_path, key, value):
-    from classifiers.study import run_study
+    from classifiers.experiments.study import run_study
     from grip_env.config import Config
 
     config = Config().override(learning={key: value})
@@ -95,7 +95,7 @@ def _assert_one_split(out: Path, metrics: dict, selector: dict) -> None:
 
 
 def _quick_config():
-    from classifiers.study import study_config
+    from classifiers.experiments.study import study_config
     from grip_env.config import Config
 
     return study_config(Config(), quick=True)

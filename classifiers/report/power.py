@@ -21,7 +21,13 @@ import matplotlib.ticker as ticker
 import numpy as np
 import pandas as pd
 
-from classifiers.half_widths import FIGURE_FILE, POWER_FILE, TARGETS, Law, paired_bootstrap
+from classifiers.evaluation.half_widths import (
+    FIGURE_FILE,
+    POWER_FILE,
+    TARGETS,
+    Law,
+    paired_bootstrap,
+)
 from classifiers.report.document import Report
 
 LABELS = {"roc_auc": "best model's ROC-AUC", "hand_difference": "hand features (paired ΔAUC)",

@@ -78,7 +78,7 @@ def _leaderboard_lines(out: Path) -> list[str]:
     board = json.loads(path.read_text()) if path.is_file() else {}
     if not board.get("methods"):
         return []
-    from classifiers.benchmark.leaderboard import leaderboard_frames, verdict_sentence
+    from classifiers.experiments.benchmark.leaderboard import leaderboard_frames, verdict_sentence
 
     main, _ = leaderboard_frames(board)
     shown = main[["method", "runs", "top-1 success", "normalised IQM", "mean - best_qc"]]

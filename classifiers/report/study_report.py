@@ -220,7 +220,7 @@ def _calibration_section(report: Report, out: Path, fig_dir: Path) -> None:
 
 
 def _perception_section(report: Report, out: Path, table: pd.DataFrame) -> None:
-    from classifiers.perception_effect import RESULT_FILE
+    from classifiers.experiments.perception_effect import RESULT_FILE
 
     report.heading("Planning on the rendered contour against the true one")
     result = _stage_result(report, out / "perception" / RESULT_FILE)
@@ -365,7 +365,7 @@ def _selector_section(report: Report, out: Path) -> None:
 
 def _benchmark_section(report: Report, out: Path) -> None:
     """The leaderboard: every method's pick on the held-out objects, against best-Q_C."""
-    from classifiers.benchmark.leaderboard import (
+    from classifiers.experiments.benchmark.leaderboard import (
         ATTEMPTS_FILE,
         PROFILE_FILE,
         leaderboard_frames,

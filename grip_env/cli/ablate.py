@@ -32,7 +32,7 @@ def ablate(
         model = model or settings.learning.ablation_model
         check_model_names((model,))
         output_dir(out)
-        from classifiers.ablation import run_ablation
+        from classifiers.experiments.ablation import run_ablation
         from grip_env.dataset import load
 
         result = run_ablation(load(data), out, settings, model)

@@ -47,9 +47,9 @@ def benchmark(
         if out.exists() and not out.is_dir():
             raise ValueError(f"--out {out} is an existing file; give a directory")
         cfg = load_config(config)
-        from classifiers.benchmark import benchmark_method
-        from classifiers.benchmark.leaderboard import write_leaderboard
-        from classifiers.selector.data import check_grip_table
+        from classifiers.experiments.benchmark import benchmark_method
+        from classifiers.experiments.benchmark.leaderboard import write_leaderboard
+        from classifiers.experiments.selector.data import check_grip_table
 
         warn_label_model(data)
         table = check_grip_table(data)

@@ -36,5 +36,6 @@ OutputDir = Annotated[
 ]
 
 MODEL_NAMES_HELP = "svm, mlp_torch, mlp_sklearn, knn, logreg, hgb, rank_qc, rank_qg, random"
-"""The model names of ``classifiers.models.MODEL_NAMES`` (a test keeps them equal), for help
+"""The model names of ``classifiers.learners.models.MODEL_NAMES`` (a test keeps them equal), for
+help
 texts: importing the learning package to list them would load torch on every command."""

@@ -66,8 +66,8 @@ def power(
             ("selector_objects", selector_objects, "--selector-objects"),
             ("selector_trials", selector_trials, "--selector-trials"))}  # fmt: skip
         output_dir(out)
-        from classifiers.half_widths import FIGURE_FILE
-        from classifiers.power import run_power
+        from classifiers.evaluation.half_widths import FIGURE_FILE
+        from classifiers.experiments.power import run_power
         from classifiers.report.power import plot_power
         from grip_env.dataset import load
 

@@ -1,6 +1,7 @@
 """``grip-env predict``: score every grip of a dataset with a model saved by ``grip-env train``.
 
-Models are read by :func:`classifiers.persistence.load_model`: JSON metadata plus a skops file
+Models are read by :func:`classifiers.learners.persistence.load_model`: JSON metadata plus a skops
+file
 (only trusted types) or a torch ``state_dict`` (``weights_only``), never a pickle. A classifier
 gives ``p_success``, the predicted probability that the grip holds; a regressor (saved as
 ``regressor_<name>``) gives ``robustness_pred``, the predicted ``robustness_mean``.
@@ -75,7 +76,7 @@ def load_saved_model(directory: Path, name: str) -> tuple[Any, dict[str, Any]]:
     import pickle
     import zipfile
 
-    from classifiers.persistence import load_model
+    from classifiers.learners.persistence import load_model
 
     try:
         return load_model(directory, name)
@@ -129,7 +130,7 @@ def _write(table: pd.DataFrame, out: Path) -> None:
 
 def _in_sample_note(info: dict[str, Any], grips: pd.DataFrame) -> str:
     """A warning when the model was trained on these very grips (its scores are in-sample)."""
-    from classifiers.persistence import dataset_checksum
+    from classifiers.learners.persistence import dataset_checksum
 
     if info.get("dataset_sha256") == dataset_checksum(grips):
         return " (note: the model was trained on this dataset: the scores are in-sample)"

@@ -51,7 +51,7 @@ def select(
         cfg = load_config(config)
         if timesteps is not None:
             check_setting("selector", "timesteps", timesteps, "--timesteps")
-        from classifiers.selector import REPORT_FILE, run_selector
+        from classifiers.experiments.selector import REPORT_FILE, run_selector
 
         report = run_selector(data, out, cfg, policy.value, timesteps, live, progress)
     for name, scores in report["policies"].items():

@@ -42,7 +42,7 @@ def study(
         output_dir(out)
         if update_readme and not readme.is_file():
             raise ValueError(f"--readme {readme} is not a file")
-        from classifiers.study import run_study
+        from classifiers.experiments.study import run_study
         from grip_env.config import load_config
         from grip_env.dataset import DatasetMismatchError
 
@@ -59,9 +59,9 @@ def study(
 
 
 def _update_readme(out: Path, readme: Path) -> None:
+    from classifiers.experiments.study import package_version
     from classifiers.report.readme import results_block, update_readme
     from classifiers.report.study_report import source_commit
-    from classifiers.study import package_version
     from grip_env.dataset import dataset_manifest, load
 
     # The commit that generated the stored run's dataset, not the checkout rewriting the README.

@@ -34,7 +34,7 @@ def train(
         check_model_names(settings.learning.models)
         output_dir(out)
         warn_label_model(data)
-        from classifiers.training import train_and_save
+        from classifiers.experiments.training import train_and_save
         from grip_env.dataset import load
 
         metrics = train_and_save(load(data), out, settings)
@@ -54,7 +54,7 @@ def model_names(text: str) -> tuple[str, ...]:
 
 def check_model_names(names: tuple[str, ...]) -> None:
     """Refuse an unknown or repeated model name before any work starts."""
-    from classifiers.models import MODEL_NAMES
+    from classifiers.learners.models import MODEL_NAMES
 
     unknown = [name for name in names if name not in MODEL_NAMES]
     if unknown:

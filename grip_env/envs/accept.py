@@ -65,7 +65,7 @@ class GripAcceptEnv(GripEnvBase):
     ## Example
 
     >>> import gymnasium, grip_env
-    >>> from classifiers.synthetic import synthetic_grips
+    >>> from classifiers.evaluation.synthetic import synthetic_grips
     >>> env = gymnasium.make("GripAccept-v0", data=synthetic_grips(n_objects=6, seed=0),
     ...                      max_candidates=8)
     >>> observation, info = env.reset(seed=0, options={"object_id": "3"})

@@ -9,7 +9,7 @@ defaults; ``--conf-file grip_env.rl_zoo.ppo`` reads the same file from the insta
 RL Zoo's algorithms (rl_zoo3 2.9) do not include sb3-contrib's MaskablePPO, so the zoo's agent
 is plain PPO: it sees the mask as part of the observation and a masked slot earns
 ``invalid_action_reward`` and ends the episode. The masked, permutation-equivariant selector is
-``grip-env select`` (:mod:`classifiers.selector`).
+``grip-env select`` (:mod:`classifiers.experiments.selector`).
 """
 
 from __future__ import annotations

@@ -10,8 +10,8 @@ from __future__ import annotations
 import pandas as pd
 import pytest
 
-from classifiers.models import MODEL_NAMES, make_model
-from classifiers.synthetic import synthetic_grips
+from classifiers.evaluation.synthetic import synthetic_grips
+from classifiers.learners.models import MODEL_NAMES, make_model
 from grip_env.planning.epsilon import epsilon_quality
 
 pytestmark = pytest.mark.slow

@@ -12,8 +12,12 @@ from __future__ import annotations
 
 import pytest
 
-from classifiers.selector.training import make_selector_env, make_selector_model, torch_threads
-from classifiers.synthetic import synthetic_grips
+from classifiers.evaluation.synthetic import synthetic_grips
+from classifiers.experiments.selector.training import (
+    make_selector_env,
+    make_selector_model,
+    torch_threads,
+)
 from grip_env.config import load_config
 
 TIMESTEPS = 1024

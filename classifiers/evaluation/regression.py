@@ -1,6 +1,7 @@
 """Grouped cross-validation of regressors of the graded outcome ``robustness_mean``.
 
-The folds are the classifiers' (:func:`classifiers.evaluation.grouped_folds`: object-grouped,
+The folds are the classifiers' (:func:`classifiers.evaluation.cross_validation.grouped_folds`:
+object-grouped,
 stratified on ``success``, seed ``config.seed + repeat``), so every regressor, and every feature
 set of the ablation, is scored on exactly the same held-out objects. Metrics per fold:
 
@@ -26,7 +27,7 @@ from scipy.stats import spearmanr
 from sklearn.base import BaseEstimator
 from sklearn.metrics import mean_absolute_error, r2_score
 
-from classifiers.evaluation import (
+from classifiers.evaluation.cross_validation import (
     GROUP_COLUMN,
     Models,
     Task,
@@ -35,7 +36,7 @@ from classifiers.evaluation import (
     paired_metrics,
     summarise_metrics,
 )
-from classifiers.models import make_regressor
+from classifiers.learners.models import make_regressor
 from grip_env.columns import FEATURES
 from grip_env.config import LearningConfig
 

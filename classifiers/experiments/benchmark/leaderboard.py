@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from classifiers.benchmark.aggregate import (
+from classifiers.experiments.benchmark.aggregate import (
     estimate,
     iqm,
     mean,
@@ -24,7 +24,7 @@ from classifiers.benchmark.aggregate import (
     performance_profile,
     probability_of_improvement,
 )
-from classifiers.benchmark.selection import MAX_ATTEMPTS
+from classifiers.experiments.benchmark.selection import MAX_ATTEMPTS
 
 REFERENCE = "best_qc"
 JSON_FILE, MARKDOWN_FILE = "leaderboard.json", "leaderboard.md"
@@ -174,7 +174,7 @@ def write_leaderboard(board: Mapping[str, Any], out: str | Path) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     (out / JSON_FILE).write_text(json.dumps(board, indent=2))
     (out / MARKDOWN_FILE).write_text(leaderboard_markdown(board))
-    from classifiers.benchmark.plots import plot_attempts, plot_profiles
+    from classifiers.experiments.benchmark.plots import plot_attempts, plot_profiles
 
     plot_profiles(board, out / PROFILE_FILE)
     plot_attempts(board, out / ATTEMPTS_FILE)

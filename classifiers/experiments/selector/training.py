@@ -1,6 +1,7 @@
 """Training the RL selector with sb3-contrib's MaskablePPO on ``GripSelect-v0``.
 
-``policy="set"`` uses :class:`~classifiers.selector.policy.CandidateSetPolicy` (one shared scorer
+``policy="set"`` uses :class:`~classifiers.experiments.selector.policy.CandidateSetPolicy` (one
+shared scorer
 per candidate, permutation-equivariant); ``policy="flat"`` is MaskablePPO's stock
 ``"MultiInputPolicy"`` (the (K, F) features and the mask flattened into one MLP), for comparison.
 
@@ -38,9 +39,9 @@ from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.vec_env import DummyVecEnv
 
 import grip_env  # noqa: F401  (registers GripSelect-v0)
-from classifiers.selector.data import check_grip_table
-from classifiers.selector.plots import plot_learning_curve
-from classifiers.selector.policy import CandidateSetPolicy
+from classifiers.experiments.selector.data import check_grip_table
+from classifiers.experiments.selector.plots import plot_learning_curve
+from classifiers.experiments.selector.policy import CandidateSetPolicy
 from grip_env.config import Config, SelectorConfig
 
 POLICIES: tuple[str, ...] = ("set", "flat")
@@ -166,7 +167,7 @@ class HeldOutEvaluation(BaseCallback):
 
     def __init__(self, table: pd.DataFrame, config: Config) -> None:
         super().__init__()
-        from classifiers.selector.evaluation import held_out_candidate_sets
+        from classifiers.experiments.selector.evaluation import held_out_candidate_sets
 
         self.sets = held_out_candidate_sets(table, config)
         self.max_attempts = config.selector.max_attempts
@@ -185,7 +186,7 @@ class HeldOutEvaluation(BaseCallback):
     def _on_rollout_end(self) -> None:
         if not self.sets:
             return
-        from classifiers.selector.evaluation import policy_order
+        from classifiers.experiments.selector.evaluation import policy_order
 
         first = [s.success_rate[policy_order(self.model, s, 1)[0]] for s in self.sets]
         value = float(np.mean(first))
@@ -267,7 +268,7 @@ def train_selector(
     recorder = callbacks[0]
     baselines = None
     if table is not None:
-        from classifiers.selector.evaluation import training_baselines
+        from classifiers.experiments.selector.evaluation import training_baselines
 
         baselines = training_baselines(table, config)
     plot_learning_curve(recorder.timesteps, recorder.rewards, out / CURVE_FILE,

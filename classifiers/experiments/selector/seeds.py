@@ -1,12 +1,12 @@
 """The RL selector trained with several seeds, each run kept, every candidate scored per seed.
 
 :func:`run_selectors` trains ``selector.seeds`` selectors, seeds ``selector.seed + k``, each
-with :func:`classifiers.selector.run_selector` into ``out/seed_<s>/``. The first seed's
+with :func:`classifiers.experiments.selector.run_selector` into ``out/seed_<s>/``. The first seed's
 ``selector.json``, ``model.zip`` and ``learning_curve.png`` are copied to ``out/`` (what a
 single-seed run writes there), with ``"seeds"``: every run's seed, folder, training time and
 held-out first-pick success.
 ``out/scores.parquet`` holds each run's action probabilities for every candidate of every
-held-out object, in the layout of :mod:`classifiers.candidate_scores` (method ``"rl"``).
+held-out object, in the layout of :mod:`classifiers.experiments.candidate_scores` (method ``"rl"``).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 import torch as th
 
-from classifiers.selector.data import check_grip_table
+from classifiers.experiments.selector.data import check_grip_table
 from grip_env.config import Config
 from grip_env.envs.observation import CandidateSet
 
@@ -44,9 +44,9 @@ def action_probabilities(model: Any, found: CandidateSet) -> np.ndarray:
 
 
 def policy_scores(model: Any, table: pd.DataFrame, config: Config, seed: int) -> pd.DataFrame:
-    """``model``'s score rows (:data:`classifiers.candidate_scores.SCORE_COLUMNS`)."""
-    from classifiers.candidate_scores import score_frame
-    from classifiers.selector.evaluation import held_out_candidate_sets
+    """``model``'s score rows (:data:`classifiers.experiments.candidate_scores.SCORE_COLUMNS`)."""
+    from classifiers.experiments.candidate_scores import score_frame
+    from classifiers.experiments.selector.evaluation import held_out_candidate_sets
 
     return pd.concat([score_frame(found.object_id, seed, METHOD, found.rows,
                                   action_probabilities(model, found))
@@ -60,8 +60,8 @@ def run_selectors(
 ) -> dict[str, Any]:
     """Train and evaluate one selector per seed; returns the first seed's report (with
     ``"seeds"``), which is also written to ``out_dir/selector.json``."""
-    from classifiers.candidate_scores import SCORES_FILE, training_seeds, write_scores
-    from classifiers.selector import REPORT_FILE, run_selector
+    from classifiers.experiments.candidate_scores import SCORES_FILE, training_seeds, write_scores
+    from classifiers.experiments.selector import REPORT_FILE, run_selector
     table = check_grip_table(table)
     out = Path(out_dir)
     settings = config.selector

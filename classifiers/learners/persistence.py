@@ -13,7 +13,9 @@ checksum, anything the caller adds) plus either
 from __future__ import annotations
 
 import hashlib
+import importlib
 import json
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -21,21 +23,25 @@ import pandas as pd
 import torch
 from sklearn.pipeline import Pipeline
 
-from classifiers.baselines import ColumnSelector
-from classifiers.torch_mlp import TorchMLPClassifier, TorchMLPRegressor
+from classifiers.learners.baselines import ColumnSelector
+from classifiers.learners.torch_mlp import TorchMLPClassifier, TorchMLPRegressor
 
 TRUSTED_TYPES = frozenset(
     {
-        "classifiers.baselines.ColumnSelector",
-        "classifiers.baselines.RankingClassifier",
-        "classifiers.baselines.RandomClassifier",
-        "classifiers.baselines.RankingRegressor",
-        "classifiers.baselines.RandomRegressor",
-        "classifiers.threads.OneThreadHGBClassifier",
-        "classifiers.threads.OneThreadHGBRegressor",
+        "classifiers.learners.baselines.ColumnSelector",
+        "classifiers.learners.baselines.RankingClassifier",
+        "classifiers.learners.baselines.RandomClassifier",
+        "classifiers.learners.baselines.RankingRegressor",
+        "classifiers.learners.baselines.RandomRegressor",
+        "classifiers.learners.threads.OneThreadHGBClassifier",
+        "classifiers.learners.threads.OneThreadHGBRegressor",
     }
 )
 _TORCH_MODELS = {cls.__name__: cls for cls in (TorchMLPClassifier, TorchMLPRegressor)}
+#: Where the trusted types lived before classifiers/ was laid out by kind: a model saved then
+#: names them so, and still loads.
+LEGACY_MODULES = {"classifiers.baselines": "classifiers.learners.baselines",
+                  "classifiers.threads": "classifiers.learners.threads"}
 
 TRUSTED_PREFIXES = ("sklearn.",)
 
@@ -96,12 +102,25 @@ def load_model(directory: str | Path, name: str) -> tuple[Pipeline, dict[str, An
         untrusted = sio.get_untrusted_types(file=path)
         unexpected = sorted(
             kind for kind in untrusted
-            if kind not in TRUSTED_TYPES and not kind.startswith(TRUSTED_PREFIXES)
+            if _current_name(kind) not in TRUSTED_TYPES and not kind.startswith(TRUSTED_PREFIXES)
         )  # fmt: skip
         if unexpected:
             raise ValueError(f"{path} holds types outside the trusted list: {unexpected}")
+        _alias_legacy_modules()
         return sio.load(path, trusted=untrusted), info
     raise ValueError(f"{meta_path}: unknown model format {info.get('format')!r}")
+
+
+def _current_name(kind: str) -> str:
+    """A type's name under today's layout (an older file may name its old module)."""
+    module, _, name = kind.rpartition(".")
+    return f"{LEGACY_MODULES.get(module, module)}.{name}"
+
+
+def _alias_legacy_modules() -> None:
+    """Let an older file's module names import today's modules."""
+    for old, new in LEGACY_MODULES.items():
+        sys.modules.setdefault(old, importlib.import_module(new))
 
 
 def _jsonable(params: dict[str, Any]) -> dict[str, Any]:

@@ -4,7 +4,7 @@ scikit-learn's HistGradientBoosting and LightGBM start one OpenMP thread per cor
 on a few thousand grips the threads cost more than they save, and on a shared or busy machine
 they oversubscribe it: one HistGradientBoosting fit on the default dataset took 3.0 s with the
 default pool and 0.23 s with one thread (2 busy cores). Torch has its own setting
-(:mod:`classifiers.torch_mlp` already trains single-threaded).
+(:mod:`classifiers.learners.torch_mlp` already trains single-threaded).
 
 The "hgb" models are :class:`OneThreadHGBClassifier` and :class:`OneThreadHGBRegressor`: the
 scikit-learn estimators, unchanged, with ``fit`` and every prediction run single-threaded, so a

@@ -3,7 +3,7 @@
 A method gives, for each held-out object and run (``seed``), a score per candidate (higher =
 pick first) or one chosen index (scored 1 for the choice, 0 for the rest). Every loader returns a
 long table ``method, seed, object_id, candidate, score`` (:data:`SCORE_COLUMNS`), the input of
-:func:`classifiers.benchmark.selection.selection_metrics`.
+:func:`classifiers.experiments.benchmark.selection.selection_metrics`.
 
 - baselines (:func:`baseline_scores`): ``best_qc`` (lowest Q_C first), ``best_qg`` (lowest Q_G),
   ``epsilon`` (highest Ferrari-Canny epsilon), ``random`` (all candidates tied: the exact
@@ -155,7 +155,7 @@ def load_skops(path: Path) -> Any:
     """A skops model, trusting only scikit-learn's and this package's types."""
     import skops.io as sio
 
-    from classifiers.persistence import TRUSTED_PREFIXES, TRUSTED_TYPES
+    from classifiers.learners.persistence import TRUSTED_PREFIXES, TRUSTED_TYPES
 
     try:
         untrusted = sio.get_untrusted_types(file=path)
@@ -172,7 +172,7 @@ def load_skops(path: Path) -> Any:
 
 
 def _model_scores(model: Any, rows: pd.DataFrame) -> np.ndarray:
-    from classifiers.evaluation import ranking_score
+    from classifiers.evaluation.cross_validation import ranking_score
 
     if hasattr(model, "classes_"):
         return ranking_score(model, rows)
@@ -194,7 +194,7 @@ def load_sb3(path: Path) -> Any:
     from stable_baselines3 import PPO
     from stable_baselines3.common.save_util import load_from_zip_file
 
-    import classifiers.selector.policy  # noqa: F401  (the selector's policy class, for unpickling)
+    import classifiers.experiments.selector.policy  # noqa: F401  (the selector's policy class, for unpickling)
 
     try:
         data, _, _ = load_from_zip_file(path, load_data=True, device="cpu")
@@ -270,9 +270,9 @@ def fitted_scores(table: pd.DataFrame, candidates: pd.DataFrame, config: Any,
                   seeds: Sequence[int]) -> pd.DataFrame:  # fmt: skip
     """Each of ``learning.models`` and ``learning.regressors`` fitted on the training objects
     (everything but the held-out objects) with each seed, scoring the held-out candidates."""
-    from classifiers.evaluation import LABEL_COLUMN
-    from classifiers.models import make_model, make_regressor
-    from classifiers.regression import TARGET_COLUMN, has_target
+    from classifiers.evaluation.cross_validation import LABEL_COLUMN
+    from classifiers.evaluation.regression import TARGET_COLUMN, has_target
+    from classifiers.learners.models import make_model, make_regressor
     from grip_env.columns import FEATURES
 
     train = table[~table["object_id"].astype(str).isin(set(candidates["object_id"]))]

@@ -1,6 +1,6 @@
 """Grip selection scored the way a robot uses it: one pick per object, against the oracle.
 
->>> from classifiers.benchmark import benchmark_method
+>>> from classifiers.experiments.benchmark import benchmark_method
 >>> board = benchmark_method(table, ["mine.zip"], "mine", config)   # leaderboard dict
 
 Modules: ``split`` (the fixed, versioned standard split), ``methods`` (baselines and loaders of
@@ -44,19 +44,19 @@ def benchmark_method(
     """The leaderboard of one user method (``specs``: its runs, e.g. one zip per seed) against
     the baselines, on the standard split. Raises ValueError on any bad input, before any file
     is written."""
-    from classifiers.benchmark.methods import (
+    from classifiers.experiments.benchmark.methods import (
         baseline_scores,
         entry_point_scores,
         sb3_scores,
         skops_scores,
     )
-    from classifiers.benchmark.split import (
+    from classifiers.experiments.benchmark.split import (
         candidate_sets,
         candidate_table,
         check_standard_objects,
         standard_split,
     )
-    from classifiers.persistence import dataset_checksum
+    from classifiers.learners.persistence import dataset_checksum
 
     if not specs:
         raise ValueError("give at least one method")
@@ -93,15 +93,15 @@ def study_benchmark(
     """The study's leaderboard: the learners' per-seed scores (``classifiers/scores.parquet``,
     ``selector/scores.parquet``), or, without them, each learner fitted with ``learning.seed``
     and the selector's ``model.zip``; plus the baselines. Writes ``out/benchmark/``."""
-    from classifiers.benchmark.leaderboard import NoRankableObject, write_leaderboard
-    from classifiers.benchmark.methods import (
+    from classifiers.experiments.benchmark.leaderboard import NoRankableObject, write_leaderboard
+    from classifiers.experiments.benchmark.methods import (
         baseline_scores,
         fitted_scores,
         sb3_scores,
         study_scores,
     )
-    from classifiers.benchmark.split import candidate_sets, candidate_table, study_split
-    from classifiers.persistence import dataset_checksum
+    from classifiers.experiments.benchmark.split import candidate_sets, candidate_table, study_split
+    from classifiers.learners.persistence import dataset_checksum
 
     out, table = Path(out), _bare(table)
     learned = study_scores(out)
@@ -141,8 +141,8 @@ def _bare(table: pd.DataFrame) -> pd.DataFrame:
 
 def _board(candidates: pd.DataFrame, scores: pd.DataFrame, split: dict[str, Any], reps: int,
            seed: int) -> dict[str, Any]:  # fmt: skip
-    from classifiers.benchmark.leaderboard import build_leaderboard
-    from classifiers.benchmark.selection import selection_metrics
+    from classifiers.experiments.benchmark.leaderboard import build_leaderboard
+    from classifiers.experiments.benchmark.selection import selection_metrics
 
     metrics = selection_metrics(candidates, scores)
     board = build_leaderboard(metrics, split, reps=reps, seed=seed)

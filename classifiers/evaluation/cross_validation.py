@@ -32,8 +32,8 @@ from sklearn.metrics import (
 )
 from sklearn.model_selection import GridSearchCV, GroupKFold, StratifiedGroupKFold
 
-from classifiers.models import check_features, make_model
-from classifiers.threads import single_threaded
+from classifiers.learners.models import check_features, make_model
+from classifiers.learners.threads import single_threaded
 from grip_env.columns import FEATURES
 from grip_env.config import LearningConfig
 from grip_env.dataset.split import held_out_objects, split_table

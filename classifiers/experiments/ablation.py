@@ -1,7 +1,8 @@
 """The feature-ablation study: do the hand (C) features add to the grasp (S, G) features?
 
 One model (default ``learning.ablation_model``, "hgb") is cross-validated on each feature set
-with exactly the folds and seeds of :mod:`classifiers.evaluation`, so the per-fold metric
+with exactly the folds and seeds of :mod:`classifiers.evaluation.cross_validation`, so the per-fold
+metric
 differences to the reference set (all twelve features) are paired; their mean and corrected 95%
 t-interval are reported. The permutation importance of each of the twelve features (drop of
 ROC-AUC when the feature is shuffled in the held-out fold,
@@ -13,11 +14,13 @@ leave-one-feature-out sets). ``eps`` is the Ferrari–Canny ε of
 
 When the table has the graded outcome, the regression task runs alongside on the same folds:
 one regressor (default ``"svr"``) of ``robustness_mean`` per feature set, scored by Spearman
-(pooled and within object, :mod:`classifiers.regression`), with the same paired differences.
+(pooled and within object, :mod:`classifiers.evaluation.regression`), with the same paired
+differences.
 
 ``"learners"`` repeats the question for the other learners (:data:`OTHER_LEARNERS`: the
 classifiers "hgb" and "svm" other than the study's model, the gradient-boosted regressor "hgb"
-and the lambdarank ranker of :mod:`classifiers.ranking`) on the named feature sets (not the
+and the lambdarank ranker of :mod:`classifiers.evaluation.ranking`) on the named feature sets (not
+the
 leave-one-feature-out ones, to bound the cost), on the same folds, each paired against its own
 all-twelve run.
 """
@@ -33,7 +36,7 @@ import numpy as np
 import pandas as pd
 from sklearn.inspection import permutation_importance
 
-from classifiers.evaluation import (
+from classifiers.evaluation.cross_validation import (
     LABEL_COLUMN,
     METRICS,
     check_dataset,
@@ -45,22 +48,22 @@ from classifiers.evaluation import (
     paired_metrics,
     summarise,
 )
-from classifiers.models import make_model
-from classifiers.plots import plot_ablation
-from classifiers.ranking import (
+from classifiers.evaluation.ranking import (
     RANKING_METRICS,
     cross_validate_rankers,
     paired_ranking_difference,
     summarise_ranking,
 )
-from classifiers.regression import (
+from classifiers.evaluation.regression import (
     REGRESSION_METRICS,
     cross_validate_regressors,
     has_target,
     paired_regression_difference,
     summarise_regression,
 )
-from classifiers.threads import single_threaded
+from classifiers.experiments.plots import plot_ablation
+from classifiers.learners.models import make_model
+from classifiers.learners.threads import single_threaded
 from grip_env.columns import FEATURES, GRASP_FEATURES, HAND_FEATURES, SHARED_FEATURES
 from grip_env.config import Config, LearningConfig
 from grip_env.planning.epsilon import EPSILON_COLUMN, add_epsilon

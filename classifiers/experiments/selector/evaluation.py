@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
-from classifiers.selector.data import check_grip_table
+from classifiers.experiments.selector.data import check_grip_table
 from grip_env.config import Config
 from grip_env.dataset.split import held_out_objects
 from grip_env.envs.observation import CandidateSet, candidate_set
@@ -95,7 +95,7 @@ def _robustness_oracle(found: CandidateSet) -> NDArray[np.intp]:
 
 
 def _classifier_ranker(model: Any) -> Ranker:
-    from classifiers.evaluation import ranking_score
+    from classifiers.evaluation.cross_validation import ranking_score
 
     return lambda found: np.argsort(-ranking_score(model, found.rows), kind="stable")
 
@@ -109,7 +109,7 @@ def fit_classifiers(
     hold a single class.
     """
     try:
-        from classifiers.models import make_model
+        from classifiers.learners.models import make_model
     except ImportError:
         return {}
     chosen = (

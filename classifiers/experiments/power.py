@@ -12,7 +12,8 @@ On each subsample three half-widths are measured (:data:`QUANTITIES`), each exac
 computes its interval:
 
 - ``roc_auc``: the model's (default ``learning.ablation_model``, the ablation's) ROC-AUC,
-  corrected resampled t over folds x repeats (:func:`classifiers.evaluation.half_width`);
+  corrected resampled t over folds x repeats
+  (:func:`classifiers.evaluation.cross_validation.half_width`);
 - ``hand_difference``: the ablation's paired ROC-AUC difference ``without_hand − all_twelve``,
   same folds and seeds, same interval;
 - ``rl_minus_best_qc``: first-pick success of the RL selector minus the best-Q_C pick on the
@@ -38,7 +39,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from classifiers.half_widths import (
+from classifiers.evaluation.half_widths import (
     POWER_FILE,
     TARGETS,
     Law,
@@ -111,8 +112,8 @@ def classifier_half_widths(
     table: pd.DataFrame, config: Config, model: str | None = None
 ) -> dict[str, tuple[float, float]]:
     """``{quantity: (estimate, half-width)}`` of ``roc_auc`` and ``hand_difference``."""
-    from classifiers.ablation import GRASP, SHARED
-    from classifiers.evaluation import cross_validate_models, half_width
+    from classifiers.evaluation.cross_validation import cross_validate_models, half_width
+    from classifiers.experiments.ablation import GRASP, SHARED
 
     learning = config.learning
     model = model or learning.ablation_model
@@ -130,8 +131,8 @@ def classifier_half_widths(
 def selector_half_width(table: pd.DataFrame, config: Config) -> tuple[float, float]:
     """(mean, half-width) of RL minus best-Q_C first-pick success on the held-out objects, the
     policy trained afresh on ``table``'s training objects (files go to a temporary folder)."""
-    from classifiers.selector.evaluation import evaluate_selectors
-    from classifiers.selector.training import train_selector
+    from classifiers.experiments.selector.evaluation import evaluate_selectors
+    from classifiers.experiments.selector.training import train_selector
 
     with tempfile.TemporaryDirectory(prefix="grip-power-") as folder:
         trained = train_selector(table, config, folder, progress=False)

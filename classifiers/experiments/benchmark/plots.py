@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from classifiers.benchmark.selection import MAX_ATTEMPTS
+from classifiers.experiments.benchmark.selection import MAX_ATTEMPTS
 
 
 def _pyplot() -> Any:

@@ -1,6 +1,6 @@
 """The RL selector: learn to pick the grip to execute with MaskablePPO, judged on unseen objects.
 
->>> from classifiers.selector import run_selector
+>>> from classifiers.experiments.selector import run_selector
 >>> report = run_selector("data/grips", "runs/selector", config)   # writes selector.json
 
 Modules: ``policy`` (permutation-equivariant actor-critic), ``training`` (MaskablePPO on
@@ -34,13 +34,19 @@ def run_selector(
     """Train the selector on the training objects, evaluate it on the test objects.
 
     Writes ``out_dir/selector.json`` (the result of
-    :func:`~classifiers.selector.evaluation.evaluate_selectors` plus a ``training`` section),
+    :func:`~classifiers.experiments.selector.evaluation.evaluate_selectors` plus a ``training``
+    section),
     ``model.zip``, ``tb/`` and ``learning_curve.png``; returns the report. Live training
     is still evaluated on the dataset's recorded outcomes.
     """
-    from classifiers.selector.data import check_grip_table
-    from classifiers.selector.evaluation import evaluate_selectors
-    from classifiers.selector.training import CURVE_FILE, MODEL_FILE, check_policy, train_selector
+    from classifiers.experiments.selector.data import check_grip_table
+    from classifiers.experiments.selector.evaluation import evaluate_selectors
+    from classifiers.experiments.selector.training import (
+        CURVE_FILE,
+        MODEL_FILE,
+        check_policy,
+        train_selector,
+    )
 
     check_policy(policy)
     table = check_grip_table(table_or_dir)

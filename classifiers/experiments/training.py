@@ -3,25 +3,26 @@
 ``train_and_save(table, out_dir, config)`` writes
 
 - ``metrics.json``: grouped, repeated CV of every model
-  (:func:`classifiers.evaluation.evaluate_models`) plus the dataset checksum;
+  (:func:`classifiers.evaluation.cross_validation.evaluate_models`) plus the dataset checksum;
 - ``metrics.json["held_out"]``: every model fitted on the training objects of the study's split
   (:func:`grip_env.dataset.split.held_out_objects`) and scored on its held-out objects, the same
   objects the RL selector and its baselines are scored on;
 - ``metrics.json["family_holdout"]``: every model fitted on all object families but one
   (named, procedural, mesh, ...) and scored on the one held out
-  (:func:`classifiers.evaluation.family_holdout_metrics`), when the dataset has two or more;
+  (:func:`classifiers.evaluation.cross_validation.family_holdout_metrics`), when the dataset has
+  two or more;
 - ``roc.png``, ``calibration.png``: curves of the out-of-fold predictions of the CV's first
   repeat, pooled (each grip scored by a model that never saw its object);
 - ``models/<name>.{json,skops|pt}``: each model refitted on the whole table, with its metadata
   (feature list, parameters, dataset checksum, seed);
 - when the table has the graded outcome: ``regression.json`` (grouped CV of
-  ``learning.regressors`` on ``robustness_mean``, see :mod:`classifiers.regression`) and
+  ``learning.regressors`` on ``robustness_mean``, see :mod:`classifiers.evaluation.regression`) and
   ``models/regressor_<name>.*``;
-- ``ranking.json``: grouped CV of ``learning.rankers`` (:mod:`classifiers.ranking`), with
+- ``ranking.json``: grouped CV of ``learning.rankers`` (:mod:`classifiers.evaluation.ranking`), with
   ``models/ranker_<name>.*`` (lambdarank: LightGBM's text model ``.txt`` beside its ``.json``);
 - ``scores.parquet``: every learner fitted with each of ``learning.seeds`` seeds on the split's
   training objects, scoring each held-out object's candidates
-  (:mod:`classifiers.candidate_scores`).
+  (:mod:`classifiers.experiments.candidate_scores`).
 """
 
 from __future__ import annotations
@@ -33,8 +34,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from classifiers.candidate_scores import SCORES_FILE, learner_scores, write_scores
-from classifiers.evaluation import (
+from classifiers.evaluation.cross_validation import (
     LABEL_COLUMN,
     evaluate_models,
     family_holdout_metrics,
@@ -43,12 +43,14 @@ from classifiers.evaluation import (
     object_families,
     positive_probability,
 )
-from classifiers.models import make_model, make_regressor
-from classifiers.persistence import dataset_checksum, save_model
-from classifiers.plots import plot_calibration, plot_roc
-from classifiers.ranking import GroupedRanker, evaluate_rankers, make_ranker, relevance
-from classifiers.regression import TARGET_COLUMN, evaluate_regressors, has_target
-from classifiers.threads import single_threaded
+from classifiers.evaluation.ranking import evaluate_rankers
+from classifiers.evaluation.regression import TARGET_COLUMN, evaluate_regressors, has_target
+from classifiers.experiments.candidate_scores import SCORES_FILE, learner_scores, write_scores
+from classifiers.experiments.plots import plot_calibration, plot_roc
+from classifiers.learners.models import make_model, make_regressor
+from classifiers.learners.persistence import dataset_checksum, save_model
+from classifiers.learners.ranking import GroupedRanker, make_ranker, relevance
+from classifiers.learners.threads import single_threaded
 from grip_env.columns import FEATURES
 from grip_env.config import Config
 
@@ -86,7 +88,7 @@ def _train_and_save(table: pd.DataFrame, out_dir: str | Path, config: Config) ->
 
 def held_out_scores(table: pd.DataFrame, config: Config) -> dict[str, Any]:
     """Each of ``learning.models`` fitted on the split's training objects, scored on the rest
-    (:func:`classifiers.evaluation.held_out_metrics`)."""
+    (:func:`classifiers.evaluation.cross_validation.held_out_metrics`)."""
     learning = config.learning
     models = {name: make_model(name, learning.seed, FEATURES) for name in learning.models}
     return held_out_metrics(table, learning, models)
@@ -94,7 +96,7 @@ def held_out_scores(table: pd.DataFrame, config: Config) -> dict[str, Any]:
 
 def family_holdout_scores(table: pd.DataFrame, config: Config) -> dict[str, Any]:
     """Each of ``learning.models`` fitted on all families but one, scored on that one
-    (:func:`classifiers.evaluation.family_holdout_metrics`)."""
+    (:func:`classifiers.evaluation.cross_validation.family_holdout_metrics`)."""
     learning = config.learning
     models = {name: make_model(name, learning.seed, FEATURES) for name in learning.models}
     return family_holdout_metrics(table, object_families(table), models)

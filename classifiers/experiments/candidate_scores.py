@@ -5,7 +5,7 @@ Each learner of ``learning.models`` (classifiers), ``learning.regressors`` and
 grips of the study split's training objects (:func:`grip_env.dataset.split.held_out_objects`;
 the split itself stays fixed by ``learning.seed``, only the models' own randomness changes) and
 scores every candidate of each held-out object. The RL selector does the same per
-``selector.seeds`` (:func:`classifiers.selector.seeds.run_selectors`).
+``selector.seeds`` (:func:`classifiers.experiments.selector.seeds.run_selectors`).
 
 Files in a study folder:
 
@@ -25,7 +25,8 @@ Columns (:data:`SCORE_COLUMNS`), one row per (object, seed, method, candidate):
 - ``grip_id`` (str): the grip, to join with the dataset's recorded outcomes (on the dataset's
   ``grip_id`` as ``str``: the real datasets' ids are strings such as ``"proc_0_00000/13/0"``);
 - ``score`` (float64): higher = pick first. Classifiers: the ranking score
-  (:func:`classifiers.evaluation.ranking_score`); regressors: predicted ``robustness_mean``;
+  (:func:`classifiers.evaluation.cross_validation.ranking_score`); regressors: predicted
+  ``robustness_mean``;
   rankers: the ranker's score (comparable within one object only); ``rl``: the policy's action
   probability (masked softmax). Ties go to the lower slot (``argsort(-score, kind="stable")``).
 
@@ -43,11 +44,11 @@ import numpy as np
 import pandas as pd
 from sklearn.base import BaseEstimator
 
-from classifiers.evaluation import GROUP_COLUMN, LABEL_COLUMN, ranking_score
-from classifiers.models import make_model, make_regressor
-from classifiers.ranking import make_ranker, relevance
-from classifiers.regression import TARGET_COLUMN, has_target
-from classifiers.threads import single_threaded
+from classifiers.evaluation.cross_validation import GROUP_COLUMN, LABEL_COLUMN, ranking_score
+from classifiers.evaluation.regression import TARGET_COLUMN, has_target
+from classifiers.learners.models import make_model, make_regressor
+from classifiers.learners.ranking import make_ranker, relevance
+from classifiers.learners.threads import single_threaded
 from grip_env.columns import FEATURES
 from grip_env.config import Config
 from grip_env.dataset.split import split_table

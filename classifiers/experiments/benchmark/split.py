@@ -167,7 +167,7 @@ def split_config(config: Config, split: BenchmarkSplit) -> Config:
 def candidate_sets(table: pd.DataFrame, config: Config, split: BenchmarkSplit) -> list[
         CandidateSet]:  # fmt: skip
     """The held-out objects' candidate sets, as ``GripSelect-v0`` shows them."""
-    from classifiers.selector.evaluation import _test_candidate_sets
+    from classifiers.experiments.selector.evaluation import _test_candidate_sets
 
     sets = _test_candidate_sets(table, split_config(config, split), split.test_objects)
     if not sets:

@@ -94,12 +94,12 @@ def run_study(
     config = study_config(config, quick)
     timings: dict[str, float] = {}
 
-    from classifiers.ablation import run_ablation
-    from classifiers.benchmark import study_benchmark
-    from classifiers.perception_effect import run_perception_effect
-    from classifiers.persistence import dataset_checksum
-    from classifiers.selector.seeds import run_selectors
-    from classifiers.training import train_and_save
+    from classifiers.experiments.ablation import run_ablation
+    from classifiers.experiments.benchmark import study_benchmark
+    from classifiers.experiments.perception_effect import run_perception_effect
+    from classifiers.experiments.selector.seeds import run_selectors
+    from classifiers.experiments.training import train_and_save
+    from classifiers.learners.persistence import dataset_checksum
     from grip_env.dataset import generate, load
 
     data_dir = out / "dataset"
@@ -150,8 +150,8 @@ def run_study(
 
 def check_learner_names(config: Config) -> None:
     """ValueError naming the ``learning`` key whose model name no registry knows."""
-    from classifiers.models import MODEL_NAMES, REGRESSOR_NAMES
-    from classifiers.ranking import RANKER_NAMES
+    from classifiers.learners.models import MODEL_NAMES, REGRESSOR_NAMES
+    from classifiers.learners.ranking import RANKER_NAMES
 
     learning = config.learning
     for key, names, known in (("models", learning.models, MODEL_NAMES),

@@ -1,5 +1,5 @@
 """Interval half-widths: the study's targets, the paired bootstrap, and the law by which a
-half-width narrows with objects and trials (fitted by :mod:`classifiers.power`, drawn by
+half-width narrows with objects and trials (fitted by :mod:`classifiers.experiments.power`, drawn by
 :mod:`classifiers.report.power`, which both import it from here)."""
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ def paired_bootstrap(
     a: np.ndarray, b: np.ndarray, seed: int, n_boot: int = 2000
 ) -> tuple[float, float]:
     """(mean, half-width) of the 95% percentile bootstrap of ``mean(a - b)`` over objects, with
-    the resamples :func:`classifiers.selector.evaluation.evaluate_selectors` draws."""
+    the resamples :func:`classifiers.experiments.selector.evaluation.evaluate_selectors` draws."""
     difference = np.asarray(a, float) - np.asarray(b, float)
     if difference.size == 0:
         raise ValueError("paired_bootstrap needs at least one object")

@@ -1,6 +1,7 @@
 """The model registry: ``make_model(name, seed, features)`` → a scikit-learn ``Pipeline``.
 
-Each pipeline starts with a :class:`~classifiers.baselines.ColumnSelector` (models take the grip
+Each pipeline starts with a :class:`~classifiers.learners.baselines.ColumnSelector` (models take
+the grip
 table and pick their columns) and ends with a step named ``"model"``, so hyper-parameters are set
 as ``pipeline.set_params(model__C=...)``. The baselines ignore ``features``: ``rank_qc`` reads
 ``Q_C``, ``rank_qg`` reads ``Q_G`` and ``random`` reads nothing but the row count.
@@ -13,14 +14,14 @@ deprecated ``SVC(probability=True)``.
 strongest learner on small tabular data) on the raw features (trees need no scaling), with
 early stopping on a seeded 15 % validation split of the training grips: the seed changes which
 grips stop the boosting, so "hgb" is a stochastic learner whose seeds give different models. It
-runs on one thread (:class:`~classifiers.threads.OneThreadHGBClassifier`, 13x faster here).
+runs on one thread (:class:`~classifiers.learners.threads.OneThreadHGBClassifier`, 13x faster here).
 
 ``make_regressor(name, seed, features)`` is the same for the regression task (predicting a grip's
 ``robustness_mean``): "svr" (RBF ``SVR`` on standardised features), "mlp_torch"
-(:class:`~classifiers.torch_mlp.TorchMLPRegressor`), "knn", "ridge", "hgb"
+(:class:`~classifiers.learners.torch_mlp.TorchMLPRegressor`), "knn", "ridge", "hgb"
 (``HistGradientBoostingRegressor``, squared error, early stopping as the classifier's), and the
 rank baselines
-"rank_qc", "rank_qg" and "random" (:class:`~classifiers.baselines.RankingRegressor`).
+"rank_qc", "rank_qg" and "random" (:class:`~classifiers.learners.baselines.RankingRegressor`).
 """
 
 from __future__ import annotations
@@ -36,15 +37,15 @@ from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.svm import SVC, SVR
 
-from classifiers.baselines import (
+from classifiers.learners.baselines import (
     ColumnSelector,
     RandomClassifier,
     RandomRegressor,
     RankingClassifier,
     RankingRegressor,
 )
-from classifiers.threads import OneThreadHGBClassifier, OneThreadHGBRegressor
-from classifiers.torch_mlp import TorchMLPClassifier, TorchMLPRegressor
+from classifiers.learners.threads import OneThreadHGBClassifier, OneThreadHGBRegressor
+from classifiers.learners.torch_mlp import TorchMLPClassifier, TorchMLPRegressor
 from grip_env.columns import FEATURES
 
 EXTRA_FEATURES = ("eps",)
