@@ -1,0 +1,1 @@
+"""Learning grip success from the twelve features: learners, evaluation, experiments, report."""
