@@ -200,3 +200,36 @@ def test_every_out_folder_is_checked_before_the_work(tmp_path, command):
     blocker = tmp_path / "result"
     blocker.write_text("")
     assert_refused(*run(*command, "--out", blocker), "existing file")
+
+
+# ----------------------------------------------------------------- bad data writes nothing
+@pytest.fixture(scope="module")
+def three_objects(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A sound dataset of 3 objects: fewer than the default 5 folds."""
+    from test_dataset import toy_job
+
+    from grip_env.config import Config
+    from grip_env.dataset import generate
+
+    config = Config().override(perception={"source": "polygon"},
+                               dataset={"trials": 2, "workers": 1})
+    return generate(config, tmp_path_factory.mktemp("three") / "data", objects=3,
+                    progress=False, job=toy_job)
+
+
+@pytest.mark.parametrize("command", ["train", "ablate", "select", "power"])
+def test_a_missing_dataset_is_refused_before_out_is_created(tmp_path, command):
+    out = tmp_path / "out"
+    code, output = run(command, "--data", tmp_path / "nowhere", "--out", out)
+    assert_refused(code, output, "nowhere")
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("command", ["train", "ablate"])
+def test_too_few_objects_for_the_folds_says_which_setting_and_writes_nothing(
+        three_objects, tmp_path, command):
+    out = tmp_path / "out"
+    code, output = run(command, "--data", three_objects, "--out", out)
+    assert_refused(code, output, "3 objects, fewer than the 5 folds of learning.folds",
+                   "at most 3")
+    assert not out.exists()

@@ -57,7 +57,9 @@ def check_dataset(table: pd.DataFrame, features: Sequence[str], folds: int) -> N
         raise ValueError(f"dataset has one class ({LABEL_COLUMN}={classes.tolist()}); need both")
     n_objects = table[GROUP_COLUMN].nunique()
     if n_objects < folds:
-        raise ValueError(f"dataset has {n_objects} objects, fewer than the {folds} folds")
+        raise ValueError(f"dataset has {n_objects} objects, fewer than the {folds} folds of "
+                         f"learning.folds: set it to at most {n_objects} in a --config file, or "
+                         "use a dataset of more objects")
 
 
 def grouped_folds(

@@ -7,6 +7,7 @@ from typing import Annotated
 import typer
 
 from grip_env.cli.errors import user_errors
+from grip_env.cli.inputs import learning_table
 from grip_env.cli.options import MODEL_NAMES_HELP, ConfigFile, DatasetDir, OutputDir
 from grip_env.cli.paths import output_dir
 from grip_env.progress import shown
@@ -31,11 +32,11 @@ def ablate(
         settings = load_config(config)
         model = model or settings.learning.ablation_model
         check_model_names((model,))
+        table = learning_table(data, settings)
         output_dir(out)
         from classifiers.experiments.ablation import run_ablation
-        from grip_env.dataset import load
 
-        result = run_ablation(load(data), out, settings, model)
+        result = run_ablation(table, out, settings, model)
         for name, entry in result["feature_sets"].items():
             auc = entry["models"][model]["roc_auc"]["mean"]
             typer.echo(f"{name:18s} ROC-AUC {auc:.3f}" if auc is not None else name)

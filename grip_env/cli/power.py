@@ -65,13 +65,13 @@ def power(
             ("objects", objects, "--objects"), ("trials", trials, "--trials"),
             ("selector_objects", selector_objects, "--selector-objects"),
             ("selector_trials", selector_trials, "--selector-trials"))}  # fmt: skip
-        output_dir(out)
         from classifiers.evaluation.half_widths import FIGURE_FILE
         from classifiers.experiments.power import run_power
         from classifiers.report.power import plot_power
         from grip_env.dataset import load
 
         tables = [load(path, allow_partial=partial) for path in data]
+        output_dir(out)
         summary = run_power(
             tables, out, settings, sizes["objects"] or None, sizes["trials"] or None, replicates,
             seed, model, sizes["selector_objects"], sizes["selector_trials"],

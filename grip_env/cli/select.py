@@ -47,13 +47,15 @@ def select(
     with stop_on_signals(f"rerun the same command to redo {out}"), user_errors():
         from grip_env.config import check_setting, load_config
 
-        output_dir(out)
         cfg = load_config(config)
         if timesteps is not None:
             check_setting("selector", "timesteps", timesteps, "--timesteps")
         from classifiers.experiments.selector import REPORT_FILE, run_selector
+        from classifiers.experiments.selector.data import check_grip_table
 
-        report = run_selector(data, out, cfg, policy.value, timesteps, live, progress)
+        table = check_grip_table(data)
+        output_dir(out)
+        report = run_selector(table, out, cfg, policy.value, timesteps, live, progress)
     for name, scores in report["policies"].items():
         rate = scores["success_rate"]
         low, high = rate["ci"]

@@ -7,6 +7,7 @@ from typing import Annotated
 import typer
 
 from grip_env.cli.errors import user_errors
+from grip_env.cli.inputs import learning_table
 from grip_env.cli.notices import warn_label_model
 from grip_env.cli.options import MODEL_NAMES_HELP, ConfigFile, DatasetDir, OutputDir
 from grip_env.cli.paths import output_dir
@@ -32,12 +33,12 @@ def train(
         if models is not None:
             settings = settings.override(learning={"models": model_names(models)})
         check_model_names(settings.learning.models)
+        table = learning_table(data, settings)
         output_dir(out)
         warn_label_model(data)
         from classifiers.experiments.training import train_and_save
-        from grip_env.dataset import load
 
-        metrics = train_and_save(load(data), out, settings)
+        metrics = train_and_save(table, out, settings)
         for name, summary in metrics["models"].items():
             auc = summary["roc_auc"]["mean"]
             typer.echo(f"{name:12s} ROC-AUC {auc:.3f}" if auc is not None else name)
