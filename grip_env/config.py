@@ -11,6 +11,7 @@ and computationally sensible (a timestep, a friction, an object size);
 
 from __future__ import annotations
 
+import difflib
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
@@ -363,14 +364,29 @@ def config_from_dict(data: dict[str, Any]) -> Config:
 
 
 def _problem(err: Any) -> str:
-    """``section.key: message (got value)`` for one pydantic error."""
+    """``section.key: message (got value)`` for one pydantic error; an unknown key names the
+    nearest known one."""
     where = ".".join(str(p) for p in err["loc"])
+    if err["type"] == "extra_forbidden":
+        return f"{where}: unknown key{_nearest(err['loc'])}"
     message = err["msg"].removeprefix("Value error, ")
     value = err.get("input")
     if isinstance(value, dict) or err["type"] == "missing":
         return f"{where}: {message}"
     shown = repr(value)
     return f"{where}: {message} (got {shown if len(shown) <= 60 else shown[:57] + '...'})"
+
+
+def _nearest(location: tuple[Any, ...]) -> str:
+    """``; did you mean section.key?`` for a misspelled key, or nothing."""
+    *section, key = (str(part) for part in location)
+    if section:
+        model = Config.model_fields.get(section[0])
+        known = list(model.annotation.model_fields) if model is not None else []
+    else:
+        known = list(Config.model_fields)
+    close = difflib.get_close_matches(key, known, n=1, cutoff=0.6)
+    return f"; did you mean {'.'.join([*section, close[0]])}?" if close else ""
 
 
 def load_config(path: str | Path | None = None) -> Config:
@@ -396,6 +412,8 @@ def load_config(path: str | Path | None = None) -> Config:
         return config_from_dict(data)
     except RecursionError:
         raise ValueError(f"config {path} is nested too deeply to be a config") from None
+    except ValueError as exc:
+        raise ValueError(f"config {path}: {exc}") from None
 
 
 def check_contour_budget(

@@ -160,3 +160,17 @@ def test_check_setting_bounds_a_cli_override_like_its_config_key():
         check_setting("selector", "timesteps", 0)
     with pytest.raises(ValueError, match=r"unknown config key dataset\.nope"):
         check_setting("dataset", "nope", 1)
+
+
+def test_a_misspelled_key_names_the_file_and_the_nearest_key(tmp_path):
+    path = tmp_path / "mine.yaml"
+    path.write_text("dataset:\n  trails: 3\n")
+    with pytest.raises(ValueError, match=r"config .*mine\.yaml: .*dataset\.trails: unknown key; "
+                                         r"did you mean dataset\.trials\?"):
+        load_config(path)
+    path.write_text("datset:\n  trials: 3\n")
+    with pytest.raises(ValueError, match=r"datset: unknown key; did you mean dataset\?"):
+        load_config(path)
+    path.write_text("dataset:\n  zzz: 3\n")
+    with pytest.raises(ValueError, match=r"dataset\.zzz: unknown key$"):
+        load_config(path)

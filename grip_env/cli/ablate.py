@@ -9,7 +9,7 @@ import typer
 from grip_env.cli.errors import user_errors
 from grip_env.cli.inputs import learning_table
 from grip_env.cli.options import MODEL_NAMES_HELP, ConfigFile, DatasetDir, OutputDir
-from grip_env.cli.paths import output_dir
+from grip_env.cli.paths import check_output_dir, output_dir
 from grip_env.progress import shown
 from grip_env.shutdown import stop_on_signals
 
@@ -32,6 +32,7 @@ def ablate(
         settings = load_config(config)
         model = model or settings.learning.ablation_model
         check_model_names((model,))
+        check_output_dir(out)
         table = learning_table(data, settings)
         output_dir(out)
         from classifiers.experiments.ablation import run_ablation

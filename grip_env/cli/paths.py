@@ -23,6 +23,18 @@ def output_dir(path: Path, option: str = "--out") -> Path:
     return path
 
 
+def check_output_dir(path: Path, option: str = "--out") -> Path:
+    """What :func:`output_dir` checks, without creating anything: a command that may still
+    refuse its other inputs checks ``--out`` first and creates it only when all are sound."""
+    if path.exists() and not path.is_dir():
+        raise ValueError(f"{option} {path} is an existing file; give a directory")
+    existing = next(parent for parent in (path, *path.parents) if parent.exists())
+    if not existing.is_dir():
+        raise ValueError(f"{option} {path}: {existing} is a file, not a directory")
+    _probe(existing, option)
+    return path
+
+
 def output_file(path: Path, suffix: str, option: str = "--out") -> Path:
     """Check that file ``path`` (which must end in ``suffix``) can be written, before the work.
 

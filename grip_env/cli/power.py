@@ -9,7 +9,7 @@ import typer
 
 from grip_env.cli.errors import user_errors
 from grip_env.cli.options import MODEL_NAMES_HELP, ConfigFile, OutputDir, dataset_folders
-from grip_env.cli.paths import output_dir
+from grip_env.cli.paths import check_output_dir, output_dir
 from grip_env.progress import shown
 from grip_env.shutdown import stop_on_signals
 
@@ -70,6 +70,7 @@ def power(
         from classifiers.report.power import plot_power
         from grip_env.dataset import load
 
+        check_output_dir(out)
         tables = [load(path, allow_partial=partial) for path in data]
         output_dir(out)
         summary = run_power(

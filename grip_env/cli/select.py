@@ -9,7 +9,7 @@ import typer
 
 from grip_env.cli.errors import user_errors
 from grip_env.cli.options import ConfigFile, DatasetDir, OutputDir
-from grip_env.cli.paths import output_dir
+from grip_env.cli.paths import check_output_dir, output_dir
 from grip_env.shutdown import stop_on_signals
 
 
@@ -53,6 +53,7 @@ def select(
         from classifiers.experiments.selector import REPORT_FILE, run_selector
         from classifiers.experiments.selector.data import check_grip_table
 
+        check_output_dir(out)
         table = check_grip_table(data)
         output_dir(out)
         report = run_selector(table, out, cfg, policy.value, timesteps, live, progress)

@@ -10,7 +10,7 @@ from grip_env.cli.errors import user_errors
 from grip_env.cli.inputs import learning_table
 from grip_env.cli.notices import warn_label_model
 from grip_env.cli.options import MODEL_NAMES_HELP, ConfigFile, DatasetDir, OutputDir
-from grip_env.cli.paths import output_dir
+from grip_env.cli.paths import check_output_dir, output_dir
 from grip_env.progress import shown
 from grip_env.shutdown import stop_on_signals
 
@@ -33,6 +33,7 @@ def train(
         if models is not None:
             settings = settings.override(learning={"models": model_names(models)})
         check_model_names(settings.learning.models)
+        check_output_dir(out)
         table = learning_table(data, settings)
         output_dir(out)
         warn_label_model(data)
