@@ -29,6 +29,7 @@ from scipy.spatial.transform import Rotation
 from grip_env.config import ObjectsConfig
 from grip_env.objects import PlanarObject
 from grip_env.objects.meshes import (
+    MESH_SET_NAMES,
     MeshPose,
     mass_properties,
     mesh_label,
@@ -53,7 +54,6 @@ HOUSEHOLD_MESHES: dict[str, str] = {
     "soccerball": "soccerball.obj",
 }
 #: Mesh object sets: ``household``, ``random_urdfs`` (about 1,000 meshes), and ``mesh`` (both).
-MESH_SET_NAMES = ("household", "random_urdfs", "mesh")
 
 RELEASE_GAP_MM = 1.5
 SETTLE_WINDOW_S = 0.1

@@ -142,3 +142,9 @@ def test_procedural_prefix_does_not_depend_on_count():
 def test_contains_is_strict_interior():
     obj = PlanarObject.from_polygon(regular_polygon(4, 10))
     assert obj.contains([[0, 0], [20, 0]]).tolist() == [True, False]
+
+
+def test_a_mesh_set_name_says_where_mesh_sets_load():
+    with pytest.raises(ValueError, match=r"'household' is a set of pybullet_data meshes.*"
+                                         r"named_set\('household'\)"):
+        load_object_set("household")

@@ -106,8 +106,8 @@ def _check_flags(
 
 def _objects(spec: str | None, mm_per_px: float | None) -> str | list[PlanarObject] | None:
     """What ``--objects`` names: a set or a count (as given), or the objects of its files."""
-    from grip_env.mesh_sets import MESH_SET_NAMES
     from grip_env.objects import OBJECT_SETS, SHAPE_NAMES
+    from grip_env.objects.meshes import MESH_SET_NAMES
     from grip_env.objects.sources import is_path_spec, objects_from_path
 
     named = spec is None or spec.strip().lstrip("-").isdigit() or spec in OBJECT_SETS or (

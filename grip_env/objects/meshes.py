@@ -25,6 +25,9 @@ from shapely.geometry import MultiPoint, Polygon
 from grip_env.columns import MESH_POSE
 from grip_env.config import ObjectsConfig
 
+#: The object sets of pybullet_data meshes (built by :func:`grip_env.mesh_sets.named_set`, which
+#: drops each mesh in the simulator until it rests).
+MESH_SET_NAMES = ("household", "random_urdfs", "mesh")
 #: Parts and holes of a silhouette smaller than this (mm²) are numerical slivers between pieces.
 SLIVER_MM2 = 1.0
 #: The silhouette is simplified within this distance (mm): far below the perception's pixel.

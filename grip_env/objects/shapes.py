@@ -7,6 +7,7 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from grip_env.objects.meshes import MESH_SET_NAMES
 from grip_env.objects.planar import PlanarObject
 
 Vertices = NDArray[np.float64]
@@ -107,6 +108,9 @@ def load_object_set(name: str = "default") -> list[PlanarObject]:
         return [make_shape(shape) for shape in OBJECT_SETS[name]]
     if name in _SHAPES:
         return [make_shape(name)]
+    if name in MESH_SET_NAMES:
+        raise ValueError(f"{name!r} is a set of pybullet_data meshes, which rest in the simulator "
+                         f"first: use grip_env.mesh_sets.named_set({name!r}).objects")
     raise ValueError(
         f"unknown object set {name!r}; known sets: {', '.join(OBJECT_SETS)} or a shape name"
     )
