@@ -50,8 +50,7 @@ def _making(manifest: dict[str, Any], grips: pd.DataFrame) -> str:
     sessions = manifest.get("sessions", [])
     wall_h = sum(s["seconds"] for s in sessions) / 3600
     core_h = sum(s["seconds"] * s["workers"] for s in sessions) / 3600
-    commits = sorted({str(s["git_commit"])[:7] for s in sessions} or
-                     {str(manifest.get("git_commit"))[:7]})
+    commits = [str(manifest.get("git_commit"))[:7]]  # the code's commit when the run began
     machines = sorted({s["machine"] for s in sessions}) or ["unrecorded"]
     rate = len(grips) / (core_h * 3600) if core_h else float("nan")
     config = manifest["config"]
@@ -59,7 +58,8 @@ def _making(manifest: dict[str, Any], grips: pd.DataFrame) -> str:
         "## How it was made", "",
         "    grip-env generate --config configs/standard.yaml --out DIR",
         "",
-        f"- Commit {', '.join(commits)}; label model `{label_model_of(manifest)}`; run seed "
+        f"- Code at commit {', '.join(commits)}; label model `{label_model_of(manifest)}`; "
+        f"run seed "
         f"{manifest['seed']}; grip-env {manifest['package_version']}.",
         f"- {manifest['trials']} trials a grip (common random numbers across an object's grips), "
         f"at most {config['dataset']['max_grips_per_object']} grips an object, sampled "
@@ -67,7 +67,8 @@ def _making(manifest: dict[str, Any], grips: pd.DataFrame) -> str:
         f"{config['perception']['resolution_px']} px top-down render.",
         f"- Cost: {wall_h:.2f} h of wall time over {len(sessions)} run(s), "
         f"**{core_h:.2f} core-hours**, {rate:.2f} grips a core-second "
-        f"(workers × wall time, with perception); on {'; '.join(machines)}.",
+        f"(workers × wall time, with perception, including any time the run was paused or "
+        f"shared its cores); on {'; '.join(machines)}.",
     ])
 
 

@@ -39,6 +39,7 @@ from grip_env.dataset.manifest import (
     MANIFEST_FILE,
     FormatVersionError,
     Manifest,
+    current_commit,
     identity_differences,
     new_manifest,
     read_manifest,
@@ -218,7 +219,7 @@ def _run(
     workers: int, backend: str, address: str | None, progress: bool,
 ) -> None:
     started, rows, last_flush = time.perf_counter(), 0, 0.0
-    began, done = datetime.now(UTC), 0
+    began, done, commit = datetime.now(UTC), 0, current_commit()
     feature_cap = manifest["feature_cap"]
     with progress_bar(total, "generate", done=total - len(pending), enabled=progress) as bar:
         try:
@@ -240,7 +241,7 @@ def _run(
             manifest["complete"] = len(manifest["shards"]) == total
             if done:
                 manifest.setdefault("sessions", []).append(session_record(
-                    began, _elapsed(started), workers, backend, done, rows))
+                    began, _elapsed(started), workers, backend, done, rows, commit))
             try:
                 write_manifest(directory, manifest)
             except OSError:  # disk full: a shard the manifest on disk does not list goes

@@ -198,12 +198,12 @@ def identity_differences(old: dict[str, Any], new: dict[str, Any], prefix: str =
 
 
 def session_record(started: datetime, seconds: float, workers: int, backend: str, objects: int,
-                   rows: int) -> dict[str, Any]:
+                   rows: int, git_commit: str | None) -> dict[str, Any]:
     """One ``generate`` run's share of a dataset (``manifest["sessions"]``): a resumed dataset
     lists every run, so its cost (core-hours, grips per core-second) adds up across them."""
     return {"started": started.isoformat(timespec="seconds"), "seconds": round(seconds, 1),
             "workers": workers, "backend": backend, "objects": objects, "rows": rows,
-            "git_commit": _git_commit(), "label_model": LABEL_MODEL, "machine": _machine()}
+            "git_commit": git_commit, "label_model": LABEL_MODEL, "machine": _machine()}
 
 
 def _machine() -> str:
@@ -227,6 +227,12 @@ def _versions() -> dict[str, str]:
         except metadata.PackageNotFoundError:
             continue
     return found
+
+
+def current_commit() -> str | None:
+    """The checkout's commit (read when a run starts: a run that commits its own shards as it
+    goes moves HEAD without changing the code)."""
+    return _git_commit()
 
 
 def _git_commit() -> str | None:
