@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -90,28 +90,15 @@ def _sample(directory: Path, grips: int, seed: int) -> list[_ObjectCheck]:
     """The objects (seeded order) and grips (seeded, ``GRIPS_PER_OBJECT`` at most each) to check."""
     manifest = read_manifest(directory)
     table = load(directory)
-    config = Config.model_validate(manifest["config"])
-    objects = {obj.name: obj for obj in load_objects(directory)}
-    seeds = {entry["object_id"]: entry["seed"] for entry in manifest["objects"]}
-    ids = [object_id for object_id in pd.unique(table["object_id"])]
+    ids = list(pd.unique(table["object_id"]))
     rng = np.random.default_rng(seed)
     order = [ids[i] for i in rng.permutation(len(ids))]
-    wanted = min(len(order), math.ceil(grips / GRIPS_PER_OBJECT))
-    chosen = order[:wanted]
-    lacking = [object_id for object_id in chosen if object_id not in objects]
-    if lacking:
-        raise ValueError(f"dataset {directory}: its objects table lacks {lacking[0]!r} "
-                         f"(and {len(lacking) - 1} more), so it cannot be re-planned")
-    rows = {object_id: table[table["object_id"] == object_id].reset_index(drop=True)
-            for object_id in chosen}
-    share = _shares(grips, [len(rows[o]) for o in chosen])
-    checks = []
-    for object_id, count in zip(chosen, share, strict=True):
-        picked = tuple(sorted(rng.choice(len(rows[object_id]), count, replace=False).tolist()))
-        task = ObjectTask(_index(manifest, object_id), object_id, objects[object_id], config,
-                          seeds[object_id])
-        checks.append(_ObjectCheck(task, rows[object_id], picked))
-    return checks
+    chosen = order[: min(len(order), math.ceil(grips / GRIPS_PER_OBJECT))]
+    checks = _checks(directory, manifest, table, chosen)
+    share = _shares(grips, [len(check.recorded) for check in checks])
+    return [replace(check, picked=tuple(sorted(
+        rng.choice(len(check.recorded), count, replace=False).tolist())))
+        for check, count in zip(checks, share, strict=True)]
 
 
 def _shares(grips: int, available: list[int]) -> list[int]:
@@ -228,8 +215,17 @@ def retest(path: str | Path, objects: int, seed: int = 0, workers: int = 1) -> R
 
 def _checks(directory: Path, manifest: dict, table: pd.DataFrame,
             chosen: list[str]) -> list[_ObjectCheck]:
+    """Every recorded grip of the ``chosen`` objects, with the task that planned them.
+
+    Raises:
+        ValueError: the objects table lacks one of them.
+    """
     config = Config.model_validate(manifest["config"])
     objects = {obj.name: obj for obj in load_objects(directory)}
+    lacking = [object_id for object_id in chosen if object_id not in objects]
+    if lacking:
+        raise ValueError(f"dataset {directory}: its objects table lacks {lacking[0]!r} "
+                         f"(and {len(lacking) - 1} more), so it cannot be re-planned")
     seeds = {entry["object_id"]: entry["seed"] for entry in manifest["objects"]}
     checks = []
     for object_id in chosen:
