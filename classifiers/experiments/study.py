@@ -16,6 +16,7 @@ import hashlib
 import json
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -35,18 +36,86 @@ QUICK_OVERRIDES: dict[str, dict[str, Any]] = {
     "selector": {"timesteps": 512, "max_candidates": 16, "seeds": 2},
 }
 STAGE_FILE = "stage.json"
-#: The config fields (a section, or ``section.field``) each stage reads.
-STAGE_INPUTS: dict[str, tuple[str, ...]] = {
-    "classifiers": ("learning", "selector.max_candidates", "sim.ramp_levels_g", "sim.ramp_ratio"),
-    "ablation": ("learning.ablation_model", "learning.folds", "learning.repeats", "learning.seed"),
-    "selector": ("learning.models", "learning.seed", "learning.test_fraction", "selector", "sim"),
-    "benchmark": ("learning", "selector", "sim", "grasp.mu"),
-    "calibration": ("grasp", "objects", "perception", "synthesis", "sim", "uncertainty",
-                    "dataset.seed", "dataset.trials", "dataset.max_grips_per_object",
-                    "dataset.sampling"),
-    "perception": ("grasp", "objects", "perception", "synthesis", "sim", "uncertainty",
-                   "dataset", "learning.seed"),
-}
+
+
+@dataclass(frozen=True)
+class StudyRun:
+    """What every stage of one study reads: the configuration, the dataset (its folder and its
+    loaded table) and the folder the study writes to."""
+
+    config: Config
+    data_dir: Path
+    table: pd.DataFrame
+    checksum: str  # the table's (:func:`classifiers.learners.persistence.dataset_checksum`)
+    out: Path
+    quick: bool = False
+    log: Callable[[str], None] = print
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One step of the study: the config fields it reads (a section, or ``section.field``), the
+    result file that marks it done (relative to the study folder) and what runs it."""
+
+    name: str
+    inputs: tuple[str, ...]
+    result: str
+    run: Callable[[StudyRun], object]
+
+
+def _classifiers(run: StudyRun) -> object:
+    from classifiers.experiments.training import train_and_save
+
+    return train_and_save(run.table, run.out / "classifiers", run.config)
+
+
+def _ablation(run: StudyRun) -> object:
+    from classifiers.experiments.ablation import run_ablation
+
+    return run_ablation(run.table, run.out / "ablation", run.config)
+
+
+def _selector(run: StudyRun) -> object:
+    from classifiers.experiments.selector.seeds import run_selectors
+
+    return run_selectors(run.table, run.out / "selector", run.config)
+
+
+def _benchmark(run: StudyRun) -> object:
+    from classifiers.experiments.benchmark import study_benchmark
+
+    return study_benchmark(run.table, run.out, run.config)
+
+
+def _calibration(run: StudyRun) -> object:
+    return run_calibration(run.config, run.out / "calibration", run.table, run.quick, run.log)
+
+
+def _perception(run: StudyRun) -> object:
+    from classifiers.experiments.perception_effect import run_perception_effect
+
+    return run_perception_effect(run.config, run.data_dir, run.out / "perception")
+
+
+#: The study's stages, in the order they run (the selector's baselines are the classifiers'
+#: learners; the benchmark reads both stages' scores).
+STAGES: tuple[Stage, ...] = (
+    Stage("classifiers", ("learning", "selector.max_candidates", "sim.ramp_levels_g",
+                          "sim.ramp_ratio"), "classifiers/metrics.json", _classifiers),
+    Stage("ablation", ("learning.ablation_model", "learning.folds", "learning.repeats",
+                       "learning.seed"), "ablation/ablation.json", _ablation),
+    Stage("selector", ("learning.models", "learning.seed", "learning.test_fraction", "selector",
+                       "sim"), "selector/selector.json", _selector),
+    Stage("benchmark", ("learning", "selector", "sim", "grasp.mu"),
+          "benchmark/leaderboard.json", _benchmark),
+    Stage("calibration", ("grasp", "objects", "perception", "synthesis", "sim", "uncertainty",
+                          "dataset.seed", "dataset.trials", "dataset.max_grips_per_object",
+                          "dataset.sampling"), "calibration/calibration.json", _calibration),
+    Stage("perception", ("grasp", "objects", "perception", "synthesis", "sim", "uncertainty",
+                         "dataset", "learning.seed"), "perception/perception.json", _perception),
+)
+#: The config fields each stage reads, by stage name.
+STAGE_INPUTS: dict[str, tuple[str, ...]] = {stage.name: stage.inputs for stage in STAGES}
 
 
 def quick_overrides(config: Config) -> dict[str, dict[str, Any]]:
@@ -79,7 +148,7 @@ def describe_quick(config: Config) -> str:
 def run_study(
     config: Config, out: str | Path, quick: bool = False, log: Callable[[str], None] = print
 ) -> Path:
-    """Run every stage into ``out`` and return the path of ``report.md``.
+    """Run every stage of :data:`STAGES` into ``out`` and return the path of ``report.md``.
 
     Learner names of ``config.learning`` are checked first: an unknown one is a ``ValueError``
     naming its key before the dataset stage spends minutes; so is a dataset in ``out`` labelled
@@ -92,13 +161,20 @@ def run_study(
     if quick:
         log(f"[study] {describe_quick(config)}")
     config = study_config(config, quick)
-    timings: dict[str, float] = {}
+    run, timings = dataset_stage(config, out, quick, log)
+    for stage in STAGES:
+        timings |= run_stage(stage, run)
+    _merge_timings(out / "timings.json", timings)
+    log("[study] report ...")
+    from classifiers.report.study_report import write_report
 
-    from classifiers.experiments.ablation import run_ablation
-    from classifiers.experiments.benchmark import study_benchmark
-    from classifiers.experiments.perception_effect import run_perception_effect
-    from classifiers.experiments.selector.seeds import run_selectors
-    from classifiers.experiments.training import train_and_save
+    return write_report(out, config, run.table)
+
+
+def dataset_stage(
+    config: Config, out: Path, quick: bool, log: Callable[[str], None]
+) -> tuple[StudyRun, dict[str, float]]:
+    """Generate (or resume, or reuse) the study's dataset in ``out/dataset`` and load it."""
     from classifiers.learners.persistence import dataset_checksum
     from grip_env.dataset import generate, load
 
@@ -107,45 +183,32 @@ def run_study(
     start = time.perf_counter()
     generate(config, data_dir)
     reused = before is not None and before == _manifest_created(data_dir)
-    if not reused:  # a reused stage keeps the time it took when it ran
-        timings["dataset"] = time.perf_counter() - start
     log(f"[study] dataset: {'reusing' if reused else 'generated'} {data_dir}")
+    # a reused stage keeps the time it took when it ran
+    timings = {} if reused else {"dataset": time.perf_counter() - start}
     table = load(data_dir)
-    checksum = dataset_checksum(table)
+    return StudyRun(config, data_dir, table, dataset_checksum(table), out, quick, log), timings
 
-    def stage(name: str, done: Path, run: Callable[[], object]) -> None:
-        record = stage_record(name, config, checksum, quick)
-        marker = done.parent / STAGE_FILE
-        if done.exists() and _stored_key(marker) == record["key"]:
-            log(f"[study] {name}: reusing {done}")
-            return
-        if done.exists():
-            log(f"[study] {name}: {changed_inputs(_stored(marker), record)} changed, recomputing")
-        log(f"[study] {name} ...")
-        start = time.perf_counter()
-        run()
-        timings[name] = time.perf_counter() - start
-        record["written"] = datetime.now(UTC).isoformat(timespec="seconds")
-        marker.write_text(json.dumps(record, indent=2))
-        log(f"[study] {name} done in {timings[name]:.1f} s")
 
-    stage("classifiers", out / "classifiers" / "metrics.json",
-          lambda: train_and_save(table, out / "classifiers", config))
-    stage("ablation", out / "ablation" / "ablation.json",
-          lambda: run_ablation(table, out / "ablation", config))
-    stage("selector", out / "selector" / "selector.json",
-          lambda: run_selectors(table, out / "selector", config))
-    stage("benchmark", out / "benchmark" / "leaderboard.json",
-          lambda: study_benchmark(table, out, config))
-    stage("calibration", out / "calibration" / "calibration.json",
-          lambda: run_calibration(config, out / "calibration", table, quick, log))
-    stage("perception", out / "perception" / "perception.json",
-          lambda: run_perception_effect(config, data_dir, out / "perception"))
-    _merge_timings(out / "timings.json", timings)
-    log("[study] report ...")
-    from classifiers.report.study_report import write_report
-
-    return write_report(out, config, table)
+def run_stage(stage: Stage, run: StudyRun) -> dict[str, float]:
+    """Run ``stage`` unless its result exists with an unchanged key; its time, if it ran."""
+    record = stage_record(stage.name, run.config, run.checksum, run.quick)
+    done = run.out / stage.result
+    marker = done.parent / STAGE_FILE
+    if done.exists() and _stored_key(marker) == record["key"]:
+        run.log(f"[study] {stage.name}: reusing {done}")
+        return {}
+    if done.exists():
+        run.log(f"[study] {stage.name}: {changed_inputs(_stored(marker), record)} changed, "
+                "recomputing")
+    run.log(f"[study] {stage.name} ...")
+    start = time.perf_counter()
+    stage.run(run)
+    took = time.perf_counter() - start
+    record["written"] = datetime.now(UTC).isoformat(timespec="seconds")
+    marker.write_text(json.dumps(record, indent=2))
+    run.log(f"[study] {stage.name} done in {took:.1f} s")
+    return {stage.name: took}
 
 
 def check_learner_names(config: Config) -> None:
