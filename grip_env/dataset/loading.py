@@ -9,7 +9,7 @@ import pandas as pd
 
 from grip_env.columns import DATASET_COLUMNS
 from grip_env.dataset.manifest import FORMAT, MANIFEST_FILE, Manifest, read_manifest, shard_records
-from grip_env.dataset.shards import GRIP_SCHEMA, read_shard
+from grip_env.dataset.shards import GRIP_SCHEMA, ShardReader
 from grip_env.label_model import label_model_of, label_model_warning
 
 
@@ -39,10 +39,9 @@ def load(path: str | Path, verify: bool = True, allow_partial: bool = False) -> 
             f"dataset {directory} is unfinished: {len(missing)} of {len(order)} objects missing "
             f"(first: {missing[0]}); rerun the same generate command to complete it"
         )
-    parts = [
-        read_shard(directory / records[object_id].file, records[object_id] if verify else None)
-        for object_id in order if object_id in records
-    ]
+    reader = ShardReader(directory)
+    parts = [reader.record(records[object_id], verify) for object_id in order
+             if object_id in records]
     grips = pd.concat(parts, ignore_index=True) if parts else _empty_grips()
     grips = grips.loc[:, list(DATASET_COLUMNS)]
     grips.attrs["params"] = dict(manifest["params"])

@@ -1,4 +1,8 @@
-"""Parquet shards: one file of grips per object, with a fixed Arrow schema and run metadata."""
+"""Parquet shards: one file of grips per object, with a fixed Arrow schema and run metadata.
+
+A finished dataset may be packed (:mod:`grip_env.dataset.packing`): every object's grips then
+stand in one file, ``grips/grips.parquet``, and each object's record says where its rows start.
+"""
 
 from __future__ import annotations
 
@@ -31,8 +35,11 @@ _TYPES: dict[str, pa.DataType] = {
 #: Arrow schema of every grip shard: DATASET_COLUMNS in order; descriptors and features float64.
 GRIP_SCHEMA = pa.schema([(name, _TYPES.get(name, pa.float64())) for name in DATASET_COLUMNS])
 NON_FLOAT_COLUMNS = tuple(name for name in IDENTITY + OUTCOMES if name != "success_rate")
-#: A shard's file name inside the dataset: ``grips/part-<index>-<safe object id>.parquet``.
-SHARD_FILE = re.compile(rf"{GRIPS_DIR}/part-\d{{6}}-[A-Za-z0-9_.-]+\.parquet")
+#: The one file of a packed dataset, relative to the dataset.
+PACKED_FILE = f"{GRIPS_DIR}/grips.parquet"
+#: A shard's file name inside the dataset: ``grips/part-<index>-<safe object id>.parquet``, or
+#: the packed file.
+SHARD_FILE = re.compile(rf"{GRIPS_DIR}/(part-\d{{6}}-[A-Za-z0-9_.-]+|grips)\.parquet")
 
 
 def _equivalent_types() -> dict[pa.DataType, pa.DataType]:
@@ -67,14 +74,21 @@ def schema_problems(name: str, schema: pa.Schema) -> list[str]:
 
 @dataclass(frozen=True)
 class ShardRecord:
-    """A completed shard as the manifest lists it."""
+    """A completed shard as the manifest lists it: its file, rows and the file's SHA-256; in a
+    packed dataset the object's rows are ``rows`` rows of the packed file from ``offset``."""
 
     file: str
     rows: int
     sha256: str
+    offset: int = 0
+
+    @property
+    def packed(self) -> bool:
+        return self.file == PACKED_FILE
 
     def as_dict(self) -> dict[str, Any]:
-        return {"file": self.file, "rows": self.rows, "sha256": self.sha256}
+        record = {"file": self.file, "rows": self.rows, "sha256": self.sha256}
+        return record | {"offset": self.offset} if self.packed else record
 
 
 def shard_path(directory: Path, index: int, object_id: str) -> Path:
@@ -118,6 +132,48 @@ def read_shard(path: Path, expected: ShardRecord | None = None) -> pd.DataFrame:
         ValueError: the file is missing, unreadable, of another schema, or differs from
             ``expected``.
     """
+    return ShardReader(path.parent.parent).read(path, expected)
+
+
+class ShardReader:
+    """Reads the shards of one dataset, each file once: a packed dataset's file holds every
+    object, so its checksum, schema and rows are checked once, then sliced per object."""
+
+    def __init__(self, directory: Path) -> None:
+        self.directory = Path(directory)
+        self._tables: dict[Path, pa.Table] = {}
+
+    def record(self, record: ShardRecord, verify: bool = True) -> pd.DataFrame:
+        """The rows of the object ``record`` lists (checked against it when ``verify``)."""
+        path = self.directory / record.file
+        if not verify:
+            return self._slice(self._table(path, None), record, path)
+        return self.read(path, record)
+
+    def read(self, path: Path, expected: ShardRecord | None = None) -> pd.DataFrame:
+        """The rows of ``path`` (of the object ``expected`` lists, when it is packed)."""
+        table = self._table(path, expected)
+        if expected is not None and not expected.packed and table.num_rows != expected.rows:
+            raise ValueError(f"shard {path} has {table.num_rows} rows, manifest says "
+                             f"{expected.rows}")
+        return self._slice(table, expected, path)
+
+    def _slice(self, table: pa.Table, record: ShardRecord | None, path: Path) -> pd.DataFrame:
+        if record is not None and record.packed:
+            if record.offset < 0 or record.offset + record.rows > table.num_rows:
+                raise ValueError(f"shard {path} has {table.num_rows} rows, the manifest places "
+                                 f"rows {record.offset}..{record.offset + record.rows} in it")
+            table = table.slice(record.offset, record.rows)
+        return table.select(list(DATASET_COLUMNS)).to_pandas()
+
+    def _table(self, path: Path, expected: ShardRecord | None) -> pa.Table:
+        if path not in self._tables:
+            self._tables[path] = _read_checked(path, expected)
+        return self._tables[path]
+
+
+def _read_checked(path: Path, expected: ShardRecord | None) -> pa.Table:
+    """A shard file's table, its checksum (against ``expected``) and schema checked."""
     if not path.is_file():
         raise ValueError(f"shard {path} is missing")
     if expected is not None and sha256_of(path) != expected.sha256:
@@ -126,13 +182,11 @@ def read_shard(path: Path, expected: ShardRecord | None = None) -> pd.DataFrame:
         table = pq.read_table(path)
     except (OSError, pa.ArrowException) as exc:
         raise ValueError(f"shard {path} is corrupt: {exc}") from None
-    if expected is not None and table.num_rows != expected.rows:
-        raise ValueError(f"shard {path} has {table.num_rows} rows, manifest says {expected.rows}")
     problems = schema_problems(str(path), table.schema)
     if problems:
         raise ValueError(f"shard {problems[0]}" + (f" (and {len(problems) - 1} more)"
                                                   if len(problems) > 1 else ""))
-    return table.select(list(DATASET_COLUMNS)).to_pandas()
+    return table
 
 
 def shard_metadata(path: Path) -> dict[str, Any]:

@@ -39,12 +39,16 @@ def validate(path: str | Path) -> list[str]:
     records = shard_records(manifest)
     params = GraspParams(**manifest["params"])
     grip_ids: list[pd.Series] = []
+    files: dict[str, tuple[list[str], pa.Table | None]] = {}
     for entry in manifest["objects"]:
         record = records.get(entry["object_id"])
         if record is None:
             problems.append(f"object {entry['object_id']}: no shard (run unfinished)")
             continue
-        found, grips = _shard_problems(directory, record)
+        if record.file not in files:  # a packed dataset's one file is checked once
+            files[record.file] = _file_problems(directory, record)
+            problems += files[record.file][0]
+        found, grips = _shard_rows(record, files[record.file][1])
         problems += found
         if grips is not None:
             problems += _row_problems(record.file, grips, params, entry["object_id"])
@@ -97,8 +101,8 @@ def _is_contour(contour: list | None) -> bool:
     return points.ndim == 2 and points.shape[1] == 2 and bool(np.isfinite(points).all())
 
 
-def _shard_problems(directory: Path, record: ShardRecord) -> tuple[list[str], pd.DataFrame | None]:
-    """Problems of one shard file, and its rows when it could be read."""
+def _file_problems(directory: Path, record: ShardRecord) -> tuple[list[str], pa.Table | None]:
+    """Problems of one shard file (presence, checksum, schema), and its table when readable."""
     path = directory / record.file
     if not path.is_file():
         return [f"{record.file}: missing"], None
@@ -109,11 +113,25 @@ def _shard_problems(directory: Path, record: ShardRecord) -> tuple[list[str], pd
         table = pq.read_table(path)
     except (OSError, pa.ArrowException) as exc:
         return [*problems, f"{record.file}: unreadable Parquet ({exc})"], None
-    if table.num_rows != record.rows:
-        problems.append(f"{record.file}: {table.num_rows} rows, manifest says {record.rows}")
     problems_of_schema = schema_problems(record.file, table.schema)
     if problems_of_schema:
         return problems + problems_of_schema, None
+    return problems, table
+
+
+def _shard_rows(
+    record: ShardRecord, table: pa.Table | None
+) -> tuple[list[str], pd.DataFrame | None]:
+    """The object's rows of its (checked) file, and a problem if the manifest's count is off."""
+    if table is None:
+        return [], None
+    if record.packed:
+        if record.offset < 0 or record.offset + record.rows > table.num_rows:
+            return [f"{record.file}: {table.num_rows} rows, the manifest places rows "
+                    f"{record.offset}..{record.offset + record.rows} in it"], None
+        return [], table.slice(record.offset, record.rows).to_pandas()
+    problems = ([f"{record.file}: {table.num_rows} rows, manifest says {record.rows}"]
+                if table.num_rows != record.rows else [])
     return problems, table.to_pandas()
 
 
