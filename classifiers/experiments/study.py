@@ -16,7 +16,7 @@ import hashlib
 import json
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -91,6 +91,22 @@ def _calibration(run: StudyRun) -> object:
     return run_calibration(run.config, run.out / "calibration", run.table, run.quick, run.log)
 
 
+def _replication(run: StudyRun) -> object:
+    """A seeded sample of the given dataset's grips simulated again from its recipe."""
+    from grip_env.dataset.resimulation import resimulate
+
+    grips = REPLICATION_GRIPS_QUICK if run.quick else REPLICATION_GRIPS
+    found = resimulate(run.data_dir, grips, seed=run.config.learning.seed,
+                       workers=run.config.dataset.workers)
+    run.log(f"[study] replication: {found.summary()}")
+    result = {"dataset": str(run.data_dir), "seed": run.config.learning.seed, **asdict(found),
+              "identical": found.identical, "summary": found.summary()}
+    path = run.out / REPLICATION.result
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(result, indent=2))
+    return result
+
+
 def _perception(run: StudyRun) -> object:
     from classifiers.experiments.perception_effect import run_perception_effect
 
@@ -114,8 +130,17 @@ STAGES: tuple[Stage, ...] = (
     Stage("perception", ("grasp", "objects", "perception", "synthesis", "sim", "uncertainty",
                          "dataset", "learning.seed"), "perception/perception.json", _perception),
 )
+#: A study on a given dataset (``--data``) first re-simulates a seeded sample of it: are its
+#: labels what this code makes from its recipe?
+REPLICATION = Stage("replication", ("learning.seed",), "replication/replication.json",
+                    _replication)
+#: Grips re-simulated by the replication stage (5 an object: 20 objects), and with ``--quick``.
+REPLICATION_GRIPS, REPLICATION_GRIPS_QUICK = 100, 10
 #: The config fields each stage reads, by stage name.
-STAGE_INPUTS: dict[str, tuple[str, ...]] = {stage.name: stage.inputs for stage in STAGES}
+STAGE_INPUTS: dict[str, tuple[str, ...]] = {
+    stage.name: stage.inputs for stage in (REPLICATION, *STAGES)}
+#: Where a study records which dataset it learned on.
+DATA_FILE = "data.json"
 
 
 def quick_overrides(config: Config) -> dict[str, dict[str, Any]]:
@@ -146,29 +171,81 @@ def describe_quick(config: Config) -> str:
 
 
 def run_study(
-    config: Config, out: str | Path, quick: bool = False, log: Callable[[str], None] = print
+    config: Config, out: str | Path, quick: bool = False, log: Callable[[str], None] = print,
+    data: str | Path | None = None,
 ) -> Path:
     """Run every stage of :data:`STAGES` into ``out`` and return the path of ``report.md``.
 
+    Without ``data`` the study generates its dataset from ``config`` into ``out/dataset``. With
+    ``data`` (a dataset folder, or ``"standard"``) it learns on that dataset, under the
+    dataset's own recipe (its recorded config, with ``config``'s ``learning`` and ``selector``),
+    and first re-simulates a seeded sample of it (:data:`REPLICATION`).
+
     Learner names of ``config.learning`` are checked first: an unknown one is a ``ValueError``
-    naming its key before the dataset stage spends minutes; so is a dataset in ``out`` labelled
-    by another label model (:func:`check_label_model`).
+    naming its key before the dataset stage spends minutes; so is a dataset labelled by another
+    label model (:func:`check_label_model`).
     """
     check_learner_names(config)
     out = Path(out)
-    check_label_model(out / "dataset")
+    data_dir = out / "dataset" if data is None else resolve_dataset(data)
+    check_label_model(data_dir)
     out.mkdir(parents=True, exist_ok=True)
     if quick:
         log(f"[study] {describe_quick(config)}")
     config = study_config(config, quick)
-    run, timings = dataset_stage(config, out, quick, log)
-    for stage in STAGES:
+    if data is None:
+        run, timings = dataset_stage(config, out, quick, log)
+        stages = STAGES
+    else:
+        run, timings = given_dataset(config, data_dir, out, quick, log), {}
+        stages = (REPLICATION, *STAGES)
+    (out / DATA_FILE).write_text(json.dumps(
+        {"dataset": str(run.data_dir.resolve()), "sha256": run.checksum,
+         "generated": data is None}, indent=2))
+    for stage in stages:
         timings |= run_stage(stage, run)
     _merge_timings(out / "timings.json", timings)
     log("[study] report ...")
     from classifiers.report.study_report import write_report
 
-    return write_report(out, config, run.table)
+    return write_report(out, run.config, run.table)
+
+
+def study_dataset(out: str | Path) -> Path:
+    """The dataset folder the study in ``out`` learned on (its own ``out/dataset``, or the one
+    given with ``data``)."""
+    recorded = _stored(Path(out) / DATA_FILE) or {}
+    return Path(recorded["dataset"]) if "dataset" in recorded else Path(out) / "dataset"
+
+
+def resolve_dataset(data: str | Path) -> Path:
+    """The folder of a ``data`` argument (``"standard"``: the shipped one); ValueError when it
+    holds no dataset."""
+    from grip_env.dataset.manifest import MANIFEST_FILE
+    from grip_env.datasets import resolve_data
+
+    folder = resolve_data(data)
+    if not (folder / MANIFEST_FILE).is_file():
+        raise ValueError(f"--data {data}: {folder} holds no grip-env dataset (no "
+                         f"{MANIFEST_FILE})")
+    return folder
+
+
+def given_dataset(
+    config: Config, data_dir: Path, out: Path, quick: bool, log: Callable[[str], None]
+) -> StudyRun:
+    """A study run on the dataset in ``data_dir``: its recipe, ``config``'s learning settings."""
+    from classifiers.learners.persistence import dataset_checksum
+    from grip_env.dataset import load
+
+    table = load(data_dir)
+    recipe = Config.model_validate(table.attrs["manifest"]["config"])
+    config = recipe.override(learning=config.learning.model_dump(),
+                             selector=config.selector.model_dump(),
+                             dataset={"workers": config.dataset.workers})
+    log(f"[study] dataset: learning on {data_dir} ({len(table)} grips, "
+        f"{table['object_id'].nunique()} objects)")
+    return StudyRun(config, data_dir, table, dataset_checksum(table), out, quick, log)
 
 
 def dataset_stage(

@@ -8,8 +8,8 @@ from typing import Annotated
 import typer
 
 from grip_env.cli.errors import user_errors
-from grip_env.cli.options import ConfigFile
-from grip_env.cli.paths import output_dir
+from grip_env.cli.options import DATA_HELP, ConfigFile, dataset_folder
+from grip_env.cli.paths import check_output_dir
 from grip_env.progress import shown
 from grip_env.shutdown import stop_on_signals
 
@@ -22,6 +22,12 @@ def study(
         typer.Option("--quick", help="tiny profile for tests: shrinks the settings the config "
                                      "leaves at their defaults, and says which"),
     ] = False,
+    data: Annotated[
+        Path | None,
+        typer.Option("--data", "-d", callback=dataset_folder,
+                     help=f"learn on this {DATA_HELP} (its own recipe; a seeded sample of it "
+                          "is re-simulated first) instead of generating one into OUT/dataset"),
+    ] = None,
     update_readme: Annotated[
         bool,
         typer.Option("--update-readme",
@@ -33,13 +39,14 @@ def study(
 ) -> None:
     """Run the whole study and write OUT/report.md and OUT/report.html.
 
-    Generates the dataset, trains and evaluates the classifiers, runs the ablation, trains and
-    evaluates the RL selector, then writes the report. A rerun reuses every stage whose inputs
+    Generates the dataset (or, with --data, re-simulates a seeded sample of the given one),
+    trains and evaluates the classifiers, runs the ablation, trains and evaluates the RL
+    selector, then writes the report. A rerun reuses every stage whose inputs
     (config fields, dataset, grip-env version) are unchanged and recomputes the others.
     Exit codes: 0 done, 1 internal error, 2 bad input, 130/143/129 stopped by a signal.
     """
     with stop_on_signals(f"rerun the same command to finish {out}"), user_errors(), shown():
-        output_dir(out)
+        check_output_dir(out)
         if update_readme and not readme.is_file():
             raise ValueError(f"--readme {readme} is not a file")
         from classifiers.experiments.study import run_study
@@ -47,7 +54,8 @@ def study(
         from grip_env.dataset import DatasetMismatchError
 
         try:
-            report = run_study(load_config(config), out, quick=quick, log=typer.echo)
+            report = run_study(load_config(config), out, quick=quick, log=typer.echo,
+                               data=data)
         except DatasetMismatchError as exc:  # its advice names generate's --overwrite
             reason = str(exc).split("; use --overwrite", 1)[0]
             raise ValueError(
@@ -59,14 +67,15 @@ def study(
 
 
 def _update_readme(out: Path, readme: Path) -> None:
-    from classifiers.experiments.study import package_version
+    from classifiers.experiments.study import package_version, study_dataset
     from classifiers.report.readme import results_block, update_readme
     from classifiers.report.study_report import source_commit
     from grip_env.dataset import dataset_manifest, load
 
     # The commit that generated the stored run's dataset, not the checkout rewriting the README.
-    commit = (dataset_manifest(out / "dataset").get("git_commit") or source_commit())[:7]
-    block = results_block(out, load(out / "dataset"), commit, package_version())
+    data_dir = study_dataset(out)
+    commit = (dataset_manifest(data_dir).get("git_commit") or source_commit())[:7]
+    block = results_block(out, load(data_dir), commit, package_version())
     update_readme(readme, block)
     typer.echo(f"updated the results block of {readme}")
 
