@@ -14,6 +14,7 @@ from grip_env.cli.paths import output_file
 if TYPE_CHECKING:
     from grip_env.config import Config
     from grip_env.objects import PlanarObject
+    from grip_env.sim import TrialResult
 
 
 def show(
@@ -25,15 +26,24 @@ def show(
     out: Annotated[
         Path, typer.Option("--out", "-o", help="PNG file to write (its name ends in .png)")
     ] = Path("show.png"),
-    grips: Annotated[int, typer.Option(help="draw the best N grips by Q_C (0: regions only)")] = 0,
+    grips: Annotated[int, typer.Option(
+        help="draw the best N grips by Q_C (0: regions only); with --sim, simulate the best N "
+             "(0 or 1: the best grip), one row of frames each"
+    )] = 0,
     config: ConfigFile = None,
     mm_per_px: Annotated[float | None, typer.Option(
         help="scale of an image object (default: the scale.yaml of its folder, else 1)"
     )] = None,
-    sim: Annotated[bool, typer.Option("--sim", help="simulate the best grip")] = False,
-    seed: Annotated[int, typer.Option(min=0, help="seed of the simulated trial")] = 0,
+    sim: Annotated[bool, typer.Option(
+        "--sim", help="simulate the best grip (or the best --grips N) in PyBullet and draw its "
+                      "phases: approach, close, lift, disturbance ramp; prints each outcome"
+    )] = False,
+    seed: Annotated[int, typer.Option(
+        min=0, help="seed of the simulated trial's draw (friction, mass, placement error)"
+    )] = 0,
 ) -> None:
-    """Draw OBJECT with its grasping regions (and grips) to a PNG."""
+    """Draw OBJECT with its grasping regions (and grips) to a PNG, or with --sim the phases of
+    simulated trials of its best grips."""
     with user_errors():
         if grips < 0:
             raise ValueError(f"--grips must be >= 0, got {grips}")
@@ -41,6 +51,7 @@ def show(
 
         output_file(out, ".png")
         cfg = load_config(config)
+        _refuse_missing_file(obj)
         several = _several_objects(obj, mm_per_px, cfg)
         if several is not None:
             if sim:
@@ -48,9 +59,25 @@ def show(
             path = _draw_sheet(several, cfg, out)
         else:
             planar = _load_object(obj, mm_per_px, cfg)
-            path = (_render_trial(planar, cfg, seed, out) if sim
+            path = (_render_trial(planar, cfg, max(grips, 1), seed, out) if sim
                     else _draw(planar, cfg, grips, out))
     typer.echo(f"wrote {path}")
+
+
+def _refuse_missing_file(spec: str) -> None:
+    """Refuse a spec that names a file (by its suffix, or a folder in its path) that is not there,
+    as a missing file rather than as an unknown object name."""
+    from grip_env.objects.sources import IMAGE_SUFFIXES, VERTEX_SUFFIXES, is_path_spec
+
+    path = Path(spec)
+    if is_path_spec(spec):  # an existing path, or a glob
+        return
+    kinds = {**dict.fromkeys(IMAGE_SUFFIXES, "image file"),
+             **dict.fromkeys(VERTEX_SUFFIXES, "vertex file"), ".obj": "mesh file"}
+    kind = kinds.get(path.suffix.lower(), "file" if len(path.parts) > 1 else None)
+    if kind is not None:
+        where = "" if path.is_absolute() else f" (looked for {path.absolute()})"
+        raise FileNotFoundError(f"{kind} {spec} does not exist{where}")
 
 
 def _several_objects(spec: str, mm_per_px: float | None, cfg: Config) -> list[PlanarObject] | None:
@@ -128,17 +155,47 @@ def _draw(planar: PlanarObject, cfg: Config, grips: int, out: Path) -> Path:
     return save_figure(object_figure(planar, regions, table, title), out)
 
 
-def _render_trial(planar: PlanarObject, cfg: Config, seed: int, out: Path) -> Path:
+def _render_trial(planar: PlanarObject, cfg: Config, grips: int, seed: int, out: Path) -> Path:
+    """Simulate the best ``grips`` grips (trial 0 of ``seed`` each), print each outcome and draw
+    each trial's phases in one row."""
+    from grip_env.drawing import save_figure, trial_figure
     from grip_env.planning.pipeline import candidates
-    from grip_env.sim import render_trial_strip
+    from grip_env.sim import TRIAL_PHASES, trial_frames
 
     table = candidates(planar, cfg.grasp, cfg)
     if table.empty:
         raise ValueError(f"object {planar.name!r} has no feasible grip to simulate")
-    result = render_trial_strip(planar, table.iloc[0], cfg, seed, out)
-    outcome = "held" if result.success else "slipped"
-    typer.echo(f"trial of {table.iloc[0]['grip_id']}: {outcome} (drift {result.drift_mm:.1f} mm)")
-    return out
+    best = table.head(grips)
+    trials = trial_frames(planar, best, cfg, seed, width=360, height=270)
+    rows = []
+    for rank, ((_, grip), (result, frames)) in enumerate(
+        zip(best.iterrows(), trials, strict=True), start=1
+    ):
+        outcome = result.describe()
+        typer.echo(f"trial of {grip['grip_id']}: {outcome}")
+        phases = [(_phase_title(phase, result), frames.get(phase)) for phase in TRIAL_PHASES]
+        rows.append((f"#{rank} by Q_C ({grip['Q_C']:.2f}), grip {grip['grip_id']}: {outcome}",
+                     phases))
+    grips_text = "the best grip" if len(best) == 1 else f"the best {len(best)} grips"
+    title = f"{planar.name}: a simulated trial (seed {seed}) of {grips_text} by Q_C"
+    return save_figure(trial_figure(rows, title), out)
+
+
+def _phase_title(phase: str, result: TrialResult) -> str:
+    """A frame's title: the phase, and what the trial measured in it."""
+    from grip_env.sim.trial import grams
+
+    if phase == "approach":
+        return "1 approach\nthe pre-shaped hand lowered"
+    if phase == "closed":
+        return f"2 close\nfingers stopped after {result.close_steps} steps"
+    if phase == "held":
+        return (f"3 lift and hold\nrose {result.lifted_mm:.0f} mm, drift {result.drift_mm:.1f} mm, "
+                f"turn {result.rotation_deg:.1f} deg")
+    if not result.held:
+        return "4 disturbance ramp\nnot run: not held after the lift"
+    return (f"4 disturbance ramp\nheld up to {grams(result.robustness_g)} "
+            f"(reference {grams(result.reference_g)})")
 
 
 def register(app: typer.Typer) -> None:

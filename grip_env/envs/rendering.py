@@ -106,7 +106,9 @@ class SceneCamera:
         scene = self._scene_of(obj)
         frames: list[NDArray[np.uint8]] = []
 
-        def capture(_phase: str, current: Any) -> None:
+        def capture(phase: str, current: Any) -> None:
+            if phase == "ramp":  # the hold is the picture; the ramp leaves the object pushed
+                return
             palm, _ = current.hand.palm_pose_mm()
             frames.append(self._shot(current, np.array([*palm[:2], 0.5 * palm[2]])))
 

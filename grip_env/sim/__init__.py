@@ -4,8 +4,9 @@
 from grip_env.sim.world import MM, Body, World  # isort: skip
 from grip_env.label_model import LABEL_MODEL, label_model_of, label_model_warning
 from grip_env.sim.execution import OUTCOME_COLUMNS, run_trial_outcomes, run_trials
+from grip_env.sim.frames import render_trial_strip, trial_frames
 from grip_env.sim.hand import HAND_URDF, Hand
-from grip_env.sim.trial import GripPlan, TrialResult, TrialScene, grip_plans, render_trial_strip
+from grip_env.sim.trial import TRIAL_PHASES, GripPlan, TrialResult, TrialScene, grip_plans
 from grip_env.sim.uncertainty import TrialNoise, object_mass_kg, sample_noise, zero_noise
 
 __all__ = [
@@ -13,6 +14,7 @@ __all__ = [
     "LABEL_MODEL",
     "MM",
     "OUTCOME_COLUMNS",
+    "TRIAL_PHASES",
     "Body",
     "GripPlan",
     "Hand",
@@ -28,5 +30,6 @@ __all__ = [
     "run_trial_outcomes",
     "run_trials",
     "sample_noise",
+    "trial_frames",
     "zero_noise",
 ]

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -48,6 +47,8 @@ APPROACH_MM = 10.0  # the pre-shaped hand is lowered this far onto its grip heig
 APPROACH_STEPS = 8
 SETTLE_STEPS = 8
 STALL_SPEED = 0.05  # rad/s: a finger whose joints move slower than this has stopped
+#: The phases ``TrialScene.run`` reports to ``on_phase``, in order (the ramp only when held).
+TRIAL_PHASES = ("approach", "closed", "held", "ramp")
 
 
 @dataclass(frozen=True)
@@ -70,7 +71,10 @@ class TrialResult:
 
     ``held``: the object was lifted and stayed within the hold tolerance; ``robustness_g``: the
     disturbance level it then resisted (0 when not held); ``success``: robustness reached the
-    reference level. Drift (mm) and rotation (deg) are in the palm frame after the hold.
+    reference level ``reference_g``. Drift (mm) and rotation (deg) are in the palm frame after
+    the hold. ``failed_at`` names the phase the trial failed in: ``"lift"`` (the object did not
+    rise with the hand), ``"hold"`` (it rose but moved in the hand past the hold tolerance),
+    ``"ramp"`` (held, but below the reference disturbance), ``""`` when it succeeded.
     """
 
     success: bool
@@ -81,6 +85,28 @@ class TrialResult:
     lifted_mm: float
     steps: int
     close_steps: int
+    reference_g: float
+    failed_at: str
+
+    def describe(self) -> str:
+        """The outcome in words, from this trial's own fields."""
+        if self.failed_at == "lift":
+            return f"dropped at the lift (the object rose only {self.lifted_mm:.1f} mm)"
+        if self.failed_at == "hold":
+            return (f"slipped in the hand at the lift (drift {self.drift_mm:.1f} mm, "
+                    f"turn {self.rotation_deg:.1f} deg after the hold)")
+        reference = f"the reference of {grams(self.reference_g)}"
+        if self.success:
+            return f"held up to {grams(self.robustness_g)} against {reference}"
+        if self.robustness_g <= 0:
+            return f"held after the lift, then slipped at the ramp's first level ({reference})"
+        return (f"held after the lift, then slipped at the ramp: held up to "
+                f"{grams(self.robustness_g)}, short of {reference}")
+
+
+def grams(level_g: float) -> str:
+    """A disturbance level for people: ``64 g``, ``45.3 g``."""
+    return f"{level_g:.1f}".removesuffix(".0") + " g"
 
 
 def grip_plans(grips: pd.DataFrame) -> list[GripPlan]:
@@ -147,7 +173,9 @@ class TrialScene:
         self, plan: GripPlan, noise: TrialNoise,
         on_phase: Callable[[str, TrialScene], None] | None = None,
     ) -> TrialResult:
-        """Execute ``plan`` under ``noise``; ``on_phase(name, scene)`` is called at each phase.
+        """Execute ``plan`` under ``noise``; ``on_phase(name, scene)`` is called at each phase
+        (``TRIAL_PHASES``: after the approach, the close, the lift and hold, and, when the
+        object was held, the disturbance ramp, the world as its last disturbance left it).
 
         Raises:
             ValueError: the plan is out of the hand's reach (no posture puts its pads there).
@@ -156,7 +184,7 @@ class TrialScene:
         self.fresh()
         palm, yaw, grip_z = self._place(plan, noise)
         counter = _StepCounter(self.world, self.hand)
-        notify = on_phase or (lambda name, scene: None)
+        notify = on_phase or (lambda name, scene: None)  # phases: TRIAL_PHASES
         self._approach(palm, yaw, grip_z, counter)
         notify("approach", self)
         close_steps = self._close(counter)
@@ -171,10 +199,15 @@ class TrialScene:
         lifted = self._object_height() - start_z
         held = (drift <= sim.hold_tolerance_mm and turn <= sim.hold_rotation_deg
                 and lifted > 0.5 * sim.lift_height_mm)
-        level = self._robustness(yaw, noise, counter) if held else 0.0
+        level = 0.0
+        if held:
+            level = self._robustness(yaw, noise, counter)
+            notify("ramp", self)
         success = held and reaches(level, sim.reference_level_g)
+        failed_at = ("" if success else "ramp" if held
+                     else "lift" if lifted <= 0.5 * sim.lift_height_mm else "hold")
         return TrialResult(bool(success), level, bool(held), drift, turn, float(lifted),
-                           counter.steps, close_steps)
+                           counter.steps, close_steps, float(sim.reference_level_g), failed_at)
 
     def posture(self, plan: GripPlan) -> ContactPosture:
         """The plan's contact posture (cached: it does not depend on a trial's noise)."""
@@ -300,36 +333,3 @@ class _StepCounter:
             hold()
             step()
         self.steps += n
-
-
-STRIP_PHASES = ("approach", "closed", "held")
-
-
-def render_trial_strip(
-    obj: PlanarObject, grip: pd.Series | dict, config: Config | None = None, seed: int = 0,
-    path: str | Path = "trial.png", width: int = 320, height: int = 240,
-) -> TrialResult:
-    """Run one trial of ``grip`` (a candidate row) and write a PNG strip of its phases.
-
-    Frames: approach, closed, held after the lift, seen obliquely from the side; the trial's
-    noise is trial 0's draw of the object (``seed``, the object's name). Returns the result.
-    """
-    from PIL import Image
-
-    from grip_env.sim.uncertainty import stable_key, trial_noises
-
-    row = pd.DataFrame([dict(grip)])
-    plan = grip_plans(row)[0]
-    frames: list[NDArray[np.uint8]] = []
-
-    def capture(name: str, scene: TrialScene) -> None:
-        palm, _ = scene.hand.palm_pose_mm()
-        target = np.array([*plan.palm_mm, 0.5 * palm[2]])
-        eye = target + np.array([260.0, -260.0, 160.0])
-        frames.append(scene.world.render(eye, target, width, height))
-
-    with TrialScene(obj, config) as scene:
-        noise = trial_noises(scene.config, seed, stable_key(obj.name), [0], [0])[0][0]
-        result = scene.run(plan, noise, on_phase=capture)
-    Image.fromarray(np.concatenate(frames, axis=1)).save(Path(path))
-    return result

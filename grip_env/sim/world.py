@@ -399,6 +399,12 @@ class World:
         self._external_torque(body, -1, np.asarray(torque_nm).tolist(), pybullet.WORLD_FRAME)
 
     # ------------------------------------------------------------------ camera
+    def set_colour(self, body: Body, rgba: tuple[float, float, float, float]) -> None:
+        """Paint every visual link of ``body`` in ``rgba`` (its look only: no physics changes)."""
+        c = self.client
+        for _, link, *_ in c.getVisualShapeData(body.uid):
+            c.changeVisualShape(body.uid, link, rgbaColor=list(rgba))
+
     def render_top_down(
         self, center_mm: NDArray[np.float64], resolution_px: int, mm_per_px: float,
         plane_z_mm: float = 0.0, height_mm: float = 1000.0,
