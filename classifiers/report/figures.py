@@ -8,10 +8,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
-from matplotlib.lines import Line2D
 
 from grip_env.columns import FEATURES
-from grip_env.drawing import draw_grip, draw_object, save_figure
+from grip_env.drawing import add_grip_legend, draw_grip, draw_object, grip_legend, save_figure
 from grip_env.objects import PlanarObject
 
 
@@ -126,20 +125,10 @@ def grip_gallery(
         ax.tick_params(labelsize=6)
     fig.supxlabel("x (mm)", fontsize=9)
     fig.supylabel("y (mm)", fontsize=9)
-    fig.legend(handles=_gallery_legend(), loc="upper center", ncol=4, fontsize=8,
-               frameon=False)  # fmt: skip
-    fig.tight_layout(rect=(0, 0, 1, 1 - 0.35 / max(rows * 3.2, 1)))
+    handles, labels = grip_legend(others="worst grip by Q_C (faint)")
+    top = add_grip_legend(fig, handles, labels, ncol=4, fontsize=8)
+    fig.tight_layout(rect=(0, 0, 1, 1 - top))
     return save_figure(fig, path, dpi=100)
-
-
-def _gallery_legend() -> list[Line2D]:
-    return [
-        Line2D([], [], color="tab:blue", linewidth=2, label="best grip by Q_C (opaque)"),
-        Line2D([], [], color="tab:blue", alpha=0.35, linewidth=2,
-               label="worst grip (faint); arrows: finger forces"),
-        Line2D([], [], marker="o", linestyle="", color="black", label="contact"),
-        Line2D([], [], marker="s", linestyle="", color="black", label="palm centre"),
-    ]
 
 
 def interval_bars(
