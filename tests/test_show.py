@@ -200,3 +200,15 @@ def test_show_says_a_missing_file_does_not_exist(runner, tmp_path, monkeypatch, 
     assert result.exit_code == 2
     assert f"error: {kind} {spec} does not exist (looked for {tmp_path / spec})" in result.output
     assert "known shape" not in result.output
+
+
+@pytest.mark.parametrize("command", ["generate", "show"])
+def test_a_missing_object_file_is_missing_for_generate_and_show_alike(runner, tmp_path,
+                                                                       monkeypatch, command):
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / ("data" if command == "generate" else "x.png")
+    flag = ["--objects", "nosuch.png"] if command == "generate" else ["nosuch.png"]
+    result = runner.invoke(app, [command, *flag, "--out", str(out)])
+    assert result.exit_code == 2
+    assert "error: image file nosuch.png does not exist" in result.output
+    assert not out.exists()

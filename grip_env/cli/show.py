@@ -48,10 +48,11 @@ def show(
         if grips < 0:
             raise ValueError(f"--grips must be >= 0, got {grips}")
         from grip_env.config import load_config
+        from grip_env.objects.sources import check_file_spec
 
         output_file(out, ".png")
         cfg = load_config(config)
-        _refuse_missing_file(obj)
+        check_file_spec(obj)
         several = _several_objects(obj, mm_per_px, cfg)
         if several is not None:
             if sim:
@@ -62,22 +63,6 @@ def show(
             path = (_render_trial(planar, cfg, max(grips, 1), seed, out) if sim
                     else _draw(planar, cfg, grips, out))
     typer.echo(f"wrote {path}")
-
-
-def _refuse_missing_file(spec: str) -> None:
-    """Refuse a spec that names a file (by its suffix, or a folder in its path) that is not there,
-    as a missing file rather than as an unknown object name."""
-    from grip_env.objects.sources import IMAGE_SUFFIXES, VERTEX_SUFFIXES, is_path_spec
-
-    path = Path(spec)
-    if is_path_spec(spec):  # an existing path, or a glob
-        return
-    kinds = {**dict.fromkeys(IMAGE_SUFFIXES, "image file"),
-             **dict.fromkeys(VERTEX_SUFFIXES, "vertex file"), ".obj": "mesh file"}
-    kind = kinds.get(path.suffix.lower(), "file" if len(path.parts) > 1 else None)
-    if kind is not None:
-        where = "" if path.is_absolute() else f" (looked for {path.absolute()})"
-        raise FileNotFoundError(f"{kind} {spec} does not exist{where}")
 
 
 def _several_objects(spec: str, mm_per_px: float | None, cfg: Config) -> list[PlanarObject] | None:

@@ -41,12 +41,27 @@ def object_from_spec(spec: str, mm_per_px: float = 1.0) -> PlanarObject:
     """A named shape, an image file (scaled by ``mm_per_px``), or a vertex file (.json or .csv)."""
     if spec in SHAPE_NAMES:
         return make_shape(spec)
+    check_file_spec(spec)
     path = Path(spec)
     if not path.exists():
         raise ValueError(
             f"object {spec!r} is neither a known shape ({', '.join(SHAPE_NAMES)}) nor a file"
         )
     return object_from_file(path, mm_per_px)
+
+
+def check_file_spec(spec: str) -> None:
+    """Refuse a spec that names a file (by its suffix, or a folder in its path) that is not
+    there, as a missing file rather than as an unknown object name (``FileNotFoundError``)."""
+    path = Path(spec)
+    if is_path_spec(spec):  # an existing path, or a glob
+        return
+    kinds = {**dict.fromkeys(IMAGE_SUFFIXES, "image file"),
+             **dict.fromkeys(VERTEX_SUFFIXES, "vertex file"), ".obj": "mesh file"}
+    kind = kinds.get(path.suffix.lower(), "file" if len(path.parts) > 1 else None)
+    if kind is not None:
+        where = "" if path.is_absolute() else f" (looked for {path.absolute()})"
+        raise FileNotFoundError(f"{kind} {spec} does not exist{where}")
 
 
 def is_path_spec(spec: str) -> bool:
