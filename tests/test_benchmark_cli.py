@@ -127,12 +127,14 @@ def test_other_split_versions(data: Path, methods: Path) -> None:
     assert not out.exists()
 
 
-def test_dataset_without_the_standard_objects_is_refused(methods: Path) -> None:
+def test_dataset_without_the_standard_objects_is_refused_by_the_standard_split(
+    methods: Path,
+) -> None:
     path = methods / "other.parquet"
     synthetic_grips(n_objects=8, grips=(4, 6), seed=1).to_parquet(path)
     out = methods / "never"
-    assert_refused(*cli("benchmark", "my_methods:by_qc", "--data", path, "--out", out),
-                   "standard split")  # fmt: skip
+    assert_refused(*cli("benchmark", "my_methods:by_qc", "--data", path, "--out", out,
+                        "--split", "standard"), "standard split", "--split auto")  # fmt: skip
     assert not out.exists()
 
 

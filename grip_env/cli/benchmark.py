@@ -1,7 +1,9 @@
-"""``grip-env benchmark``: score a user's grip selector on the standard split of a dataset."""
+"""``grip-env benchmark``: score a user's grip selector on the standard split of a dataset, or on
+a seeded split of its own objects when it lacks the standard ones."""
 
 from __future__ import annotations
 
+from enum import StrEnum
 from pathlib import Path
 from typing import Annotated
 
@@ -11,6 +13,14 @@ from grip_env.cli.errors import user_errors
 from grip_env.cli.notices import warn_label_model
 from grip_env.cli.options import ConfigFile, DatasetDir, OutputDir
 from grip_env.shutdown import stop_on_signals
+
+
+class SplitMode(StrEnum):
+    """``--split``: the standard split when DATA has its objects, else a seeded one (``auto``),
+    or the standard split only (``standard``)."""
+
+    auto = "auto"
+    standard = "standard"
 
 
 def benchmark(
@@ -27,18 +37,28 @@ def benchmark(
     config: ConfigFile = None,
     reps: Annotated[int, typer.Option(min=100, max=100_000,
                                       help="bootstrap resamples")] = 2000,
+    split: Annotated[SplitMode, typer.Option(
+        help="auto: the latest standard split whose held-out objects all have grips in DATA, "
+             "else a seeded split of DATA's own objects (named auto-not-standard: not "
+             "comparable with standard-split scores); standard: the standard split or an error "
+             "saying what fits")] = SplitMode.auto,
     split_version: Annotated[int | None, typer.Option(
-        help="standard split version [default: the latest, 3]; 2 = default datasets of the "
-             "60-object set with meshes, 1 = before the default objects gained meshes")] = None,
+        help="standard split version (implies --split standard) [default: the latest, 3]; 2 = "
+             "default datasets of the 60-object set with meshes, 1 = before the default objects "
+             "gained meshes")] = None,
+    seed: Annotated[int, typer.Option(min=0, help="seed of the auto split")] = 0,
 ) -> None:
     """Score METHODS on the standard split (grip-select-standard v3: 17 held-out objects of the
     default dataset, their 64 best candidates by Q_C) against best-Q_C, best-Q_G, epsilon, random
-    and the oracle.
+    and the oracle. A dataset without grips of the standard objects (a small one, or one whose
+    planning kept no grip of one of them) is scored on a seeded split of its own objects,
+    named auto-not-standard, unless --split standard is given.
 
     A function method takes one object's candidate table (outcomes removed, rows in slot order)
     and returns a score per row (higher = pick first) or one row index; with a `seed` argument it
-    is called once per training seed 0..4. Writes OUT/leaderboard.json, OUT/leaderboard.md and
-    the performance-profile and attempts figures; bad input writes nothing (exit 2).
+    is called once per training seed 0..4; `module` is imported from the current folder first.
+    Writes OUT/leaderboard.json, OUT/leaderboard.md and the performance-profile and attempts
+    figures; bad input writes nothing (exit 2).
     """
     with stop_on_signals(f"rerun the same command to redo {out}"), user_errors():
         from grip_env.config import load_config
@@ -56,10 +76,13 @@ def benchmark(
         if GROUP_COLUMN not in table.columns:
             raise ValueError(f"dataset {data} has no {GROUP_COLUMN!r} column")
         label = name or _default_name(methods[0])
-        board = benchmark_method(table, methods, label, cfg, reps, split_version)
+        board = benchmark_method(table, methods, label, cfg, reps, split_version, split.value,
+                                 seed)  # fmt: skip
         _check_out(out)
         written = write_leaderboard(board, out)
-    row = board["methods"][label]
+    row, chosen = board["methods"][label], board["split"]
+    typer.echo(f"split {chosen['name']} v{chosen['version']}"
+               + (f": {chosen['note']}" if chosen.get("note") else ""))  # fmt: skip
     typer.echo(f"{label}: top-1 success {row['success']:.3f}, normalised IQM "
                f"{row['iqm']['estimate']:.3f} [{row['iqm']['ci'][0]:.3f}, "
                f"{row['iqm']['ci'][1]:.3f}], {row['verdict']}")  # fmt: skip

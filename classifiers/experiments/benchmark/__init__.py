@@ -3,10 +3,11 @@
 >>> from classifiers.experiments.benchmark import benchmark_method
 >>> board = benchmark_method(table, ["mine.zip"], "mine", config)   # leaderboard dict
 
-Modules: ``split`` (the fixed, versioned standard split), ``methods`` (baselines and loaders of
-SB3 zips, skops files and ``module:function`` entry points, as score tables), ``selection``
-(exact per-object metrics), ``aggregate`` (rliable's IQM, stratified bootstrap, probability of
-improvement, performance profiles), ``leaderboard`` (tables, verdicts, files), ``plots``.
+Modules: ``split`` (the fixed, versioned standard split, or a seeded split of a dataset's own
+objects), ``methods`` (baselines and loaders of SB3 zips, skops files and ``module:function``
+entry points, as score tables), ``selection`` (exact per-object metrics), ``aggregate``
+(rliable's IQM, stratified bootstrap, probability of improvement, performance profiles),
+``leaderboard`` (tables, verdicts, files), ``plots``.
 """
 
 from __future__ import annotations
@@ -39,11 +40,14 @@ def method_kind(spec: str) -> str:
 
 def benchmark_method(
     table: pd.DataFrame, specs: Sequence[str], name: str, config: Config, reps: int = 2000,
-    split_version: int | None = None,
+    split_version: int | None = None, split: str = "auto", seed: int = 0,
 ) -> dict[str, Any]:
     """The leaderboard of one user method (``specs``: its runs, e.g. one zip per seed) against
-    the baselines, on the standard split. Raises ValueError on any bad input, before any file
-    is written."""
+    the baselines, on the split :func:`~classifiers.experiments.benchmark.split.choose_split`
+    picks (``split``: ``"auto"`` or ``"standard"``; ``seed``: the auto split's). Its ``split``
+    entry says which, ``standard`` whether it is the standard one and ``note`` why another.
+    Raises ValueError on any bad input, before any file is written."""
+    from classifiers.experiments.benchmark.leaderboard import NoRankableObject
     from classifiers.experiments.benchmark.methods import (
         baseline_scores,
         entry_point_scores,
@@ -51,10 +55,10 @@ def benchmark_method(
         skops_scores,
     )
     from classifiers.experiments.benchmark.split import (
+        DatasetObjects,
         candidate_sets,
         candidate_table,
-        check_standard_objects,
-        standard_split,
+        choose_split,
     )
     from classifiers.learners.persistence import dataset_checksum
 
@@ -62,12 +66,12 @@ def benchmark_method(
         raise ValueError("give at least one method")
     if name in ("best_qc", "best_qg", "epsilon", "random", "oracle"):
         raise ValueError(f"method name {name!r} is a baseline's; choose another with --name")
-    table, split = _bare(table), standard_split(split_version)
     kinds = {method_kind(s) for s in specs}
     if len(kinds) > 1:
         raise ValueError(f"the runs of one method must be of one kind, got {sorted(kinds)}")
-    check_standard_objects(table, split)
-    sets = candidate_sets(table, config, split)
+    chosen, note = choose_split(DatasetObjects.of(table), split, split_version, seed)
+    table = _bare(table)
+    sets = candidate_sets(table, config, chosen)
     candidates = candidate_table(sets)
     kind = kinds.pop()
     frames = []
@@ -77,14 +81,21 @@ def benchmark_method(
         elif kind == METHOD_KINDS[1]:
             frames.append(skops_scores(Path(spec), sets, name).assign(seed=run))
         else:
-            offset = len(split.seeds) * run
-            frames.append(entry_point_scores(spec, sets, split.seeds, name).assign(
+            offset = len(chosen.seeds) * run
+            frames.append(entry_point_scores(spec, sets, chosen.seeds, name).assign(
                 seed=lambda f, o=offset: f["seed"] + o))  # fmt: skip
     # the standard split's baselines do not depend on the user's config (epsilon: default mu)
     scores = pd.concat([baseline_scores(candidates), *frames], ignore_index=True)
-    info = {**split.describe(), "dataset_sha256": dataset_checksum(table),
-            "method_files": list(specs)}  # fmt: skip
-    return _board(candidates, scores, info, reps, config.learning.seed)
+    info = {**chosen.describe(), **({"note": note} if note else {}),
+            "dataset_sha256": dataset_checksum(table), "method_files": list(specs)}  # fmt: skip
+    try:
+        return _board(candidates, scores, info, reps, config.learning.seed)
+    except NoRankableObject as exc:
+        if chosen.standard:
+            raise
+        raise NoRankableObject(f"{exc} (the auto split's held-out {list(chosen.test_objects)}, "
+                               f"seed {seed}): try another --seed or a dataset with more "
+                               f"objects") from None  # fmt: skip
 
 
 def study_benchmark(

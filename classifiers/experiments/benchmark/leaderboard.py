@@ -190,7 +190,18 @@ def split_line(board: Mapping[str, Any]) -> str:
             f"({len(board['degenerate_objects'])} where every candidate has the same success "
             f"rate are left out of the normalised score), up to {split.get('max_candidates')} "
             f"candidates each (lowest Q_C first); training seeds {seeds}; dataset sha256 "
-            f"`{str(split.get('dataset_sha256', ''))[:12]}`." + _few_objects(board))
+            f"`{str(split.get('dataset_sha256', ''))[:12]}`." + _not_standard(split)
+            + _few_objects(board))  # fmt: skip
+
+
+def _not_standard(split: Mapping[str, Any]) -> str:
+    """Why the split is not the latest standard one, and, when it is no standard split at all,
+    that its scores do not compare with the standard leaderboards."""
+    if split.get("note"):
+        return f" Split chosen: {split['note']}."
+    if split.get("standard", True):
+        return ""
+    return " Not the standard split: do not compare these scores with its leaderboards."
 
 
 def _few_objects(board: Mapping[str, Any]) -> str:

@@ -101,20 +101,40 @@ def public_rows(found: CandidateSet) -> pd.DataFrame:
 
 # ------------------------------------------------------------------ entry points
 def load_entry_point(spec: str) -> Callable[..., Any]:
-    """The function named by ``module:function`` (the current directory is importable)."""
+    """The function named by ``module:function``, imported as pytest and uvicorn import: the
+    current directory first on ``sys.path``, so ``mysel:pick`` finds ``./mysel.py``."""
     module_name, sep, attribute = spec.partition(":")
     if not sep or not module_name or not attribute:
         raise ValueError(f"an entry point is 'module:function', got {spec!r}")
-    if "" not in sys.path and str(Path.cwd()) not in sys.path:
-        sys.path.insert(0, str(Path.cwd()))
+    folder = str(Path.cwd())
+    if folder not in sys.path:
+        sys.path.insert(0, folder)
+    importlib.invalidate_caches()  # a module written since this process looked at the folder
     try:
         module = importlib.import_module(module_name)
-    except ImportError as exc:
-        raise ValueError(f"cannot import {module_name!r} for {spec!r}: {exc}") from None
+    except ModuleNotFoundError as exc:
+        if exc.name is None or not f"{module_name}.".startswith(f"{exc.name}."):
+            raise ValueError(f"importing {module_name!r} for {spec!r} failed: {exc}") from None
+        raise ValueError(_no_module(spec, module_name, folder)) from None
+    except Exception as exc:  # the user's module failing as it loads: bad input, in one line
+        raise ValueError(f"importing {module_name!r} for {spec!r} failed: "
+                         f"{type(exc).__name__}: {exc}") from None  # fmt: skip
     function = getattr(module, attribute, None)
     if not callable(function):
         raise ValueError(f"{spec!r}: {module_name} has no function {attribute!r}")
     return function
+
+
+def _no_module(spec: str, module_name: str, folder: str) -> str:
+    """One line: the module not found, where it was looked for, and the expected form."""
+    bare = module_name.removesuffix(".py")
+    path = bare.replace(".", "/")
+    hint = (f" (name the module without '.py': '{bare}:{spec.partition(':')[2]}')"
+            if bare != module_name else "")  # fmt: skip
+    return (f"no module {module_name!r} for the method {spec!r}: looked in the current folder "
+            f"{folder} (for {path}.py or {path}/__init__.py) and the installed packages; a "
+            f"function method is 'module:function', run from the folder that holds the module "
+            f"or with the module installed{hint}")
 
 
 def entry_point_scores(spec: str, sets: Sequence[CandidateSet], seeds: Sequence[int],

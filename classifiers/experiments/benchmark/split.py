@@ -1,7 +1,13 @@
-"""The benchmark's standard split: fixed, versioned held-out objects and training seeds.
+"""The benchmark's split: the standard one (fixed, versioned held-out objects and training seeds)
+or, for a dataset without its objects, a seeded split of the dataset's own objects.
 
 A version pins the held-out object ids, so two users' numbers are on the same objects; a
-dataset that lacks any of them is refused. Each version's objects are
+dataset that lacks grips of any of them cannot be scored on that version. :func:`choose_split`
+picks the split: with ``--split auto`` (the default) the latest version whose held-out objects
+all have grips in the dataset, else :func:`auto_split`, a seeded split of the dataset's own
+objects named :data:`AUTO_SPLIT_NAME` (never to be compared with standard-split scores); with
+``--split standard`` (or a ``--split-version``) that version or a refusal saying what fits
+instead. Each version's objects are
 :func:`grip_env.dataset.split.split_objects` (``test_fraction=0.25``, seed 0) of the objects with
 grips of the default dataset of its time (``grip-env generate`` with the default config), listed
 in :data:`DEFAULT_OBJECTS` (a test re-derives each version's objects from that list):
@@ -30,51 +36,46 @@ import pandas as pd
 
 from grip_env.columns import FEATURES
 from grip_env.config import Config
-from grip_env.dataset.split import held_out_objects
+from grip_env.dataset.split import held_out_objects, split_objects
 from grip_env.envs.observation import CandidateSet
 
-DEFAULT_OBJECTS_V1: tuple[str, ...] = (
-    "bean", "disc", "ellipse", "hexagon", "l_shape", "parallelogram", "pentagon", "proc_0_00000",
-    "proc_0_00001", "proc_0_00002", "proc_0_00003", "proc_0_00004", "proc_0_00005", "proc_0_00006",
-    "proc_0_00007", "proc_0_00008", "proc_0_00009", "proc_0_00010", "proc_0_00011", "proc_0_00012",
-    "proc_0_00014", "proc_0_00015", "proc_0_00016", "proc_0_00017", "proc_0_00018", "proc_0_00020",
-    "proc_0_00021", "proc_0_00022", "proc_0_00023", "proc_0_00024", "proc_0_00025", "proc_0_00026",
-    "proc_0_00027", "proc_0_00028", "proc_0_00029", "proc_0_00030", "proc_0_00031", "proc_0_00032",
-    "proc_0_00035", "proc_0_00037", "proc_0_00039", "proc_0_00040", "proc_0_00041", "rectangle",
-    "right_triangle", "rounded_rectangle", "square", "star", "t_shape", "trapezoid", "triangle",
-    "u_shape",
-)  # fmt: skip
 
-DEFAULT_OBJECTS_V2: tuple[str, ...] = (
-    "bean", "bunny", "cube", "disc", "domino", "duck", "ellipse", "hexagon", "jenga", "l_shape",
-    "mug", "parallelogram", "pentagon", "proc_0_00000", "proc_0_00001", "proc_0_00002",
-    "proc_0_00003", "proc_0_00004", "proc_0_00005", "proc_0_00006", "proc_0_00007", "proc_0_00008",
-    "proc_0_00009", "proc_0_00010", "proc_0_00011", "proc_0_00012", "proc_0_00014", "proc_0_00015",
-    "proc_0_00016", "proc_0_00017", "proc_0_00018", "proc_0_00020", "proc_0_00021", "proc_0_00022",
-    "proc_0_00023", "rectangle", "right_triangle", "rounded_rectangle", "square", "star",
-    "t_shape", "trapezoid", "triangle", "u_shape", "urdf_162", "urdf_206", "urdf_222", "urdf_264",
-    "urdf_459", "urdf_674", "urdf_683", "urdf_711", "urdf_814",
-)  # fmt: skip
+def object_ids(named: str, procedural: str, meshes: str = "") -> tuple[str, ...]:
+    """Sorted object ids from named ids, procedural indices (``"0-2 5"``: ``proc_0_00000`` to
+    ``proc_0_00002`` and ``proc_0_00005``) and mesh numbers (``"518"``: ``urdf_518``)."""
+    numbers = [n for part in procedural.split() for n in _span(part)]
+    return tuple(sorted([*named.split(), *(f"proc_0_{n:05d}" for n in numbers),
+                         *(f"urdf_{m}" for m in meshes.split())]))  # fmt: skip
 
-DEFAULT_OBJECTS_V3: tuple[str, ...] = (
-    "bean", "bunny", "cube", "disc", "domino", "duck", "ellipse", "hexagon", "jenga", "l_shape",
-    "lego", "mug", "parallelogram", "pentagon", "proc_0_00000", "proc_0_00001", "proc_0_00002",
-    "proc_0_00003", "proc_0_00004", "proc_0_00005", "proc_0_00006", "proc_0_00007", "proc_0_00008",
-    "proc_0_00009", "proc_0_00010", "proc_0_00011", "proc_0_00012", "proc_0_00014", "proc_0_00015",
-    "proc_0_00016", "proc_0_00017", "proc_0_00018", "proc_0_00020", "proc_0_00021", "proc_0_00022",
-    "proc_0_00023", "proc_0_00024", "proc_0_00025", "proc_0_00026", "proc_0_00027", "proc_0_00028",
-    "proc_0_00029", "proc_0_00030", "proc_0_00032", "proc_0_00034", "proc_0_00035", "proc_0_00037",
-    "proc_0_00039", "proc_0_00040", "proc_0_00041", "proc_0_00042", "proc_0_00043", "rectangle",
-    "right_triangle", "rounded_rectangle", "square", "star", "t_shape", "trapezoid", "triangle",
-    "u_shape", "urdf_206", "urdf_222", "urdf_264", "urdf_459", "urdf_518", "urdf_683", "urdf_711",
-    "urdf_814",
-)  # fmt: skip
+
+def _span(part: str) -> range:
+    low, _, high = part.partition("-")
+    return range(int(low), int(high or low) + 1)
+
+
+_NAMED = ("bean disc ellipse hexagon l_shape parallelogram pentagon rectangle right_triangle "
+          "rounded_rectangle square star t_shape trapezoid triangle u_shape")  # fmt: skip
+_NAMED_MESHES = "bunny cube domino duck jenga mug"  # named mesh objects since 423a072
+DEFAULT_OBJECTS_V1 = object_ids(_NAMED, "0-12 14-18 20-32 35 37 39-41")
+DEFAULT_OBJECTS_V2 = object_ids(f"{_NAMED} {_NAMED_MESHES}", "0-12 14-18 20-23",
+                                "162 206 222 264 459 674 683 711 814")  # fmt: skip
+DEFAULT_OBJECTS_V3 = object_ids(f"{_NAMED} {_NAMED_MESHES} lego",
+                                "0-12 14-18 20-30 32 34-35 37 39-43",
+                                "206 222 264 459 518 683 711 814")  # fmt: skip
 
 STANDARD_TEST_OBJECTS_V1: tuple[str, ...] = (
     "l_shape", "proc_0_00003", "proc_0_00004", "proc_0_00011", "proc_0_00015", "proc_0_00017",
     "proc_0_00018", "proc_0_00022", "proc_0_00023", "proc_0_00029", "proc_0_00030",
     "proc_0_00031", "proc_0_00035",
 )  # fmt: skip
+
+
+STANDARD_NAME = "grip-select-standard"
+#: The name of a seeded split of a dataset's own objects: it says it is not the standard one.
+AUTO_SPLIT_NAME = "auto-not-standard"
+#: ``--split``: ``auto`` (the standard split when its objects are there, else a seeded split of
+#: the dataset's own objects) or ``standard`` (the standard split or an error).
+SPLIT_MODES = ("auto", "standard")
 
 
 @dataclass(frozen=True)
@@ -91,9 +92,14 @@ class BenchmarkSplit:
     test_fraction: float = 0.25
     split_seed: int = 0
 
+    @property
+    def standard(self) -> bool:
+        """Whether this is a version of the standard split (scores compare across users)."""
+        return self.name == STANDARD_NAME
+
     def describe(self) -> dict[str, object]:
         """The split as JSON values (for the leaderboard)."""
-        found = asdict(self)
+        found = {**asdict(self), "standard": self.standard}
         return {k: list(v) if isinstance(v, tuple) else v for k, v in found.items()}
 
 
@@ -109,9 +115,9 @@ STANDARD_TEST_OBJECTS: tuple[str, ...] = (
 )  # fmt: skip
 _SEEDS = (0, 1, 2, 3, 4)
 STANDARD_SPLITS: dict[int, BenchmarkSplit] = {
-    1: BenchmarkSplit("grip-select-standard", 1, STANDARD_TEST_OBJECTS_V1, _SEEDS),
-    2: BenchmarkSplit("grip-select-standard", 2, STANDARD_TEST_OBJECTS_V2, _SEEDS),
-    3: BenchmarkSplit("grip-select-standard", 3, STANDARD_TEST_OBJECTS, _SEEDS),
+    1: BenchmarkSplit(STANDARD_NAME, 1, STANDARD_TEST_OBJECTS_V1, _SEEDS),
+    2: BenchmarkSplit(STANDARD_NAME, 2, STANDARD_TEST_OBJECTS_V2, _SEEDS),
+    3: BenchmarkSplit(STANDARD_NAME, 3, STANDARD_TEST_OBJECTS, _SEEDS),
 }
 STANDARD_SPLIT = STANDARD_SPLITS[max(STANDARD_SPLITS)]
 #: The objects each version's held-out objects were drawn from.
@@ -130,17 +136,105 @@ def standard_split(version: int | None = None) -> BenchmarkSplit:
     return STANDARD_SPLITS[version]
 
 
-def check_standard_objects(table: pd.DataFrame, split: BenchmarkSplit = STANDARD_SPLIT) -> None:
-    """ValueError naming the held-out objects of ``split`` that ``table`` lacks."""
-    present = set(table["object_id"].astype(str))
-    missing = [oid for oid in split.test_objects if oid not in present]
-    if missing:
-        raise ValueError(
-            f"dataset lacks {len(missing)} of the {len(split.test_objects)} objects of the "
-            f"standard split {split.name} v{split.version} (e.g. {missing[:3]}); generate it with "
-            f"the default config (grip-env generate), or give the --split-version of its time "
-            f"(known: {sorted(STANDARD_SPLITS)})"
-        )
+@dataclass(frozen=True)
+class DatasetObjects:
+    """The objects of a dataset: those with grips, and those it holds with none (its manifest
+    records a finished shard of no rows: the planning kept no grip, which can differ between
+    machines); a bare grip table knows only the first."""
+
+    with_grips: tuple[str, ...]
+    without_grips: tuple[str, ...] = ()
+
+    @classmethod
+    def of(cls, table: pd.DataFrame) -> DatasetObjects:
+        """The objects of ``table`` (a loaded dataset keeps its manifest in ``attrs``)."""
+        present = sorted(set(table["object_id"].astype(str)))
+        shards = (table.attrs.get("manifest") or {}).get("shards") or {}
+        empty = sorted(str(oid) for oid, record in shards.items()
+                       if int(record.get("rows", 0)) == 0 and str(oid) not in present)  # fmt: skip
+        return cls(tuple(present), tuple(empty))
+
+    def lacks(self, split: BenchmarkSplit) -> str:
+        """Which held-out objects of ``split`` have no grip here, in words ("" when none)."""
+        have = set(self.with_grips)
+        missing = [oid for oid in split.test_objects if oid not in have]
+        if not missing:
+            return ""
+        hollow = [oid for oid in missing if oid in self.without_grips]
+        absent = [oid for oid in missing if oid not in hollow]
+        parts = [f"{_some(hollow)} {_be(hollow)} in it with no grips (planning kept none here, "
+                 "as can differ between machines)" if hollow else "",
+                 f"{_some(absent)} {_be(absent)} not in it" if absent else ""]  # fmt: skip
+        return (f"dataset lacks {len(missing)} of the {len(split.test_objects)} held-out objects "
+                f"of the standard split {split.name} v{split.version}: "
+                + "; ".join(p for p in parts if p))  # fmt: skip
+
+    def fitting_versions(self) -> list[int]:
+        """The standard split versions whose held-out objects all have grips here."""
+        return [v for v, split in sorted(STANDARD_SPLITS.items()) if not self.lacks(split)]
+
+
+def _some(ids: Sequence[str], shown: int = 3) -> str:
+    more = f" and {len(ids) - shown} more" if len(ids) > shown else ""
+    return f"{', '.join(ids[:shown])}{more}"
+
+
+def _be(ids: Sequence[str]) -> str:
+    return "is" if len(ids) == 1 else "are"
+
+
+def check_standard_objects(objects: DatasetObjects, split: BenchmarkSplit = STANDARD_SPLIT) -> None:
+    """ValueError naming the held-out objects of ``split`` without grips in the dataset, and
+    what to run instead: a standard version whose objects are all there, or ``--split auto``."""
+    gap = objects.lacks(split)
+    if not gap:
+        return
+    fits = objects.fitting_versions()
+    instead = f"--split-version {fits[-1]} (all its objects are here) or " if fits else ""
+    raise ValueError(f"{gap}; use {instead}--split auto (a seeded split of this dataset's own "
+                     f"objects, not comparable with standard-split scores)")  # fmt: skip
+
+
+def auto_split(objects: DatasetObjects, seed: int = 0) -> BenchmarkSplit:
+    """The seeded split of the dataset's own objects with grips (:func:`split_objects` with the
+    standard split's ``test_fraction``, seed ``seed``): named :data:`AUTO_SPLIT_NAME`, version 0,
+    so it is never taken for the standard split."""
+    if len(objects.with_grips) < 2:
+        raise ValueError(f"an auto split needs at least 2 objects with grips (one to hold out), "
+                         f"the dataset has {len(objects.with_grips)}")  # fmt: skip
+    fraction = STANDARD_SPLIT.test_fraction
+    _, test = split_objects(objects.with_grips, fraction, seed)
+    return BenchmarkSplit(AUTO_SPLIT_NAME, 0, test, _SEEDS, test_fraction=fraction,
+                          split_seed=seed)  # fmt: skip
+
+
+def choose_split(objects: DatasetObjects, mode: str = "auto", version: int | None = None,
+                 seed: int = 0) -> tuple[BenchmarkSplit, str]:  # fmt: skip
+    """The split to score a dataset on, and a sentence saying why when it is not the latest
+    standard split.
+
+    ``mode="standard"`` (or a ``version`` given): that standard split, or ValueError when the
+    dataset lacks grips of its objects. ``mode="auto"``: the latest standard version whose
+    held-out objects all have grips, else :func:`auto_split` with ``seed``.
+    """
+    if mode not in SPLIT_MODES:
+        raise ValueError(f"--split must be one of {list(SPLIT_MODES)}, got {mode!r}")
+    if mode == "standard" or version is not None:
+        split = standard_split(version)
+        check_standard_objects(objects, split)
+        return split, ""
+    gap = objects.lacks(STANDARD_SPLIT)
+    if not gap:
+        return STANDARD_SPLIT, ""
+    fits = objects.fitting_versions()
+    if fits:
+        split = STANDARD_SPLITS[fits[-1]]
+        return split, f"{gap}; scored on v{split.version}, whose held-out objects are all here"
+    split = auto_split(objects, seed)
+    return split, (f"not the standard split: {gap}; scored on a seeded split (seed {seed}) of "
+                   f"this dataset's own {len(objects.with_grips)} objects with grips, "
+                   f"{len(split.test_objects)} held out: do not compare its scores with "
+                   f"{STANDARD_NAME} scores")  # fmt: skip
 
 
 def study_split(table: pd.DataFrame, config: Config, seeds: Sequence[int]) -> BenchmarkSplit:
@@ -150,7 +244,7 @@ def study_split(table: pd.DataFrame, config: Config, seeds: Sequence[int]) -> Be
     found = [v for v, s in STANDARD_SPLITS.items() if s.test_objects == tuple(test)
              and config.selector.max_candidates == s.max_candidates]  # fmt: skip
     return BenchmarkSplit(
-        STANDARD_SPLIT.name if found else "study", found[0] if found else 0,
+        STANDARD_NAME if found else "study", found[0] if found else 0,
         tuple(test), tuple(int(s) for s in seeds), config.selector.max_candidates,
         test_fraction=learning.test_fraction, split_seed=learning.seed,
     )  # fmt: skip
