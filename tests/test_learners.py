@@ -19,9 +19,11 @@ from classifiers.experiments.candidate_scores import (
     score_frame,
     training_seeds,
 )
+from classifiers.experiments.training import train_rankers
 from classifiers.learners.models import make_model, make_regressor
-from classifiers.learners.persistence import load_model, save_model
+from classifiers.learners.persistence import load_model, save_model, saved_models
 from classifiers.learners.ranking import GroupedRanker, make_ranker, relevance
+from grip_env.columns import FEATURES
 from grip_env.config import Config, LearningConfig, SimConfig
 
 CV = LearningConfig(folds=3, repeats=1)
@@ -96,6 +98,22 @@ def test_ranker_seeds_differ_and_repeat(grips):
     scores = [make_ranker("lambdarank", seed).fit(grips, grades).predict(grips)
               for seed in (0, 0, 1)]  # fmt: skip
     assert np.array_equal(scores[0], scores[1]) and not np.array_equal(scores[0], scores[2])
+
+
+def test_rankers_saved_by_training_load_and_score_as_fitted(grips, tmp_path):
+    config = Config().override(learning={"rankers": ("lambdarank", "rank_qc"), "folds": 3,
+                                         "repeats": 1})
+    train_rankers(grips, tmp_path, config, "sha")
+    assert saved_models(tmp_path / "models") == ["ranker_lambdarank", "ranker_rank_qc"]
+    assert saved_models(tmp_path) == []  # ranking.json beside them is no model
+    fitted = make_ranker("lambdarank", config.learning.seed).fit(grips,
+                                                                 relevance(grips, config.sim))
+    loaded, info = load_model(tmp_path / "models", "ranker_lambdarank")
+    assert info["format"] == "lightgbm_text" and info["columns"] == list(FEATURES)
+    np.testing.assert_allclose(loaded.predict(grips), fitted.predict(grips))
+    (tmp_path / "models" / "ranker_lambdarank.txt").write_text("not a model")
+    with pytest.raises(ValueError, match="not a LightGBM model"):
+        load_model(tmp_path / "models", "ranker_lambdarank")
 
 
 def test_training_seeds():

@@ -92,6 +92,57 @@ def test_bad_model_data_or_out_end_in_one_line(
                    "directory")
 
 
+def test_predict_takes_every_model_train_writes_each_with_its_column(
+    trained: Path, generated_dataset_dir: Path, tmp_path: Path
+) -> None:
+    """Classifiers, regressors and rankers, the lambdarank ranker (LightGBM's text model) too."""
+    from classifiers.learners.persistence import saved_models
+
+    grips = load(generated_dataset_dir)
+    names = saved_models(trained)
+    assert {"logreg", "regressor_ridge", "ranker_lambdarank", "ranker_rank_qc"} <= set(names)
+    for name in names:
+        out = tmp_path / f"{name}.parquet"
+        code, output = cli("predict", "--model", trained / f"{name}.json",
+                           "--data", generated_dataset_dir, "--out", out)
+        assert code == 0, (name, output)
+        table = pd.read_parquet(out)
+        column = ("rank_score" if name.startswith("ranker_") else
+                  "robustness_pred" if name.startswith("regressor_") else "p_success")
+        assert list(table.columns) == ["grip_id", "object_id", column, "model"], name
+        assert f"{column} from model {name}" in output
+        model, _ = load_model(trained, name)
+        if column != "p_success":
+            np.testing.assert_allclose(table[column], model.predict(grips))
+    # the ranker given by its LightGBM file; its scores order each object's grips
+    code, output = cli("predict", "--model", trained / "ranker_lambdarank.txt",
+                       "--data", generated_dataset_dir, "--out", tmp_path / "lgbm.parquet")
+    assert code == 0, output
+    scores = pd.read_parquet(tmp_path / "lgbm.parquet")["rank_score"]
+    assert scores.notna().all() and scores.std() > 0
+
+
+def test_a_folder_lists_its_models_only(trained: Path, generated_dataset_dir: Path) -> None:
+    data = generated_dataset_dir
+    code, output = cli("predict", "--model", trained, "--data", data)
+    assert_refused(code, output, "directory", "logreg.json", "regressor_ridge.json",
+                   "ranker_lambdarank.json")
+    train_out = trained.parent  # metrics.json, ranking.json, regression.json, models/
+    code, output = cli("predict", "--model", train_out, "--data", data)
+    assert_refused(code, output, "directory", "models/logreg.json", "models/ranker_lambdarank")
+    for other in ("metrics.json", "ranking.json", "regression.json"):
+        assert (train_out / other).is_file()
+        assert other not in output
+        assert_refused(*cli("predict", "--model", train_out / other, "--data", data),
+                       f"{other} is not a saved model", "models/logreg.json")
+
+
+def test_an_agent_zip_is_pointed_to_benchmark(tmp_path: Path, generated_dataset_dir: Path) -> None:
+    for agent in (tmp_path / "selector" / "model.zip", Path("model.ZIP")):
+        assert_refused(*cli("predict", "--model", agent, "--data", generated_dataset_dir),
+                       "Stable-Baselines3 agent", "grip-env benchmark AGENT.zip --data")
+
+
 # ----------------------------------------------------------------------------- crafted files
 class Planted(BaseEstimator):
     """An estimator whose restoring leaves a mark: a loader that ran it would be caught."""

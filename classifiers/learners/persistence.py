@@ -7,7 +7,14 @@ checksum, anything the caller adds) plus either
   :data:`TRUSTED_TYPES` (this package's estimators) and scikit-learn's own internals
   (``sklearn.*``: calibrators, KD-trees, optimisers) are accepted beyond skops' defaults), or
 - ``name.pt`` for the torch MLP: the network's ``state_dict`` (loaded with ``weights_only=True``),
-  rebuilt with its JSON parameters.
+  rebuilt with its JSON parameters, or
+- ``name.txt`` for the lambdarank ranker (``format: lightgbm_text``, written by
+  :meth:`~classifiers.learners.ranking.GroupedRanker.save`): LightGBM's own text model, rebuilt
+  with its JSON parameters.
+
+:data:`MODEL_FORMATS` are the formats :func:`load_model` reads; :func:`saved_models` lists the
+models of a folder by them (a folder also holds other JSON files, e.g. ``grip-env train``'s
+metrics beside its ``models/``).
 """
 
 from __future__ import annotations
@@ -44,6 +51,8 @@ LEGACY_MODULES = {"classifiers.baselines": "classifiers.learners.baselines",
                   "classifiers.threads": "classifiers.learners.threads"}
 
 TRUSTED_PREFIXES = ("sklearn.",)
+#: The ``format`` of a model's JSON metadata, and the file beside it that holds the model.
+MODEL_FORMATS = {"skops": ".skops", "torch_state_dict": ".pt", "lightgbm_text": ".txt"}
 
 
 def dataset_checksum(table: pd.DataFrame) -> str:
@@ -79,13 +88,40 @@ def save_model(
     return path
 
 
-def load_model(directory: str | Path, name: str) -> tuple[Pipeline, dict[str, Any]]:
-    """Read back a model written by :func:`save_model`, with its metadata."""
+def model_format(meta_path: str | Path) -> str | None:
+    """The saved format named by a model's JSON metadata; ``None`` for any other file (not JSON,
+    not an object, no known ``format``)."""
+    try:
+        info = json.loads(Path(meta_path).read_text())
+    except (OSError, UnicodeDecodeError, ValueError):
+        return None
+    found = info.get("format") if isinstance(info, dict) else None
+    return found if found in MODEL_FORMATS else None
+
+
+def saved_models(directory: str | Path) -> list[str]:
+    """The names of the models saved in ``directory`` (each ``NAME.json`` whose format
+    :func:`load_model` reads), sorted."""
+    return sorted(path.stem for path in Path(directory).glob("*.json")
+                  if path.is_file() and model_format(path) is not None)
+
+
+def load_model(directory: str | Path, name: str) -> tuple[Any, dict[str, Any]]:
+    """Read back a model written by :func:`save_model` (or a ranker's
+    :meth:`~classifiers.learners.ranking.GroupedRanker.save`), with its metadata; the metadata's
+    ``columns`` are the table columns the model reads."""
     directory = Path(directory)
     meta_path = directory / f"{name}.json"
     if not meta_path.is_file():
         raise FileNotFoundError(f"no saved model metadata {meta_path}")
     info = json.loads(meta_path.read_text())
+    if not isinstance(info, dict):
+        raise ValueError(f"{meta_path}: not a model's metadata (a JSON object)")
+    if info.get("format") == "lightgbm_text":
+        from classifiers.learners.ranking import GroupedRanker  # LightGBM: only when needed
+
+        ranker = GroupedRanker.load(directory / f"{name}.txt", info.get("params", {}))
+        return ranker, {**info, "columns": list(ranker.features)}
     if info.get("format") == "torch_state_dict":
         state = torch.load(directory / f"{name}.pt", weights_only=True)
         kind = info.get("estimator", "TorchMLPClassifier")

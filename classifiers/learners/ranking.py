@@ -17,7 +17,8 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from lightgbm import LGBMRanker
+from lightgbm import Booster, LGBMRanker
+from lightgbm.basic import LightGBMError
 from sklearn.base import BaseEstimator
 from sklearn.pipeline import Pipeline
 from sklearn.utils.validation import check_is_fitted
@@ -91,13 +92,14 @@ class GroupedRanker(BaseEstimator):
             label_gain=list(range(int(grades.max()) + 1)), verbose=-1,
         )  # fmt: skip
         self.ranker_.fit(values[order], grades[order], group=sizes)
+        self.booster_ = self.ranker_.booster_
         self.n_groups_ = int(sizes.size)
         return self
 
     def predict(self, X: pd.DataFrame) -> np.ndarray:
         """The ranking score of each row (comparable within one object only)."""
-        check_is_fitted(self, "ranker_")
-        return np.asarray(self.ranker_.predict(self._values(X)), dtype=float)
+        check_is_fitted(self, "booster_")
+        return np.asarray(self.booster_.predict(self._values(X)), dtype=float)
 
     def decision_function(self, X: pd.DataFrame) -> np.ndarray:
         """Same as :meth:`predict`, the name
@@ -106,11 +108,27 @@ class GroupedRanker(BaseEstimator):
 
     def save(self, directory: str | Path, name: str) -> Path:
         """Write the booster as LightGBM's own text model ``name.txt``; returns its path."""
-        check_is_fitted(self, "ranker_")
+        check_is_fitted(self, "booster_")
         path = Path(directory) / f"{name}.txt"
         path.parent.mkdir(parents=True, exist_ok=True)
-        self.ranker_.booster_.save_model(str(path))
+        self.booster_.save_model(str(path))
         return path
+
+    @classmethod
+    def load(cls, path: str | Path, params: dict[str, Any]) -> GroupedRanker:
+        """A ranker written by :meth:`save`, rebuilt with its ``get_params()``: it predicts as
+        the fitted one did (LightGBM parses its text model; nothing is unpickled)."""
+        ranker = cls(**params)
+        if not Path(path).is_file():
+            raise FileNotFoundError(f"no saved ranker {path}")
+        try:
+            ranker.booster_ = Booster(model_file=str(path))
+        except LightGBMError as exc:
+            raise ValueError(f"{path} is not a LightGBM model: {exc}") from None
+        if ranker.booster_.num_feature() != len(check_features(ranker.features)):
+            raise ValueError(f"{path} reads {ranker.booster_.num_feature()} features, its "
+                             f"parameters name {len(ranker.features)}")
+        return ranker
 
     def _values(self, X: pd.DataFrame) -> np.ndarray:
         return ColumnSelector(check_features(self.features)).fit_transform(X)
