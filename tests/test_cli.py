@@ -122,3 +122,91 @@ def test_entry_point_keeps_version_help_and_exit_codes():
     help_run = grip_env_command("show", "--help")
     assert help_run.returncode == 0 and "Shape names" in help_run.stdout
     assert grip_env_command("show", "nosuch").returncode == 2
+
+
+# ------------------------------------------------------------------ help, as the text reads it
+def _help(*args: str) -> str:
+    result = RUNNER.invoke(app, [*args, "--help"], terminal_width=200)
+    assert result.exit_code == 0, result.output
+    return result.output
+
+
+def test_train_help_names_its_classifiers_regressors_and_rankers_from_the_registries():
+    from classifiers.learners.models import MODEL_NAMES, REGRESSOR_NAMES
+    from classifiers.learners.ranking import RANKER_NAMES
+
+    text = " ".join(_help("train").split())
+    for kind, names in (("Classifiers", MODEL_NAMES), ("Regressors", REGRESSOR_NAMES),
+                        ("Rankers", RANKER_NAMES)):
+        assert kind in text and ", ".join(names) in text, kind
+    assert "{" not in text  # every placeholder filled
+    assert "{" not in _help()  # and none leaks into the group's list of commands
+
+
+def test_the_group_help_names_every_command():
+    description = typer.main.get_command(app).help
+    assert set(COMMANDS) == set(re.findall(r"[a-z]+", description.split(":", 1)[1]))
+    text = _help()
+    assert all(name in text.split("Options")[0] for name in COMMANDS)
+
+
+def test_registering_twice_adds_no_command_twice():
+    _register_commands()
+    names = [info.name for info in app.registered_commands]
+    assert len(names) == len(set(names)) == len(COMMANDS)
+
+
+@pytest.mark.parametrize("name", ["", *sorted(COMMANDS)])
+def test_flags_show_as_flags(name):
+    text = _help(*[name] if name else [])
+    assert "<bool>" not in text
+    assert re.search(r"--help +Show this message", text), text
+
+
+_ARGUMENT_COMMANDS = sorted(name for name, command in COMMANDS.items()
+                            if any(isinstance(p, typer.core.TyperArgument) for p in command.params))
+# Left to the engineers whose files these are (strict: each fails loudly once fixed, to be removed)
+_OTHERS_TO_DO = {
+    "show": "grip_env/cli/show.py: its argument needs typer.Argument(metavar='OBJECT')",
+    ("show", "grips"): "grip_env/cli/show.py: --grips needs min=0",
+    ("benchmark", "split_version"): "grip_env/cli/benchmark.py: --split-version needs min=1",
+}
+
+
+@pytest.mark.parametrize("name", [
+    pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=_OTHERS_TO_DO[n]))
+    if n in _OTHERS_TO_DO else n for n in _ARGUMENT_COMMANDS])
+def test_usage_names_each_argument_as_the_help_text_does(name):
+    command = COMMANDS[name]
+    usage = _help(name).split("Usage:", 1)[1].splitlines()[0]
+    assert "{" not in usage and "}" not in usage, usage
+    words = set(re.findall(r"\b[A-Z][A-Z_]+\b", command.help or ""))
+    for param in command.params:
+        if isinstance(param, typer.core.TyperArgument):
+            shown = param.metavar or param.name.upper()
+            assert shown in [word.strip("[].") for word in usage.split()], usage
+            longer = {word for word in words if word.startswith(shown) and word != shown}
+            assert not longer, f"usage says {shown}, the text {sorted(longer)}"
+
+
+def _int_options():
+    for name, command in sorted(COMMANDS.items()):
+        for param in command.params:
+            if isinstance(param, typer.core.TyperOption) and \
+                    param.type_descriptor.annotation is int:
+                todo = _OTHERS_TO_DO.get((name, param.name))
+                marks = [pytest.mark.xfail(strict=True, reason=todo)] if todo else []
+                yield pytest.param(name, param.name, marks=marks, id=f"{name}-{param.name}")
+
+
+@pytest.mark.parametrize(("name", "option"), list(_int_options()))
+def test_every_seed_and_count_states_its_range(name, option):
+    param = next(p for p in COMMANDS[name].params if p.name == option)
+    if "seed" in option:
+        assert (param.min, param.max) == (0, None), "seeds: x>=0"
+    else:
+        assert param.min is not None and param.min >= 0, "counts: their least (x>=1, or 0 if none)"
+    lines = _help(name).split("─ Options ─", 1)[1].splitlines()  # the panel, not the text
+    first = next(i for i, line in enumerate(lines) if f"--{option.replace('_', '-')} " in line)
+    row = " ".join(lines[first:first + 2])  # a long type column wraps its range
+    assert "x>=" in row or "<=x<=" in row, row

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cli_runs import assert_refused
+from cli_runs import RUNNER, app, assert_refused
 from cli_runs import cli as run
 from PIL import Image
 
@@ -151,10 +151,16 @@ def test_ablate_model_is_checked_before_the_data(tmp_path):
     assert not (tmp_path / "a").exists()
 
 
-@pytest.mark.parametrize("steps", ["99999999999999999999999", "0", "-5"])
-def test_select_timesteps_are_bounded_before_any_training(tmp_path, steps):
+def test_select_timesteps_are_bounded_before_any_training(tmp_path):
     assert_refused(*run("select", "--data", tmp_path / "none", "--out", tmp_path / "s",
-                        "--timesteps", steps), "timesteps")
+                        "--timesteps", "99999999999999999999999"), "timesteps")
+    for steps in ("0", "-5"):  # below the range --help states: a usage error (one line, exit 2)
+        result = RUNNER.invoke(app, ["select", "--data", str(tmp_path / "none"), "--out",
+                                     str(tmp_path / "s"), "--timesteps", steps],
+                               standalone_mode=False)
+        message = result.exception.format_message()
+        assert "'--timesteps'" in message and "greater than or equal to 1" in message
+    assert not (tmp_path / "s").exists()
 
 
 # ----------------------------------------------------------------- generate

@@ -11,10 +11,16 @@ import sys
 from typing import Annotated
 
 import typer
+from typer.core import TyperCommand
+
+from grip_env.cli.helptext import Command, Group
+
+SUMMARY = "Learn which Barrett BH8-280 grips hold"
 
 app = typer.Typer(
     name="grip-env",
-    help="Learn which Barrett BH8-280 grips hold: generate, train, ablate, select, study, show.",
+    cls=Group,
+    help=f"{SUMMARY}.",  # completed with the command names by _register_commands
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
@@ -48,7 +54,7 @@ def _root(
                      help="print the version and exit"),
     ] = False,
 ) -> None:
-    """Learn which Barrett BH8-280 grips hold: generate, train, ablate, select, study, show."""
+    """The group's options; its help is ``app.info.help`` (the summary and every command)."""
 
 
 _COMMAND_MODULES = (
@@ -58,8 +64,17 @@ _COMMAND_MODULES = (
 
 
 def _register_commands() -> None:
-    for name in _COMMAND_MODULES:
-        importlib.import_module(f"grip_env.cli.{name}").register(app)
+    """Add every command once (a second call changes nothing), each shown by
+    :class:`~grip_env.cli.helptext.Command` unless it asks for its own, and name them all in the
+    group's help."""
+    if not app.registered_commands:
+        for name in _COMMAND_MODULES:
+            importlib.import_module(f"grip_env.cli.{name}").register(app)
+    for info in app.registered_commands:
+        if info.cls in (None, TyperCommand):  # typer's default: the command asked for none
+            info.cls = Command
+    names = dict.fromkeys(info.name for info in app.registered_commands if info.name)
+    app.info.help = f"{SUMMARY}: {', '.join(names)}."
 
 
 def main() -> None:

@@ -33,14 +33,15 @@ def generate(
                                          "gives it)"),
     ] = None,
     trials: Annotated[
-        int | None, typer.Option(help="simulated trials per grip (default: config dataset.trials)")
+        int | None,
+        typer.Option(min=1, help="simulated trials per grip (default: config dataset.trials)"),
     ] = None,
     seed: Annotated[
-        int | None, typer.Option(help="run seed (default: config dataset.seed)")
+        int | None, typer.Option(min=0, help="run seed (default: config dataset.seed)")
     ] = None,
     workers: Annotated[
         int | None,
-        typer.Option(help="parallel workers; the data do not depend on it "
+        typer.Option(min=1, help="parallel workers; the data do not depend on it "
                           "(default: config dataset.workers)"),
     ] = None,
     backend: Annotated[

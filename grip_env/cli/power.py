@@ -39,8 +39,8 @@ def power(
     selector_trials: Annotated[
         str, typer.Option(help=f"trials at which the RL selector is retrained ({_SIZES})")
     ] = "",
-    replicates: Annotated[int, typer.Option(help="seeded subsamples per size")] = 2,
-    seed: Annotated[int, typer.Option(help="subsampling seed")] = 0,
+    replicates: Annotated[int, typer.Option(min=1, help="seeded subsamples per size")] = 2,
+    seed: Annotated[int, typer.Option(min=0, help="subsampling seed")] = 0,
     model: Annotated[
         str | None,
         typer.Option(help=f"the classifier: {MODEL_NAMES_HELP} [default: the config's "

@@ -26,7 +26,7 @@ def select(
     config: ConfigFile = None,
     timesteps: Annotated[
         int | None,
-        typer.Option(help="training timesteps [default: config selector.timesteps]"),
+        typer.Option(min=1, help="training timesteps [default: config selector.timesteps]"),
     ] = None,
     policy: Annotated[
         Policy,

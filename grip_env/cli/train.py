@@ -1,4 +1,5 @@
-"""``grip-env train``: cross-validate, plot and save the grip classifiers."""
+"""``grip-env train``: cross-validate, plot and save the grip classifiers, regressors and
+rankers (its help names them from the learning package's registries, when shown)."""
 
 from __future__ import annotations
 
@@ -7,9 +8,10 @@ from typing import Annotated
 import typer
 
 from grip_env.cli.errors import user_errors
+from grip_env.cli.helptext import LearnerHelp
 from grip_env.cli.inputs import learning_table
 from grip_env.cli.notices import warn_label_model
-from grip_env.cli.options import MODEL_NAMES_HELP, ConfigFile, DatasetDir, OutputDir
+from grip_env.cli.options import ConfigFile, DatasetDir, OutputDir
 from grip_env.cli.paths import check_output_dir, output_dir
 from grip_env.progress import shown
 from grip_env.shutdown import stop_on_signals
@@ -21,11 +23,19 @@ def train(
     config: ConfigFile = None,
     models: Annotated[
         str | None,
-        typer.Option(help=f"comma-separated model names, from {MODEL_NAMES_HELP} "
+        typer.Option(help="comma-separated classifier names, from {classifiers} "
                           "[default: config learning.models]"),
     ] = None,
 ) -> None:
-    """Write OUT/metrics.json (grouped CV), roc.png, calibration.png and OUT/models/."""
+    """Cross-validate classifiers, regressors and rankers; save each, refitted, in OUT/models/.
+
+    Classifiers of grip success ({classifiers}; --models, default config learning.models):
+    OUT/metrics.json (grouped CV), roc.png, calibration.png and OUT/models/NAME.json.
+    Regressors of robustness_mean ({regressors}; config learning.regressors), when the dataset
+    has it: OUT/regression.json and OUT/models/regressor_NAME.json. Rankers, one query per
+    object ({rankers}; config learning.rankers): OUT/ranking.json and
+    OUT/models/ranker_NAME.json. grip-env predict scores a dataset with any of these models.
+    """
     with stop_on_signals(f"rerun the same command to redo {out}"), user_errors(), shown():
         from grip_env.config import load_config
 
@@ -68,4 +78,4 @@ def check_model_names(names: tuple[str, ...]) -> None:
 
 def register(app: typer.Typer) -> None:
     """Add the command to the ``grip-env`` app."""
-    app.command("train")(train)
+    app.command("train", cls=LearnerHelp)(train)
