@@ -101,9 +101,10 @@ def _calibration_trials() -> pd.DataFrame:
 
     for box in ("box_90x55", "box_70x70", "box_120x40"):
         add(box, "design", "best", f"{box}/0", 8.0, 1)
-    for obj in ("a", "b", "c"):
+    for obj in "abcdefghij":  # ten objects: fewer are too few for the cone check's verdict
         add(obj, "cone", "best", f"{obj}/best", 6.0, 4)
         add(obj, "cone", "outside", f"{obj}/out", 2.0, 4)
+    for obj in ("a", "b", "c"):
         for i in range(8):
             add(obj, "retest", "best" if i < 4 else "worst", f"{obj}/{i}", float(i), 8)
     return pd.DataFrame(rows)

@@ -28,6 +28,18 @@ def feature_correlations(table: pd.DataFrame, method: str = "spearman") -> pd.Da
     return correlations.rename_axis("feature")
 
 
+def constant_columns(table: pd.DataFrame, columns: tuple[str, ...]) -> dict[str, float]:
+    """The columns of ``columns`` that take one value over the whole table, with that value
+    (a correlation with them is undefined)."""
+    _require(table, columns)
+    found = {}
+    for name in columns:
+        values = table[name].dropna()
+        if len(values) and values.nunique() == 1:
+            found[name] = float(values.iloc[0])
+    return found
+
+
 @dataclass(frozen=True)
 class RankComparison:
     """Grasp rank (by Q_G) against configuration ranks (by Q_C) for one object."""

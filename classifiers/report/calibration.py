@@ -16,11 +16,15 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from classifiers.report.document import Report
+from classifiers.report.judge import FEW_OBJECTS
 from grip_env.drawing import save_figure
 
 #: What the within-object check asks, in one line.
 WITHIN_GLOSS = ("within one object: do two sets of trials rank that object's grips alike (what a "
                 "robot choosing among them needs)")
+#: Grips below which the retest and ICC checks are too small to judge (the default run scores
+#: 6 objects x 16 grips; the quick one 8 grips).
+MIN_GRIPS = 20
 RESULT_FILE = "calibration.json"
 TRIALS_FILE = "calibration_trials.parquet"
 
@@ -40,15 +44,22 @@ def write_calibration(out: Path, result: dict[str, Any], trials: pd.DataFrame) -
 def calibration_section(report: Report, result: dict[str, Any], trials: pd.DataFrame | None,
                         fig_dir: Path, root: Path, level: int = 2) -> None:
     """The checks as a pass/fail table, then one sub-section per check with its figure."""
-    checks = result["checks"]
+    settings = result.get("settings")
+    checks = {name: {**check, **assess(check, settings)}
+              for name, check in result["checks"].items()}
     report.heading("Label validity (calibration)", level)
     report.text(
         f"Measured, never tuned: reference level {result['reference_level_g']:g} g, design "
         f"friction mu = {result['mu']:g}, {result['trials']} simulated calibration trials"
-        f"{_conditions(result.get('config'))}. Each check states its target and whether the "
-        "measured figure meets it."
+        f"{_conditions(result.get('config'))}. Each check states its target, the sample it "
+        "was measured on and whether the measured figure meets it."
     )
-    report.table(summary_table(checks), caption="Checks against their targets.")
+    report.table(summary_table(checks, settings), caption="Checks against their targets.")
+    small = {name: check["too_small"] for name, check in checks.items() if check["too_small"]}
+    if small:
+        report.text("Too small to judge: " + "; ".join(f"{n}, {why}" for n, why in small.items())
+                    + ". Their figures are shown as measured; a pass or a FAIL on such a sample "
+                    "says nothing about the labels.")
     if "within_object" in checks:
         report.text(f"within_object: {WITHIN_GLOSS}.")
     sub = level + 1
@@ -69,20 +80,62 @@ def calibration_section(report: Report, result: dict[str, Any], trials: pd.DataF
                     "or the study's calibration stage).")
 
 
-def summary_table(checks: dict[str, dict[str, Any]]) -> pd.DataFrame:
-    """One row per check: measured figure, interval, target, verdict."""
+def summary_table(checks: dict[str, dict[str, Any]],
+                  settings: dict[str, Any] | None = None) -> pd.DataFrame:
+    """One row per check: measured figure, interval, target, the sample it was measured on,
+    verdict (see :func:`assess`; ``settings``: the run's ``CalibrationSettings`` as a dict)."""
     rows = {}
     for name, check in checks.items():
         measured = check["measured"]
+        judged = {**check, **assess(check, settings)}
         rows[name] = {
             "measured": _number(measured) if not isinstance(measured, dict)
             else ", ".join(f"{k} {_number(v)}" for k, v in measured.items()),
             "95% interval": _ci(check.get("ci")),
             "target": check["target"],
-            "verdict": _verdict(check["passed"])
+            "sample": judged["sample"],
+            "verdict": _judged(judged)
             + (" (ill-posed)" if check.get("well_posed") is False else ""),
         }
     return pd.DataFrame(rows).T.rename_axis("check")
+
+
+def assess(check: dict[str, Any], settings: dict[str, Any] | None = None) -> dict[str, Any]:
+    """``{"sample": what the check was measured on, "too_small": why that cannot carry a
+    verdict, or None}``.
+
+    Too small: the check rests on fewer objects, or grips, than a verdict needs
+    (:data:`~classifiers.report.judge.FEW_OBJECTS` objects for the cone and decile checks, whose
+    intervals resample objects; :data:`MIN_GRIPS` grips for the retest and ICC; the
+    within-object check's own ``WITHIN_SCORED``), or its interval has zero width. The design
+    check has no sample to grow: three boxes, without pose error, at fixed friction.
+    """
+    from grip_env.calibration import WITHIN_SCORED
+
+    settings = settings or {}
+    name, objects, grips = check.get("name", ""), check.get("objects"), check.get("grips")
+    per_object = check.get("per_object") or []
+    sample = {
+        "design_hold": f"{len(per_object)} boxes × {settings.get('design_trials', '?')} trial(s)",
+        "cone": f"{len(per_object)} object(s) × {settings.get('cone_trials', '?')} trial(s) a "
+                "grip",
+        "retest": f"{grips} grips on {objects} object(s), 2 × {check.get('trials_per_set')} "
+                  "trials",
+        "icc": f"{grips} grips × {check.get('trials')} trials",
+        "within_object": f"{objects} object(s) scored ({check.get('skipped')} skipped), "
+                         f"{grips} grips",
+    }.get(name, f"{objects} objects, {grips} grips")
+    floor = {"cone": ("object(s)", len(per_object), FEW_OBJECTS),
+             "retest": ("grips", grips, MIN_GRIPS), "icc": ("grips", grips, MIN_GRIPS),
+             "within_object": ("object(s) scored", objects, WITHIN_SCORED)}.get(
+        name, ("objects", objects, FEW_OBJECTS) if name.startswith("decile_") else None)
+    why = None
+    if floor and floor[1] is not None and floor[1] < floor[2]:
+        why = f"{floor[1]} {floor[0]} (a verdict needs {floor[2]})"
+    ci = check.get("ci")
+    if why is None and ci and ci[0] is not None and ci[0] == ci[1]:
+        why = "an interval of zero width"
+    return {"sample": sample, "too_small": why}
 
 
 # ------------------------------------------------------------------------------- sub-sections
@@ -102,19 +155,31 @@ def _design(report: Report, check: dict[str, Any], reference: float, fig_dir: Pa
                  "mu_for_reference, the friction at which the squeeze's ceiling reaches the "
                  "reference.")
     report.text(design_verdict_text(check, reference))
-    fig = Figure(figsize=(5.5, 3.4))
+    _figure(report, save_figure(design_figure(rows, reference), fig_dir / "calibration_design.png"),
+            root, "Robustness of each box's best grip by Q_C against the reference level.")
+
+
+def design_figure(rows: pd.DataFrame, reference: float) -> Figure:
+    """Each box's robustness (bars) against the reference level (dashed) and the squeeze's
+    friction ceiling; the legend sits beside the axes, clear of the reference line."""
+    fig = Figure(figsize=(7.5, 3.4))
     ax = fig.subplots()
     ax.bar(rows["object_id"], rows["robustness"], color="tab:blue")
     ax.axhline(reference, color="tab:red", linestyle="--", label=f"reference {reference:g} g")
     if "friction_ceiling_g" in rows:
         ax.scatter(rows["object_id"], rows["friction_ceiling_g"], marker="_", s=900,
-                   color="black", label="squeeze's friction ceiling at mu", zorder=3)  # fmt: skip
+                   color="black", label="squeeze's friction\nceiling at mu", zorder=3)  # fmt: skip
     ax.set_ylabel("robustness (g)")
     ax.set_title("Best-Q_C grip at friction mu, no pose error")
-    ax.legend(fontsize=8)
+    _legend_beside(ax, markerscale=0.3)
     fig.tight_layout()
-    _figure(report, save_figure(fig, fig_dir / "calibration_design.png"), root,
-            "Robustness of each box's best grip by Q_C against the reference level.")
+    return fig
+
+
+def _legend_beside(ax: Any, markerscale: float = 1.0) -> None:
+    """The legend to the right of the axes, where it hides no line or bar."""
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0,
+              markerscale=markerscale)
 
 
 def design_verdict_text(check: dict[str, Any], reference: float) -> str:
@@ -123,7 +188,7 @@ def design_verdict_text(check: dict[str, Any], reference: float) -> str:
     rows = pd.DataFrame(check.get("per_object", []))
     held = ", ".join(f"{r.object_id} {r.robustness:.1f} g" for r in rows.itertuples())
     text = (f"Measured at the design friction: {held}, against the {reference:g} g reference "
-            f"({_verdict(check['passed'])}).")
+            f"({_judged(check)}).")
     if check.get("squeeze_text"):
         text += f" At the commanded squeeze, {check['squeeze_text']}."
     if check.get("well_posed") is False:
@@ -152,7 +217,7 @@ def _cone(report: Report, check: dict[str, Any], fig_dir: Path, root: Path, leve
         f"grip inside it, at friction mu: mean robustness difference "
         f"{_number(check['measured'])} g, "
         f"95% t-interval over {len(rows)} objects {_ci(check['ci'])}, half-width "
-        f"{_number(check.get('half_width'))} g ({_verdict(check['passed'])}). The spread of the "
+        f"{_number(check.get('half_width'))} g ({_judged(check)}). The spread of the "
         "difference is between objects, so the interval narrows as 1/sqrt(objects) and hardly "
         "with trials per grip; `grip-env calibrate --cone-objects N --cone-trials K` resizes it."
     )
@@ -182,11 +247,11 @@ def _retest(report: Report, checks: dict[str, Any], trials: pd.DataFrame | None,
         f"Per-grip mean robustness from two disjoint sets of {retest.get('trials_per_set')} "
         f"trial seeds over {retest.get('grips')} grips (best and worst by Q_C on "
         f"{retest.get('objects')} default objects): Spearman {_number(retest['measured'])} "
-        f"{_ci(retest['ci'])} ({_verdict(retest['passed'])}); within one object, over these "
+        f"{_ci(retest['ci'])} ({_judged(retest)}); within one object, over these "
         f"grips only, the mean Spearman is {_number(retest.get('within_object_mean'))} (the "
         "within-object check uses all kept grips at the dataset's trials). ICC(1) of per-trial "
         f"robustness with the grip as class: {_number(icc.get('measured'))} "
-        f"{_ci(icc.get('ci'))} ({_verdict(icc.get('passed'))}). Within a grip, the trial's "
+        f"{_ci(icc.get('ci'))} ({_judged(icc)}). Within a grip, the trial's "
         f"friction draw against its robustness residual has Spearman "
         f"{_number(icc.get('friction_residual_spearman'))}: how far the draw orders one grip's "
         "trials (0: not at all; a grip that holds by friction holds in proportion to it)."
@@ -228,17 +293,19 @@ def _within_object(report: Report, check: dict[str, Any], fig_dir: Path, root: P
         f"A) against {n}..{2 * n - 1} (set B), n = dataset.trials: mean "
         f"{_number(check['measured'])} over {check['objects']} objects, 95% bootstrap interval "
         f"over objects {_ci(check['ci'])}; target >= {RETEST_TARGET}: "
-        f"{_verdict(check['passed'])}. {check['grips']} grips on "
+        f"{_judged(check)}. {check['grips']} grips on "
         f"{check['objects'] + check['skipped']} objects were run; {check['skipped']} object(s) "
         "skipped, where a set gives all the object's grips one robustness (it ranks nothing)."
     )
     rows = pd.DataFrame(check.get("per_object", []))
     if rows.empty:
         return
-    report.table(rows.set_index("object_id"), caption="Per object: kept grips run and the "
-                 "Spearman of their set-A against set-B means (nan: skipped).")
+    shown = rows.assign(spearman=rows["spearman"].astype(object).where(rows["spearman"].notna(),
+                                                                         "skipped"))
+    report.table(shown.set_index("object_id"), caption="Per object: kept grips run and the "
+                 "Spearman of their set-A against set-B means (skipped: a set ranks nothing).")
     scored = rows.dropna(subset=["spearman"]).sort_values("spearman")
-    fig = Figure(figsize=(6.0, 3.4))
+    fig = Figure(figsize=(7.5, 3.4))
     ax = fig.subplots()
     ax.bar(scored["object_id"].astype(str), scored["spearman"], color="tab:blue")
     if check["measured"] is not None:
@@ -247,7 +314,7 @@ def _within_object(report: Report, check: dict[str, Any], fig_dir: Path, root: P
     ax.set(ylabel="Spearman, set A vs set B", ylim=(-1.05, 1.05),
            title="Within-object test-retest")  # fmt: skip
     ax.tick_params(axis="x", labelrotation=60, labelsize=7)
-    ax.legend(fontsize=8)
+    _legend_beside(ax)
     fig.tight_layout()
     _figure(report, save_figure(fig, fig_dir / "calibration_within_object.png"), root,
             "Each object's Spearman between two disjoint sets of its grips' trials.")
@@ -274,7 +341,7 @@ def _deciles(report: Report, checks: list[dict[str, Any]], fig_dir: Path, root: 
         report.text(
             f"{column}: Spearman between decile and mean robustness {_number(check['measured'])}"
             f" {_ci(check['ci'])} (object-cluster bootstrap over {check['objects']} objects, "
-            f"{check['grips']} grips), {check['target']}: {_verdict(check['passed'])}; "
+            f"{check['grips']} grips), {check['target']}: {_judged(check)}; "
             f"over single grips the Spearman is {_number(check['pooled_grip_spearman'])}."
         )
     fig.tight_layout()
@@ -317,6 +384,15 @@ def _ci(ci: Any) -> str:
 
 def _verdict(passed: bool | None) -> str:
     return {True: "pass", False: "FAIL", None: "-"}[passed]
+
+
+def _judged(check: dict[str, Any]) -> str:
+    """The check's verdict, or "too small to judge" with what was measured (see :func:`assess`;
+    a check not assessed is judged as measured)."""
+    verdict = _verdict(check.get("passed"))
+    if not check.get("too_small"):
+        return verdict
+    return "too small to judge" + (f"; measured {verdict}" if verdict != "-" else "")
 
 
 def _plain(value: Any) -> Any:

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from matplotlib import colormaps
 from matplotlib.figure import Figure
 
 from grip_env.columns import FEATURES
@@ -15,27 +16,48 @@ from grip_env.objects import PlanarObject
 
 
 def correlation_heatmap(correlations: pd.DataFrame, path: Path, label: str = "Spearman ρ") -> Path:
-    """Heat map of a correlation matrix with the values printed in the cells."""
+    """Heat map of a correlation matrix with the values printed in the cells (see
+    :func:`correlation_figure`)."""
+    return save_figure(correlation_figure(correlations, label), path)
+
+
+def correlation_figure(correlations: pd.DataFrame, label: str = "Spearman ρ") -> Figure:
+    """The heat map; an undefined correlation (a constant feature's row and column) is a grey
+    cell marked "—", never "nan"."""
     fig = Figure(figsize=(7, 6))
     ax = fig.subplots()
-    image = ax.imshow(correlations.to_numpy(), vmin=-1, vmax=1, cmap="RdBu_r")
+    values = correlations.to_numpy(dtype=float)
+    cmap = colormaps["RdBu_r"].with_extremes(bad="lightgrey")
+    image = ax.imshow(np.ma.masked_invalid(values), vmin=-1, vmax=1, cmap=cmap)
     labels = list(correlations.columns)
     ax.set_xticks(range(len(labels)), labels)
     ax.set_yticks(range(len(labels)), labels)
-    for (i, j), value in np.ndenumerate(correlations.to_numpy()):
-        ax.text(j, i, f"{value:.2f}", ha="center", va="center", fontsize=7)
+    for (i, j), value in np.ndenumerate(values):
+        ax.text(j, i, f"{value:.2f}" if np.isfinite(value) else "—", ha="center", va="center",
+                fontsize=7)  # fmt: skip
     fig.colorbar(image, ax=ax, shrink=0.8, label=label)
-    ax.set_title(f"Feature correlations, {label} (paper, section VI-B)")
+    undefined = [name for k, name in enumerate(labels) if np.isnan(values[k]).all()]
+    ax.set_title(f"Feature correlations, {label} (paper, section VI-B)"
+                 + (f"\n— : {', '.join(undefined)} constant, no correlation defined"
+                    if undefined else ""), fontsize=10)  # fmt: skip
     fig.tight_layout()
-    return save_figure(fig, path)
+    return fig
 
 
 def feature_distributions(table: pd.DataFrame, path: Path) -> Path:
+    """Share of grips per bin of each feature, held against slipped, on symlog axes (see
+    :func:`distribution_figure`)."""
+    return save_figure(distribution_figure(table), path)
+
+
+def distribution_figure(table: pd.DataFrame) -> Figure:
     """Share of grips per bin of each feature, held against slipped, on symlog axes.
 
     No value is cut: bins are even in ``asinh(x / s)`` (``s`` the feature's smallest nonzero
     magnitude, at least 1e-3), which is what a symlog axis with linear range ``s`` shows; each
-    outcome's bars sum to 1, so the two groups compare whatever their sizes.
+    outcome's bars sum to 1, so the two groups compare whatever their sizes. A feature whose
+    values span less than ``s`` gets an axis of ``s`` either side of them; a constant one says
+    so in its title.
     """
     fig = Figure(figsize=(12, 8))
     axes = fig.subplots(3, 4).ravel()
@@ -51,13 +73,15 @@ def feature_distributions(table: pd.DataFrame, path: Path) -> Path:
                 ax.hist(chosen, bins=edges, weights=np.full(chosen.size, 1.0 / chosen.size),
                         alpha=0.55, label=label, color=colour)  # fmt: skip
         ax.set_xscale("symlog", linthresh=scale)
-        ax.set_title(name)
+        ax.set_xlim(edges[0], edges[-1])
+        unique = np.unique(values[finite])
+        ax.set_title(f"{name} (constant {unique[0]:g})" if unique.size == 1 else name)
         ax.tick_params(labelsize=7)
     axes[0].legend()
     fig.supylabel("share of the outcome's grips")
     fig.suptitle("Feature distributions by simulated outcome (symlog x: every value shown)")
     fig.tight_layout()
-    return save_figure(fig, path)
+    return fig
 
 
 def _linear_range(values: np.ndarray) -> float:
@@ -66,12 +90,14 @@ def _linear_range(values: np.ndarray) -> float:
 
 
 def _symlog_edges(values: np.ndarray, scale: float, bins: int = 30) -> np.ndarray:
+    """Bin edges even in ``asinh(x / scale)`` over the values, widened to ``scale`` either side
+    when the values span less (a constant feature's bar sits mid-axis on a readable scale)."""
     if values.size == 0:
         return np.linspace(0.0, 1.0, bins + 1)
-    low, high = np.arcsinh(values.min() / scale), np.arcsinh(values.max() / scale)
-    if high <= low:
-        high = low + 1e-6
-    return np.sinh(np.linspace(low, high, bins + 1)) * scale
+    low, high = float(values.min()), float(values.max())
+    if high - low < scale:
+        low, high = low - scale, high + scale
+    return np.sinh(np.linspace(np.arcsinh(low / scale), np.arcsinh(high / scale), bins + 1)) * scale
 
 
 def success_by_bin(bins: pd.DataFrame, path: Path, column: str = "Q_C") -> Path:

@@ -29,6 +29,7 @@ from classifiers.evaluation.half_widths import (
     paired_bootstrap,
 )
 from classifiers.report.document import Report
+from classifiers.report.judge import FEW_OBJECTS
 
 LABELS = {"roc_auc": "best model's ROC-AUC", "hand_difference": "hand features (paired ΔAUC)",
           "rl_minus_best_qc": "RL − best Q_C (held out)"}  # fmt: skip
@@ -129,19 +130,25 @@ def power_section(report: Report, out: Path) -> None:
     report.heading("Statistical power: how many objects and trials")
     measured = study_half_widths(out)
     trials = _study_trials(out)
-    rows = {}
+    rows, unjudged = {}, []
     for quantity, value in measured.items():
         target, half, n = TARGETS[quantity], value["half_width"], value["objects"]
+        met, why = target_met(half, target, n)
         rows[LABELS[quantity]] = {
             "estimate": value["estimate"], "half-width": half, "objects": n, "target": target,
-            "met": "yes" if half <= target else "no",
-            "objects needed (1/sqrt(n))": math.ceil(n * (half / target) ** 2),
+            "met": met,
+            "objects needed (1/sqrt(n))": (math.ceil(n * (half / target) ** 2)
+                                           if half and math.isfinite(half) else "–"),
         }
+        if why:
+            unjudged.append(f"{LABELS[quantity]}: {why}")
     if rows:
         report.table(pd.DataFrame(rows).T.rename_axis("question"), float_format="{:.3f}",
                      caption=f"This study's 95% interval half-widths at {trials} trials per grip "
                      "against the targets; the objects needed scale this study's size by "
                      "(half-width / target)^2, the 1/sqrt(n) law from a single size.")
+    if unjudged:
+        report.text("Not judged against its target: " + "; ".join(unjudged) + ".")
     summary = _json(out / "power" / POWER_FILE)
     if summary is None:
         report.text("No measured power curve: `grip-env power --data DIR --out "
@@ -154,6 +161,21 @@ def power_section(report: Report, out: Path) -> None:
                       "the number of objects (left) and of trials per grip (right): dots are "
                       "seeded subsamples, lines the fitted law h² = (a + b/t)/n, dotted the "
                       "targets.")
+
+
+def target_met(half: float | None, target: float, objects: int) -> tuple[str, str | None]:
+    """Whether a half-width meets its target ("yes", "no" or "not judged") and, when not judged,
+    why: a zero (or undefined) width comes from constant scores or too few objects to vary,
+    not from precision, and a width within target on few objects is itself too uncertain."""
+    if half is None or not math.isfinite(half) or half <= 0:
+        return "not judged", ("its interval has zero width (constant scores, or too few objects "
+                              "for a resample to differ): it measures no precision")
+    if half > target:
+        return "no", None
+    if objects < FEW_OBJECTS:
+        return "not judged", (f"a half-width within target on {objects} objects (fewer than "
+                              f"{FEW_OBJECTS}) is itself too uncertain")
+    return "yes", None
 
 
 def _curve_tables(report: Report, summary: dict[str, Any]) -> None:

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import functools
 import json
 import platform
 import subprocess
+from collections.abc import Callable
 from datetime import UTC, datetime
 from importlib import metadata
 from pathlib import Path
@@ -13,20 +15,35 @@ from typing import Any
 import pandas as pd
 import yaml
 
+from classifiers.experiments.perception_effect import RESULT_FILE as PERCEPTION_FILE
 from classifiers.report import analysis, figures
 from classifiers.report.document import Report, frame_of_intervals
+from classifiers.report.judge import (
+    FEW_OBJECTS,
+    SPANS,
+    difference_verdict,
+    leaderboard_caution,
+    unjudgeable,
+)
 from classifiers.report.power import power_section
 from grip_env.config import Config
 from grip_env.objects import PlanarObject, procedural_objects
 
+STAGE_RECORD = "stage.json"
 _PACKAGES = ("numpy", "pandas", "scikit-learn", "torch", "pybullet", "gymnasium",
              "stable-baselines3", "sb3-contrib")
 
 
-def write_report(out: Path, config: Config, table: pd.DataFrame) -> Path:
-    """Write the report of the study in ``out`` and return the Markdown path."""
+def write_report(out: Path, config: Config, table: pd.DataFrame,
+                 quick: bool | None = None) -> Path:
+    """Write the report of the study in ``out`` and return the Markdown path.
+
+    ``quick``: whether the study ran the ``--quick`` toy profile (None: read from the stage
+    records in ``out``, see :func:`ran_quick`); a toy or small study says so at the top.
+    """
     fig_dir = out / "figures"
     report = Report("grip-env study")
+    _size_banner(report, config, table, ran_quick(out) if quick is None else quick)
     report.text(
         "Candidate Barrett BH8-280 grips of planar objects, characterised by the paper's twelve "
         "visual quality measures and labelled by simulated execution in PyBullet under "
@@ -52,6 +69,54 @@ def write_report(out: Path, config: Config, table: pd.DataFrame) -> Path:
 
 
 # ---------------------------------------------------------------------------------- sections
+def _stage_section(title: str, result_file: str) -> Callable[[Callable[..., None]],
+                                                              Callable[..., None]]:
+    """A section drawn from one stage's JSON result (``result_file``, relative to the study
+    folder): the decorated ``body(report, out, result, *rest)`` is called as
+    ``section(report, out, *rest)``, under ``title``, and "Not run." stands in for it when the
+    stage wrote no result."""
+    def decorate(body: Callable[..., None]) -> Callable[..., None]:
+        @functools.wraps(body)
+        def section(report: Report, out: Path, *rest: Any) -> None:
+            report.heading(title)
+            result = _json(out / result_file)
+            if result is None:
+                report.text("Not run.")
+                return
+            body(report, out, result, *rest)
+        return section
+    return decorate
+
+
+def ran_quick(out: Path) -> bool:
+    """Whether the study in ``out`` ran ``--quick``, as its calibration stage's record says (the
+    stage records the flag among its inputs, since its sizes depend on it)."""
+    record = _json(out / "calibration" / STAGE_RECORD) or {}
+    return bool(record.get("inputs", {}).get("quick"))
+
+
+def _size_banner(report: Report, config: Config, table: pd.DataFrame, quick: bool) -> None:
+    """At the top: a toy profile, or a study too small for verdicts, says so."""
+    objects = table["object_id"].nunique()
+    learning = config.learning
+    if quick:
+        report.text(
+            "**Toy profile (`grip-env study --quick`).** This study ran the quick profile, which "
+            f"checks that every stage runs end to end: {objects} objects, "
+            f"{config.dataset.trials} trials per grip, {learning.folds}-fold cross-validation × "
+            f"{learning.repeats} repeat(s), {config.selector.timesteps} selector timesteps and "
+            "the calibration at its quick sizes. Its numbers show that the stages run, not what "
+            "they measure: the intervals below are wide or of zero width, no winner is declared "
+            "from them, and checks on too small a sample say so. Run `grip-env study` without "
+            "`--quick` for results."
+        )
+    elif objects < FEW_OBJECTS:
+        report.text(
+            f"**Small study: {objects} objects.** With fewer than {FEW_OBJECTS} objects the "
+            "intervals below are indicative only, and no winner is declared from them."
+        )
+
+
 def _dataset_section(report: Report, table: pd.DataFrame, objects: list[PlanarObject],
                      fig_dir: Path, config: Config) -> None:
     report.heading("Dataset")
@@ -95,13 +160,16 @@ def _feature_section(report: Report, table: pd.DataFrame, fig_dir: Path) -> None
                   "per bin of each feature; symlog x axis, so no value is cut.")
     correlations = analysis.feature_correlations(table, "spearman")
     pearson = analysis.feature_correlations(table, "pearson")
+    constant = analysis.constant_columns(table, analysis.CORRELATION_COLUMNS)
+    note = _constant_note(constant)
     path = figures.correlation_heatmap(correlations, fig_dir / "correlations.png")
     report.figure(_rel(path, root), "Spearman rank correlations of the features and Q_C over "
-                  "all grips.")
+                  "all grips" + (f"; {note}" if note else "") + ".")
     shown = correlations.round(2).assign(**{"Q_C (Pearson)": pearson["Q_C"].round(2)})
-    report.table(shown, caption="Spearman rank correlations, with Pearson's r against Q_C in the "
-                 "last column (the paper's table in section VI-B, Pearson, has Q_C correlating "
-                 "most with C4 (.86) and C1 (.68)).")
+    report.table(undefined_as_dash(shown), caption="Spearman rank correlations, with Pearson's r "
+                 "against Q_C in the last column (the paper's table in section VI-B, Pearson, "
+                 "has Q_C correlating most with C4 (.86) and C1 (.68))"
+                 + (f"; {note}" if note else "") + ".")
     for column in ("Q_C", "Q_G"):
         bins = analysis.success_by_decile(table, column)
         path = figures.success_by_bin(bins, fig_dir / f"success_by_{column}.png", column)
@@ -114,6 +182,24 @@ def _feature_section(report: Report, table: pd.DataFrame, fig_dir: Path) -> None
         f"the worst three {bins['success_rate'].iloc[-3:].mean():.1%} (difference {trend:+.1%}); "
         "the paper expects lower Q_C to hold more often."
     )
+
+
+def _constant_note(constant: dict[str, float]) -> str:
+    """What a dash in the correlations means, naming the constant features ("" if none)."""
+    if not constant:
+        return ""
+    named = ", ".join(f"{name} (every grip {value:g})" for name, value in constant.items())
+    verb = "is" if len(constant) == 1 else "are"
+    return f"{named} {verb} constant on this dataset: no correlation with it is defined (—)"
+
+
+_UNDEFINED_NOTE = (" —: undefined on these objects (a ROC-AUC or balanced accuracy needs grips "
+                   "that held and grips that slipped among them).")
+
+
+def undefined_as_dash(frame: pd.DataFrame) -> pd.DataFrame:
+    """``frame`` with every undefined (NaN) number shown as "—"."""
+    return frame.astype(object).where(frame.notna(), "—")
 
 
 def _rank_section(report: Report, objects: list[PlanarObject], config: Config) -> None:
@@ -150,26 +236,39 @@ def _rank_section(report: Report, objects: list[PlanarObject], config: Config) -
     )
 
 
-def _classifier_section(report: Report, out: Path) -> None:
-    report.heading("Classifiers (grouped cross-validation by object)")
-    metrics = _stage_result(report, out / "classifiers" / "metrics.json")
-    if metrics is None:
-        return
+@_stage_section("Classifiers (grouped cross-validation by object)", "classifiers/metrics.json")
+def _classifier_section(report: Report, out: Path, metrics: dict[str, Any]) -> None:
     models = metrics["models"]
     names = ["roc_auc", "balanced_accuracy", "accuracy", "f1", "brier", "top1_success"]
     report.table(frame_of_intervals(models, names),
                  caption="Mean and 95% interval over folds × repeats.")
+    objects = metrics.get("cv", {}).get("n_objects")
     best = _best(models, "roc_auc")
     if best:
         top = _best(models, "top1_success")
-        report.text(
-            f"Best ROC-AUC: **{best}** ({_fmt(models[best]['roc_auc'])}); best top-1 (does the "
-            f"model's top-ranked grip on a test object hold): **{top}** "
-            f"({_fmt(models[top]['top1_success'])})."
-        )
+        report.text(_sentence(
+            _winner("ROC-AUC", best, models[best]["roc_auc"], objects, SPANS["roc_auc"]),
+            _winner("top-1 (does the model's top-ranked grip on a test object hold)", top,
+                    models[top]["top1_success"], objects, SPANS["top1_success"])))
     _held_out_table(report, metrics.get("held_out"))
     _family_holdout_table(report, metrics.get("family_holdout"))
     _stage_figures(report, out, "classifiers")
+
+
+def _winner(metric: str, name: str, value: dict[str, Any], objects: int | None,
+            span: tuple[float, float] | None = None) -> str:
+    """The best model by ``metric``: bold when its interval can carry the claim, otherwise the
+    highest mean and why it is not declared best."""
+    problem = unjudgeable(value, objects, span)
+    if problem is None:
+        return f"best {metric}: **{name}** ({_fmt(value)})"
+    return f"highest mean {metric}: {name} ({_fmt(value)}), not declared best: {problem}"
+
+
+def _sentence(*clauses: str) -> str:
+    """Clauses joined by semicolons into one sentence."""
+    text = "; ".join(clauses)
+    return text[:1].upper() + text[1:] + "."
 
 
 def _held_out_table(report: Report, held_out: dict[str, Any] | None, rows: str = "model",
@@ -180,11 +279,15 @@ def _held_out_table(report: Report, held_out: dict[str, Any] | None, rows: str =
     shown = ["roc_auc", "balanced_accuracy", "brier", "top1_success"]
     frame = pd.DataFrame(held_out["models"]).T.reindex(columns=shown).rename_axis(rows)
     split = held_out["split"]
-    report.table(frame.astype(float).round(3),
+    few = (f" {len(split['test'])} held-out objects are too few to read anything into."
+           if len(split["test"]) < FEW_OBJECTS else "")
+    frame = frame.astype(float).round(3)
+    report.table(undefined_as_dash(frame),
                  caption=f"{what}Trained on the {len(split['train'])} training objects, scored on "
                  f"the {len(split['test'])} held-out objects the RL selector is scored on "
                  f"(test_fraction {split['test_fraction']:g}, seed {split['seed']}): one split, "
-                 "so no interval; the cross-validated table above is the estimate.")
+                 f"so no interval; the cross-validated table above is the estimate.{few}"
+                 + _UNDEFINED_NOTE * bool(frame.isna().any().any()))
 
 
 def _family_holdout_table(report: Report, holdout: dict[str, Any] | None) -> None:
@@ -201,9 +304,10 @@ def _family_holdout_table(report: Report, holdout: dict[str, Any] | None) -> Non
                                             for model, values in entry["models"].items()}
     frame = pd.DataFrame(columns).rename_axis("model").astype(float).round(3)
     counts = ", ".join(f"{name} {entry['objects']} objects" for name, entry in scored.items())
-    report.table(frame, caption="Family holdout: trained on every other object family, scored "
-                 f"on the family named in the column ({counts}); one split per family, so no "
-                 "interval. Does what is learnt on drawn shapes transfer to real silhouettes?")
+    report.table(undefined_as_dash(frame), caption="Family holdout: trained on every other "
+                 f"object family, scored on the family named in the column ({counts}); one split "
+                 "per family, so no interval. Does what is learnt on drawn shapes transfer to "
+                 "real silhouettes?" + _UNDEFINED_NOTE * bool(frame.isna().any().any()))
 
 
 def _calibration_section(report: Report, out: Path, fig_dir: Path) -> None:
@@ -219,13 +323,10 @@ def _calibration_section(report: Report, out: Path, fig_dir: Path) -> None:
     calibration_section(report, result, trials, fig_dir, out)
 
 
-def _perception_section(report: Report, out: Path, table: pd.DataFrame) -> None:
-    from classifiers.experiments.perception_effect import RESULT_FILE
-
-    report.heading("Planning on the rendered contour against the true one")
-    result = _stage_result(report, out / "perception" / RESULT_FILE)
-    if result is None:
-        return
+@_stage_section("Planning on the rendered contour against the true one",
+                f"perception/{PERCEPTION_FILE}")
+def _perception_section(report: Report, out: Path, result: dict[str, Any],
+                        table: pd.DataFrame) -> None:
     if result["planned_on"] != "render":
         report.text("The dataset's grips were planned on the true polygons "
                     "(`perception.source: polygon`): there is no rendered plan to compare.")
@@ -285,21 +386,19 @@ def _regression_section(report: Report, out: Path) -> None:
     best = _best(learned, "spearman_object")
     versus = result["paired_difference"].get(best or "", {}).get("vs_rank_qc")
     if best and versus:
-        report.text(
-            f"Best learned regressor within objects: **{best}** (Spearman "
-            f"{_fmt(models[best]['spearman_object'])}), against ranking by Q_C "
-            f"{_fmt(versus['spearman_object'])} paired; pooled Spearman "
-            f"{_fmt(models[best]['spearman'])} against Q_C's "
+        objects = result.get("cv", {}).get("n_objects")
+        report.text(_sentence(
+            _winner("learned regressor within objects (Spearman)", best,
+                    models[best]["spearman_object"], objects, SPANS["spearman_object"]),
+            f"against ranking by Q_C {_fmt(versus['spearman_object'])} paired "
+            f"({difference_verdict(versus['spearman_object'], objects, (-2.0, 2.0))})",
+            f"pooled Spearman {_fmt(models[best]['spearman'])} against Q_C's "
             f"{_fmt(models['rank_qc']['spearman'])} and Q_G's "
-            f"{_fmt(models['rank_qg']['spearman'])}."
-        )
+            f"{_fmt(models['rank_qg']['spearman'])}"))
 
 
-def _ablation_section(report: Report, out: Path) -> None:
-    report.heading("Ablation: what the hand features add")
-    ablation = _stage_result(report, out / "ablation" / "ablation.json")
-    if ablation is None:
-        return
+@_stage_section("Ablation: what the hand features add", "ablation/ablation.json")
+def _ablation_section(report: Report, out: Path, ablation: dict[str, Any]) -> None:
     model, reference = ablation["model"], ablation["reference"]
     sets = ablation["feature_sets"]
     scores = {name: block["models"][model] for name, block in sets.items()}
@@ -314,12 +413,17 @@ def _ablation_section(report: Report, out: Path) -> None:
                  caption=f"Paired difference against {reference} (same folds and seeds).")
     hand = differences.get("without_hand", {}).get("roc_auc")
     if hand is not None:
-        verdict = ("the interval excludes zero" if hand["ci"][0] > 0 or hand["ci"][1] < 0
-                   else "the interval includes zero: no significant effect on this dataset")
+        verdict = difference_verdict(hand, ablation.get("cv", {}).get("n_objects"), (-1.0, 1.0))
         report.text(
             f"Removing the six hand features (C1–C6) changes ROC-AUC by {_fmt(hand)} "
             f"against all twelve; {verdict}."
         )
+    constant = _constant_scores(scores, "roc_auc")
+    if constant is not None:
+        chance = " (chance: it learnt nothing on this dataset)" if constant == 0.5 else ""
+        report.text(f"Model {model} scores ROC-AUC {constant:.3f} on every feature set and fold, "
+                    f"with no spread{chance}, so the differences above say nothing about the "
+                    "features.")
     _held_out_table(report, ablation.get("held_out"), "feature set", f"Model {model}. ")
     _regression_ablation(report, ablation.get("regression"))
     importance = ablation.get("permutation_importance", {})
@@ -343,19 +447,16 @@ def _regression_ablation(report: Report, regression: dict[str, Any] | None) -> N
                  caption=f"Regression task: paired difference against {reference}.")
     hand = differences.get("without_hand", {}).get("spearman_object")
     if hand is not None and hand["mean"] is not None:
-        verdict = ("the interval excludes zero" if hand["ci"][0] > 0 or hand["ci"][1] < 0
-                   else "the interval includes zero: no significant effect on this dataset")
+        verdict = difference_verdict(hand, regression.get("cv", {}).get("n_objects"),
+                                     (-2.0, 2.0))
         report.text(
             f"Regression task: removing the hand features changes the within-object Spearman "
             f"by {_fmt(hand)}; {verdict}."
         )
 
 
-def _selector_section(report: Report, out: Path) -> None:
-    report.heading("RL selector on held-out objects")
-    selector = _stage_result(report, out / "selector" / "selector.json")
-    if selector is None:
-        return
+@_stage_section("RL selector on held-out objects", "selector/selector.json")
+def _selector_section(report: Report, out: Path, selector: dict[str, Any]) -> None:
     policies = selector["policies"]
     metrics = sorted({m for v in policies.values() for m in v if isinstance(v.get(m), dict)})
     report.table(frame_of_intervals(policies, metrics),
@@ -363,7 +464,8 @@ def _selector_section(report: Report, out: Path) -> None:
     _stage_figures(report, out, "selector")
 
 
-def _benchmark_section(report: Report, out: Path) -> None:
+@_stage_section("Leaderboard: the grip each method picks", "benchmark/leaderboard.json")
+def _benchmark_section(report: Report, out: Path, board: dict[str, Any]) -> None:
     """The leaderboard: every method's pick on the held-out objects, against best-Q_C."""
     from classifiers.experiments.benchmark.leaderboard import (
         ATTEMPTS_FILE,
@@ -373,10 +475,6 @@ def _benchmark_section(report: Report, out: Path) -> None:
         verdict_sentence,
     )
 
-    report.heading("Leaderboard: the grip each method picks")
-    board = _stage_result(report, out / "benchmark" / "leaderboard.json")
-    if board is None:
-        return
     if not board.get("methods"):
         report.text(f"No leaderboard: {board.get('skipped', 'no method was scored')}.")
         return
@@ -389,9 +487,12 @@ def _benchmark_section(report: Report, out: Path) -> None:
         "random) / (oracle - random) per object, random being the exact mean over the "
         "candidates. " + split_line(board)
     )
+    few = leaderboard_caution(board)
+    if few:
+        main = main.assign(verdict="not judged")
     report.table(main.set_index("method"), caption="Leaderboard, sorted by the interquartile "
                  "mean of the normalised score; intervals: " + board["interval"] + ".")
-    report.text("**" + verdict_sentence(board) + "**")
+    report.text(few or "**" + verdict_sentence(board) + "**")
     report.table(attempts.set_index("method"), caption="Success within k attempts: the chance "
                  "that one of the method's top-k picks holds, independent trials assumed "
                  "(GripSelect-v0 with max_attempts = k; GripAccept-v0 executing those k).")
@@ -427,7 +528,7 @@ def _stage_table(report: Report, out: Path) -> None:
     """Each stage's record: the key of what it read, the grip-env version, when it was written."""
     rows = {}
     for folder in ("classifiers", "ablation", "selector", "calibration"):
-        record = _json(out / folder / "stage.json")
+        record = _json(out / folder / STAGE_RECORD)
         if record:
             rows[folder] = {"key": str(record.get("key", ""))[:12],
                             "grip-env": record.get("package_version", "?"),
@@ -465,31 +566,46 @@ def _study_objects(config: Config) -> list[PlanarObject]:
     return objects
 
 
-def _stage_result(report: Report, path: Path) -> dict[str, Any] | None:
-    """A stage's JSON result, or None after saying in the report that the stage did not run."""
-    result = _json(path)
-    if result is None:
-        report.text("Not run.")
-    return result
+def _constant_scores(scores: dict[str, dict[str, Any]], metric: str) -> float | None:
+    """The one value every row scores on ``metric`` with a zero-width interval, or None."""
+    blocks = [block.get(metric) or {} for block in scores.values()]
+    values = {(b.get("mean"), *(b.get("ci") or [None, None])) for b in blocks}
+    if len(values) != 1:
+        return None
+    mean, low, high = next(iter(values))
+    return mean if mean is not None and mean == low == high else None
 
 
-_CAPTIONS = {
-    "roc": "ROC curves of the pooled out-of-fold predictions of grouped cross-validation (first "
-           "repeat): every grip is scored by a model that never saw its object.",
-    "calibration": "Reliability of the predicted success probabilities (same out-of-fold "
-                   "predictions), with the number of grips in each probability bin below.",
-    "ablation": "Classification: ROC-AUC of each feature set (left) and its paired difference "
-                "to all twelve features (right), mean and 95% corrected interval.",
-    "ablation_regression": "Regression: Spearman of predicted and simulated robustness for "
-                           "each feature set (left) and its paired difference (right).",
-    "learning_curve": "Selector episode reward while training, with the expected reward of "
-                      "random, best-Q_C and oracle picks on the training objects.",
+#: Every figure a stage draws, per stage folder, in the order shown, with its caption (a stage
+#: that did not draw one, such as the regression ablation without a graded outcome, skips it).
+STAGE_FIGURES: dict[str, tuple[tuple[str, str], ...]] = {
+    "classifiers": (
+        ("roc.png", "ROC curves of the pooled out-of-fold predictions of grouped cross-validation "
+                    "(first repeat): every grip is scored by a model that never saw its object."),
+        ("calibration.png", "Reliability of the predicted success probabilities (same "
+                            "out-of-fold predictions), with the number of grips in each "
+                            "probability bin below."),
+    ),
+    "ablation": (
+        ("ablation.png", "Classification: ROC-AUC of each feature set (left) and its paired "
+                         "difference to all twelve features (right), mean and 95% corrected "
+                         "interval."),
+        ("ablation_regression.png", "Regression: Spearman of predicted and simulated "
+                                    "robustness for each feature set (left) and its paired "
+                                    "difference (right)."),
+    ),
+    "selector": (
+        ("learning_curve.png", "Selector episode reward while training, with the expected "
+                               "reward of random, best-Q_C and oracle picks on the training "
+                               "objects."),
+    ),
 }
 
 
 def _stage_figures(report: Report, out: Path, folder: str) -> None:
-    for png in sorted((out / folder).glob("*.png")):
-        report.figure(_rel(png, out), _CAPTIONS.get(png.stem, png.stem.replace("_", " ")))
+    for name, caption in STAGE_FIGURES[folder]:
+        if (out / folder / name).exists():
+            report.figure(f"{folder}/{name}", caption)
 
 
 def _json(path: Path) -> dict[str, Any] | None:

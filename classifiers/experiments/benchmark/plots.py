@@ -20,15 +20,14 @@ def _pyplot() -> Any:
     return plt
 
 
-def _colors(plt: Any, board: Mapping[str, Any]) -> list[Any]:
-    """One distinct colour per method (tab20: up to 20 methods before a colour repeats)."""
-    cmap = plt.get_cmap("tab20")
-    return [cmap(i % 20) for i in range(len(board["methods"]))]
+def _lines(ax: Any, board: Mapping[str, Any], x: Any, values: Any, **options: Any) -> None:
+    """One line per method, each with a look of its own and the references (random, oracle,
+    best-Q_C) in greys; a method's line identical to another's says so in the legend
+    (:func:`classifiers.experiments.plots.draw_lines`)."""
+    from classifiers.experiments.plots import draw_lines
 
-
-def _style(name: str, board: Mapping[str, Any]) -> str:
-    """Dashed for the references (oracle, random, best-Q_C), solid for the rest."""
-    return "--" if name in ("random", "oracle", board["reference"]) else "-"
+    series = {name: (x, values(row)) for name, row in board["methods"].items()}
+    draw_lines(ax, series, ("random", "oracle", board["reference"]), **options)
 
 
 def _finish(plt: Any, fig: Any, ax: Any, title: str, legend: str, path: str | Path) -> Path:
@@ -47,9 +46,7 @@ def plot_profiles(board: Mapping[str, Any], path: str | Path) -> Path:
     plt = _pyplot()
     taus = np.asarray(board["taus"], dtype=float)
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    for (name, row), color in zip(board["methods"].items(), _colors(plt, board), strict=True):
-        ax.step(taus, np.asarray(row["profile"], dtype=float), where="post", color=color,
-                ls=_style(name, board), label=name)  # fmt: skip
+    _lines(ax, board, taus, lambda row: row["profile"], drawstyle="steps-post")
     ax.set_xlabel("normalised score tau  (0 = random pick, 1 = oracle)")
     ax.set_ylabel("fraction of objects x runs with score > tau")
     ax.set_xlim(taus.min(), taus.max())
@@ -62,9 +59,7 @@ def plot_attempts(board: Mapping[str, Any], path: str | Path) -> Path:
     plt = _pyplot()
     ks = np.arange(1, MAX_ATTEMPTS + 1)
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    for (name, row), color in zip(board["methods"].items(), _colors(plt, board), strict=True):
-        values = [row[f"success_at_{k}"] for k in ks]
-        ax.plot(ks, values, marker="o", color=color, ls=_style(name, board), label=name)
+    _lines(ax, board, ks, lambda row: [row[f"success_at_{k}"] for k in ks], every_point=True)
     ax.set_xticks(ks)
     ax.set_xlabel("attempts allowed")
     ax.set_ylabel("P(one of the top-k picks holds)")
