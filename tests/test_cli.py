@@ -165,17 +165,7 @@ def test_flags_show_as_flags(name):
 
 _ARGUMENT_COMMANDS = sorted(name for name, command in COMMANDS.items()
                             if any(isinstance(p, typer.core.TyperArgument) for p in command.params))
-# Left to the engineers whose files these are (strict: each fails loudly once fixed, to be removed)
-_OTHERS_TO_DO = {
-    "show": "grip_env/cli/show.py: its argument needs typer.Argument(metavar='OBJECT')",
-    ("show", "grips"): "grip_env/cli/show.py: --grips needs min=0",
-    ("benchmark", "split_version"): "grip_env/cli/benchmark.py: --split-version needs min=1",
-}
-
-
-@pytest.mark.parametrize("name", [
-    pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=_OTHERS_TO_DO[n]))
-    if n in _OTHERS_TO_DO else n for n in _ARGUMENT_COMMANDS])
+@pytest.mark.parametrize("name", _ARGUMENT_COMMANDS)
 def test_usage_names_each_argument_as_the_help_text_does(name):
     command = COMMANDS[name]
     usage = _help(name).split("Usage:", 1)[1].splitlines()[0]
@@ -194,9 +184,7 @@ def _int_options():
         for param in command.params:
             if isinstance(param, typer.core.TyperOption) and \
                     param.type_descriptor.annotation is int:
-                todo = _OTHERS_TO_DO.get((name, param.name))
-                marks = [pytest.mark.xfail(strict=True, reason=todo)] if todo else []
-                yield pytest.param(name, param.name, marks=marks, id=f"{name}-{param.name}")
+                yield pytest.param(name, param.name, id=f"{name}-{param.name}")
 
 
 @pytest.mark.parametrize(("name", "option"), list(_int_options()))

@@ -43,11 +43,13 @@ def test_show_sim_writes_a_strip_of_the_trial(runner, tmp_path):
         assert image.size[0] > 3 * image.size[1]  # frames side by side
 
 
-@pytest.mark.parametrize("args", [["nosuch"], ["star", "--grips", "-1"]])
-def test_show_refuses_bad_input_with_exit_code_2(runner, tmp_path, args):
+@pytest.mark.parametrize(("args", "said"), [
+    (["nosuch"], "error:"), (["star", "--grips", "-1"], "greater than or equal to 0")])
+def test_show_refuses_bad_input_with_exit_code_2(runner, tmp_path, args, said):
     result = runner.invoke(app, ["show", *args, "--out", str(tmp_path / "x.png")])
     assert result.exit_code == 2
-    assert "error:" in result.output
+    assert said in result.output
+    assert not (tmp_path / "x.png").exists()
 
 
 def test_objects_from_vertex_and_image_files(tmp_path):

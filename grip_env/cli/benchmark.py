@@ -43,6 +43,7 @@ def benchmark(
              "comparable with standard-split scores); standard: the standard split or an error "
              "saying what fits")] = SplitMode.auto,
     split_version: Annotated[int | None, typer.Option(
+        min=1,
         help="standard split version (implies --split standard) [default: the latest, 3]; 2 = "
              "default datasets of the 60-object set with meshes, 1 = before the default objects "
              "gained meshes")] = None,

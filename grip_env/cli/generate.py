@@ -109,7 +109,7 @@ def _objects(spec: str | None, mm_per_px: float | None) -> str | list[PlanarObje
     """What ``--objects`` names: a set or a count (as given), or the objects of its files."""
     from grip_env.objects import OBJECT_SETS, SHAPE_NAMES
     from grip_env.objects.meshes import MESH_SET_NAMES
-    from grip_env.objects.sources import is_path_spec, objects_from_path
+    from grip_env.objects.sources import check_file_spec, is_path_spec, objects_from_path
 
     named = spec is None or spec.strip().lstrip("-").isdigit() or spec in OBJECT_SETS or (
         spec in SHAPE_NAMES) or spec in MESH_SET_NAMES
@@ -117,6 +117,7 @@ def _objects(spec: str | None, mm_per_px: float | None) -> str | list[PlanarObje
         if mm_per_px is not None:
             raise ValueError(f"--mm-per-px {mm_per_px:g} is for image files given by --objects")
         return spec
+    check_file_spec(spec)
     if not is_path_spec(spec):
         raise ValueError(
             f"--objects: unknown object set {spec!r}, and no such file, folder or glob "

@@ -19,6 +19,7 @@ if TYPE_CHECKING:
 
 def show(
     obj: Annotated[str, typer.Argument(
+        metavar="OBJECT",
         help="shape name (listed below), mesh (household name, urdf_NNN or an .obj file), "
              "image file, vertex file (.json/.csv), or a folder or glob of such files (drawn "
              "side by side)"
@@ -27,6 +28,7 @@ def show(
         Path, typer.Option("--out", "-o", help="PNG file to write (its name ends in .png)")
     ] = Path("show.png"),
     grips: Annotated[int, typer.Option(
+        min=0,
         help="draw the best N grips by Q_C (0: regions only); with --sim, simulate the best N "
              "(0 or 1: the best grip), one row of frames each"
     )] = 0,
@@ -45,8 +47,6 @@ def show(
     """Draw OBJECT with its grasping regions (and grips) to a PNG, or with --sim the phases of
     simulated trials of its best grips."""
     with user_errors():
-        if grips < 0:
-            raise ValueError(f"--grips must be >= 0, got {grips}")
         from grip_env.config import load_config
         from grip_env.objects.sources import check_file_spec
 
