@@ -72,6 +72,7 @@ from grip_env.hand_geometry import (
 )
 from grip_env.params import DEFAULT_PARAMS, GraspParams
 from grip_env.planning.features import force_line_from_deviations
+from grip_env.planning.grasps import ContactRegions
 
 if TYPE_CHECKING:
     from grip_env.objects import PlanarObject
@@ -141,19 +142,18 @@ ReachTest = Callable[[Array], NDArray[np.bool_]]
 
 
 @dataclass(frozen=True)
-class Configurations:
+class Configurations(ContactRegions):
     """C hand configurations; finger order 1, 2 (spreading), 3 (thumb).
+
+    The :class:`~grip_env.planning.grasps.ContactRegions` arrays are per finger: ``contacts``
+    P1, P2, P3 (mm), their ideal force directions ``normals`` N1, N2, N3, and the ``region``,
+    ``region_a``, ``region_b`` and ``rho`` of each finger's region.
 
     Attributes:
         grasp: (C,) index of the generating grasp.
         thumb: (C,) which of the grasp's contacts (0, 1, 2) the thumb takes.
         two_finger: (C,) whether the configuration is a two-finger one.
         contact_index: (C, 3) which grasp contact fingers 1, 2 and the thumb sit on.
-        contacts: (C, 3, 2) contacts P1, P2, P3 (mm).
-        normals: (C, 3, 2) ideal force directions N1, N2, N3.
-        region: (C, 3) region index of each finger's contact.
-        region_a, region_b: (C, 3, 2) endpoints of each finger's region.
-        rho: (C, 3) curvature of each finger's region.
         grasp_focus: (C, 2) the grasp's force focus C_G (NaN for two-finger).
         forces: (C, 3, 2) real unit force directions F1, F2, F3.
         focus: (C, 2) real focus C_C (NaN for two-finger).
@@ -168,12 +168,6 @@ class Configurations:
     thumb: NDArray[np.int_]
     two_finger: NDArray[np.bool_]
     contact_index: NDArray[np.int_]
-    contacts: Array
-    normals: Array
-    region: NDArray[np.int_]
-    region_a: Array
-    region_b: Array
-    rho: Array
     grasp_focus: Array
     forces: Array
     focus: Array
@@ -182,15 +176,6 @@ class Configurations:
     palm: Array
     yaw: Array
     force_line: Array
-
-    def __len__(self) -> int:
-        return len(self.grasp)
-
-    @classmethod
-    def concatenate(cls, parts: list[Configurations]) -> Configurations:
-        """All configurations of ``parts``, in order."""
-        names = cls.__dataclass_fields__
-        return cls(**{name: np.concatenate([getattr(p, name) for p in parts]) for name in names})
 
 
 def hand_axes(yaw: Array) -> tuple[Array, Array]:
@@ -453,13 +438,10 @@ def _configurations(
     grasps: Grasps, grasp: NDArray[np.int_], contact_index: NDArray[np.int_], **solved: Array
 ) -> Configurations:
     """Configurations of ``grasp`` with fingers on ``contact_index``; grasp data in finger order."""
-    rows = grasp[:, None]
     return Configurations(
         grasp=grasp, thumb=contact_index[:, 2], two_finger=grasps.two_finger[grasp],
-        contact_index=contact_index, normals=grasps.normals[rows, contact_index],
-        region=grasps.region[rows, contact_index], region_a=grasps.region_a[rows, contact_index],
-        region_b=grasps.region_b[rows, contact_index], rho=grasps.rho[rows, contact_index],
-        grasp_focus=grasps.focus[grasp], **solved)
+        contact_index=contact_index, grasp_focus=grasps.focus[grasp],
+        **grasps.regions_at(grasp, contact_index), **solved)
 
 
 def _two_finger_palm(depth: Array, min_extension: float) -> Array:

@@ -34,8 +34,9 @@ are kept.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from itertools import combinations
+from typing import Self
 
 import numpy as np
 from numpy.typing import NDArray
@@ -65,17 +66,17 @@ Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
-class Grasps:
-    """G grasps of one object.
+class ContactRegions:
+    """N rows of three contacts and the grasping regions they lie on: what a grasp and a hand
+    configuration (:class:`~grip_env.planning.barrett.Configurations`, its grasp's contacts in
+    finger order) both are.
 
     Attributes:
-        contacts: (G, 3, 2) contact points (mm). Two-finger grasps: index 2 is the thumb.
-        normals: (G, 3, 2) unit inward region normals, the ideal force directions N_i.
-        region: (G, 3) index of each contact's region.
-        region_a, region_b: (G, 3, 2) endpoints of each contact's region (mm).
-        rho: (G, 3) curvature of each contact's region.
-        focus: (G, 2) force focus C_G (NaN for two-finger grasps).
-        two_finger: (G,) whether the grasp is a virtual two-finger grasp.
+        contacts: (N, 3, 2) contact points (mm).
+        normals: (N, 3, 2) unit inward region normals, the ideal force directions N_i.
+        region: (N, 3) index of each contact's region.
+        region_a, region_b: (N, 3, 2) endpoints of each contact's region (mm).
+        rho: (N, 3) curvature of each contact's region.
     """
 
     contacts: Array
@@ -84,11 +85,45 @@ class Grasps:
     region_a: Array
     region_b: Array
     rho: Array
-    focus: Array
-    two_finger: NDArray[np.bool_]
 
     def __len__(self) -> int:
         return len(self.contacts)
+
+    def take(self, index: NDArray[np.int_]) -> Self:
+        """The rows at ``index``, in that order (indices past the end are ignored)."""
+        index = np.asarray(index)
+        index = index[index < len(self)]
+        return type(self)(**{name: getattr(self, name)[index] for name in _fields(self)})
+
+    @classmethod
+    def concatenate(cls, parts: list[Self]) -> Self:
+        """All rows of ``parts``, in order."""
+        return cls(**{name: np.concatenate([getattr(p, name) for p in parts])
+                      for name in _fields(cls)})
+
+    def regions_at(self, rows: NDArray[np.int_], columns: NDArray[np.int_]) -> dict[str, Array]:
+        """Every array but ``contacts`` for the contacts ``columns`` (K, 3) of ``rows`` (K,), in
+        that order: keyword arguments of another :class:`ContactRegions`."""
+        return {name: getattr(self, name)[rows[:, None], columns]
+                for name in _fields(ContactRegions) if name != "contacts"}
+
+
+def _fields(rows: type[ContactRegions] | ContactRegions) -> tuple[str, ...]:
+    return tuple(field.name for field in fields(rows))
+
+
+@dataclass(frozen=True)
+class Grasps(ContactRegions):
+    """G grasps of one object: three contacts on their regions (the :class:`ContactRegions`
+    arrays; in a two-finger grasp index 2 is the thumb), and their focus.
+
+    Attributes:
+        focus: (G, 2) force focus C_G (NaN for two-finger grasps).
+        two_finger: (G,) whether the grasp is a virtual two-finger grasp.
+    """
+
+    focus: Array
+    two_finger: NDArray[np.bool_]
 
     @classmethod
     def empty(cls) -> Grasps:
@@ -96,20 +131,6 @@ class Grasps:
         z = np.zeros((0, 3, 2))
         return cls(z, z, np.zeros((0, 3), dtype=int), z, z, np.zeros((0, 3)), np.zeros((0, 2)),
                    np.zeros(0, dtype=bool))
-
-    def take(self, index: NDArray[np.int_]) -> Grasps:
-        """The grasps at ``index``, in that order (indices past the end are ignored)."""
-        index = np.asarray(index)
-        index = index[index < len(self)]
-        return Grasps(**{name: getattr(self, name)[index] for name in _FIELDS})
-
-    @classmethod
-    def concatenate(cls, parts: list[Grasps]) -> Grasps:
-        """All grasps of ``parts``, in order."""
-        return cls(**{name: np.concatenate([getattr(p, name) for p in parts]) for name in _FIELDS})
-
-
-_FIELDS = tuple(Grasps.__dataclass_fields__)
 
 
 def _grasps_on(regions: Regions, contacts: Array, region: NDArray[np.int_], focus: Array,
