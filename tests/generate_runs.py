@@ -133,6 +133,20 @@ def stop(process: subprocess.Popen[str], signum: int) -> tuple[int, float, str, 
     return process.returncode, took, stderr, left
 
 
+def assert_stops_cleanly(process: subprocess.Popen[str], signum: signal.Signals, out: Path) -> str:
+    """Stop the run with ``signum`` (see :func:`stop`) and check that it stopped cleanly: exit
+    code 128 + signum within ``STOP_SECONDS``, no process of it left running, a last line that
+    says so, and no partial file in ``out``. Returns its stderr."""
+    code, took, stderr, left = stop(process, signum)
+    assert code == 128 + signum, stderr
+    assert took < STOP_SECONDS, f"took {took:.1f} s to stop"
+    assert not left, f"processes left running: {left}"
+    last = stderr.strip().splitlines()[-1]
+    assert last.startswith(f"interrupted by {signum.name}: stopped cleanly"), stderr
+    assert_no_partial_files(out)
+    return stderr
+
+
 def shards_on_disk(out: Path) -> list[Path]:
     return sorted((out / "grips").glob("*")) if (out / "grips").is_dir() else []
 

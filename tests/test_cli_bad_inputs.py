@@ -108,14 +108,22 @@ def test_show_of_an_oversized_image_is_refused_before_decoding(tmp_path):
     assert_refused(*run("show", path, "--out", tmp_path / "x.png"), "5000 x 4000 pixels")
 
 
-def test_show_of_a_fine_spacing_on_a_large_object_is_refused(tmp_path):
+def comb_too_fine_to_sample(tmp_path: Path) -> tuple[Path, Path]:
+    """A comb's vertex file and a config that would sample its contour into too many points:
+    1.9 m teeth make a 77 m contour inside a 0.8 x 1.9 m box (within the size bound), and
+    ``contour_spacing_mm: 0.1`` would cut it into 772 000 points."""
     config = tmp_path / "fine.yaml"
     config.write_text("perception:\n  contour_spacing_mm: 0.1\n")
     teeth = [[x, y] for i in range(20) for x, y in
              ((40.0 * i, 1900.0), (40.0 * i + 20, 1900.0), (40.0 * i + 20, 10.0),
               (40.0 * i + 40, 10.0))]
-    path = tmp_path / "comb.json"  # 1.9 m teeth: a 76 m contour inside a 0.8 x 1.9 m box
+    path = tmp_path / "comb.json"
     path.write_text(json.dumps([[0.0, 0.0], [800.0, 0.0], *teeth[::-1]]))
+    return path, config
+
+
+def test_show_of_a_fine_spacing_on_a_large_object_is_refused(tmp_path):
+    path, config = comb_too_fine_to_sample(tmp_path)
     assert_refused(*run("show", path, "--config", config, "--out", tmp_path / "x.png"),
                    "contour_spacing_mm 0.1")
 
@@ -188,13 +196,7 @@ def test_generate_of_an_oversized_image_in_a_folder_is_refused_before_decoding(t
 
 
 def test_generate_of_own_objects_is_bounded_by_the_contour_budget(tmp_path):
-    config = tmp_path / "fine.yaml"
-    config.write_text("perception:\n  contour_spacing_mm: 0.1\n")
-    teeth = [[x, y] for i in range(20) for x, y in
-             ((40.0 * i, 1900.0), (40.0 * i + 20, 1900.0), (40.0 * i + 20, 10.0),
-              (40.0 * i + 40, 10.0))]
-    path = tmp_path / "comb.json"
-    path.write_text(json.dumps([[0.0, 0.0], [800.0, 0.0], *teeth[::-1]]))
+    path, config = comb_too_fine_to_sample(tmp_path)
     assert_refused(*run("generate", "--out", tmp_path / "g", "--objects", path,
                         "--config", config), "comb.json", "contour_spacing_mm 0.1")
     assert not (tmp_path / "g").exists()

@@ -53,29 +53,33 @@ BAD_SETTINGS = [
     ("sim:\n  finger_force_n: .nan\n", r"sim\.finger_force_n"),
     ("learning:\n  seed: 4294967296\n", r"learning\.seed.*4294967296"),
     ("selector:\n  seed: 99999999999999999999\n", r"selector\.seed"),
+    ("dataset:\n  trials: 0\n", r"dataset\.trials"),
+]
+#: Files that are no config at all; each is refused with a ValueError saying why.
+BAD_FILES = [
+    pytest.param("grasp:\n  mu: 0.5\n  muu: 3\n", r"grasp\.muu", id="unknown_key_is_named"),
+    pytest.param("grasp: !!python/object/apply:os.system ['echo hi']\n", "not valid YAML",
+                 id="unsafe_yaml_is_not_executed"),
+    pytest.param("- 1\n- 2\n", "mapping", id="not_a_mapping"),
+    pytest.param("grasp: " + "[" * 5000 + "]" * 5000 + "\n", "nested too deeply",
+                 id="deeply_nested_yaml_not_a_recursion_error"),
+    pytest.param("# padding\n" * 200_000, "larger than", id="huge_file"),
 ]
 
 
-@pytest.mark.parametrize(("text", "message"), BAD_SETTINGS)
-def test_settings_out_of_their_physical_range_are_named(tmp_path, text, message):
+@pytest.mark.parametrize(("text", "message"), BAD_SETTINGS + BAD_FILES)
+def test_a_bad_config_file_is_refused_naming_its_problem(tmp_path, text, message):
+    """Settings out of their physical range are named with their value; files that are no
+    config are refused saying why."""
     path = tmp_path / "c.yaml"
     path.write_text(text)
     with pytest.raises(ValueError, match=message):
         load_config(path)
 
 
-def test_deeply_nested_yaml_is_refused_not_a_recursion_error(tmp_path):
-    path = tmp_path / "deep.yaml"
-    path.write_text("grasp: " + "[" * 5000 + "]" * 5000 + "\n")
-    with pytest.raises(ValueError, match="nested too deeply"):
-        load_config(path)
-
-
-def test_huge_config_file_is_refused(tmp_path):
-    path = tmp_path / "big.yaml"
-    path.write_text("# padding\n" * 200_000)
-    with pytest.raises(ValueError, match="larger than"):
-        load_config(path)
+def test_a_missing_config_file_is_refused(tmp_path):
+    with pytest.raises(ValueError, match="not found"):
+        load_config(tmp_path / "nope.yaml")
 
 
 def test_contour_budget_bounds_vertices_size_and_sample_count():
@@ -102,36 +106,6 @@ def test_grasp_params_defaults_are_the_papers():
 def test_negative_parameters_are_refused(field):
     with pytest.raises(ValueError, match=field):
         GraspParams(**{field: -0.1})
-
-
-def test_unknown_key_is_named(tmp_path):
-    path = tmp_path / "c.yaml"
-    path.write_text("grasp:\n  mu: 0.5\n  muu: 3\n")
-    with pytest.raises(ValueError, match=r"grasp\.muu"):
-        load_config(path)
-
-
-def test_out_of_range_value_is_named(tmp_path):
-    path = tmp_path / "c.yaml"
-    path.write_text("dataset:\n  trials: 0\n")
-    with pytest.raises(ValueError, match=r"dataset\.trials"):
-        load_config(path)
-
-
-def test_unsafe_yaml_is_not_executed(tmp_path):
-    path = tmp_path / "c.yaml"
-    path.write_text("grasp: !!python/object/apply:os.system ['echo hi']\n")
-    with pytest.raises(ValueError, match="not valid YAML"):
-        load_config(path)
-
-
-def test_missing_file_and_non_mapping(tmp_path):
-    with pytest.raises(ValueError, match="not found"):
-        load_config(tmp_path / "nope.yaml")
-    path = tmp_path / "list.yaml"
-    path.write_text("- 1\n- 2\n")
-    with pytest.raises(ValueError, match="mapping"):
-        load_config(path)
 
 
 def test_override_validates():

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 from hypothesis import given, settings
-from hypothesis import strategies as st
+from planar_cases import Motion, cross, rigid_motions, side_regions
 
 from grip_env.config import SynthesisConfig
 from grip_env.objects import PlanarObject, make_shape
@@ -18,15 +18,6 @@ from grip_env.planning.grasps import END_FRACTION, HALF_FINGER_BASE_MM, Grasps, 
 
 PARAMS = GraspParams()
 ALL = SynthesisConfig(max_grasps=100_000)
-
-
-def side_regions(obj: PlanarObject, inset: float = 3.0) -> Regions:
-    """One region per polygon side, inset from the corners, flat (rho = 0)."""
-    return Regions.from_polygon_sides(obj.contour, inset)
-
-
-def _cross(u, v):
-    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
 
 
 def _focus_depths(grasps: Grasps) -> np.ndarray:
@@ -41,7 +32,7 @@ def _assert_well_formed(grasps: Grasps, regions: Regions, obj: PlanarObject,
     three = ~grasps.two_finger
     # three-finger: normal lines meet at the focus, in front of every contact, inside the object
     to_focus = grasps.focus[three][:, None, :] - grasps.contacts[three]
-    np.testing.assert_allclose(_cross(to_focus, grasps.normals[three]), 0.0, atol=1e-7)
+    np.testing.assert_allclose(cross(to_focus, grasps.normals[three]), 0.0, atol=1e-7)
     assert np.all(_focus_depths(grasps) > margin)
     assert obj.contains(grasps.focus[three]).all()
     angles = np.sort(np.arctan2(grasps.normals[three, :, 1], grasps.normals[three, :, 0]), axis=1)
@@ -52,7 +43,7 @@ def _assert_well_formed(grasps: Grasps, regions: Regions, obj: PlanarObject,
     np.testing.assert_allclose(grasps.normals, regions.normal[grasps.region])
     t = np.sum((grasps.contacts - regions.a[grasps.region]) * regions.direction[grasps.region],
                axis=-1) / regions.length[grasps.region]
-    off = _cross(grasps.contacts - regions.a[grasps.region], regions.direction[grasps.region])
+    off = cross(grasps.contacts - regions.a[grasps.region], regions.direction[grasps.region])
     np.testing.assert_allclose(off, 0.0, atol=1e-7)
     assert np.all((t >= -1e-9) & (t <= 1 + 1e-9))
     assert np.all((t[three] >= END_FRACTION - 1e-9) & (t[three] <= 1 - END_FRACTION + 1e-9))
@@ -140,14 +131,9 @@ def test_bad_regions_are_refused():
 
 
 @settings(max_examples=25, deadline=None)
-@given(
-    shape=st.sampled_from(["triangle", "pentagon", "trapezoid", "star", "rectangle", "hexagon"]),
-    angle=st.floats(-math.pi, math.pi),
-    offset=st.tuples(st.floats(-300, 300), st.floats(-300, 300)),
-)
-def test_grasps_move_with_the_object(shape, angle, offset):
-    obj = make_shape(shape)
-    moved = obj.transformed(angle, offset)
+@given(rigid_motions(("triangle", "pentagon", "trapezoid", "star", "rectangle", "hexagon"), 300))
+def test_grasps_move_with_the_object(motion: Motion):
+    obj, moved, angle, offset = motion
     grasps = synthesize_grasps(side_regions(obj), obj, PARAMS, ALL)
     moved_grasps = synthesize_grasps(side_regions(moved), moved, PARAMS, ALL)
     assert len(moved_grasps) == len(grasps)

@@ -2,13 +2,11 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pandas as pd
 import pytest
 from hypothesis import given, settings
-from hypothesis import strategies as st
+from planar_cases import Motion, cross, rigid_motions, side_regions
 
 from grip_env.columns import CANDIDATE_COLUMNS
 from grip_env.config import Config
@@ -34,18 +32,9 @@ ALL_GRASPS = CONFIG.override(synthesis={"max_grasps": 100_000})
 TOL = 1e-6
 
 
-def side_regions(obj: PlanarObject, inset: float = 3.0) -> Regions:
-    """One region per polygon side, inset from the corners, flat (rho = 0)."""
-    return Regions.from_polygon_sides(obj.contour, inset)
-
-
 def _xy(table: pd.DataFrame, prefix: str) -> np.ndarray:
     return np.stack([table[[f"{prefix}{i}_x", f"{prefix}{i}_y"]].to_numpy() for i in "123"],
                     axis=1)
-
-
-def _cross(u, v):
-    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
 
 
 def assert_row_geometry(table: pd.DataFrame, obj: PlanarObject, config: Config = CONFIG) -> None:
@@ -72,7 +61,7 @@ def assert_row_geometry(table: pd.DataFrame, obj: PlanarObject, config: Config =
     np.testing.assert_allclose(np.linalg.norm(n, axis=-1), 1.0, atol=TOL)
     # force lines: fingers through their spread axes O +- 25 x, thumb through O before it
     axes = np.stack([palm + SPREAD_AXIS_OFFSET_MM * x, palm - SPREAD_AXIS_OFFSET_MM * x], axis=1)
-    np.testing.assert_allclose(_cross(p[:, :2] - axes, f[:, :2]), 0.0, atol=TOL)
+    np.testing.assert_allclose(cross(p[:, :2] - axes, f[:, :2]), 0.0, atol=TOL)
     np.testing.assert_allclose(p[:, 2], palm - e[:, 2:3] * y, atol=TOL)
     np.testing.assert_allclose(e, np.linalg.norm(p - palm[:, None], axis=-1), atol=TOL)
     # hand limits
@@ -92,15 +81,15 @@ def assert_row_geometry(table: pd.DataFrame, obj: PlanarObject, config: Config =
     span = ends_b - ends_a
     t = np.sum((p - ends_a) * span, axis=-1) / np.sum(span**2, axis=-1)
     assert np.all((t > -TOL) & (t < 1 + TOL))
-    np.testing.assert_allclose(_cross(p - ends_a, span / np.linalg.norm(span, axis=-1)[..., None]),
+    np.testing.assert_allclose(cross(p - ends_a, span / np.linalg.norm(span, axis=-1)[..., None]),
                                0.0, atol=TOL)
-    np.testing.assert_allclose(_cross(span, n), np.linalg.norm(span, axis=-1), atol=TOL)  # left
+    np.testing.assert_allclose(cross(span, n), np.linalg.norm(span, axis=-1), atol=TOL)  # left
     np.testing.assert_allclose(ends_a[two, 0], ends_a[two, 1])  # two-finger: shared region
     # three-finger: normal lines meet at C_G; real force lines meet at C_C = O - 25 cot(theta) y
     cg = table[["cg_x", "cg_y"]].to_numpy()
     cc = table[["cc_x", "cc_y"]].to_numpy()
-    np.testing.assert_allclose(_cross(cg[three, None] - p[three], n[three]), 0.0, atol=TOL)
-    np.testing.assert_allclose(_cross(cc[three, None] - p[three], f[three]), 0.0, atol=TOL)
+    np.testing.assert_allclose(cross(cg[three, None] - p[three], n[three]), 0.0, atol=TOL)
+    np.testing.assert_allclose(cross(cc[three, None] - p[three], f[three]), 0.0, atol=TOL)
     cot = np.cos(theta[three]) / np.sin(theta[three])
     expected_cc = palm[three] - SPREAD_AXIS_OFFSET_MM * cot[:, None] * y[three]
     np.testing.assert_allclose(cc[three], expected_cc, atol=TOL)
@@ -221,7 +210,7 @@ def test_search_and_features_agree_on_the_cone_edge():
         np.testing.assert_allclose(features[:, OUTPUT_NAMES.index("C1")], confs.force_line,
                                    rtol=1e-12, atol=1e-12)
         f, n = confs.forces, confs.normals
-        deviation = np.arctan2(np.abs(_cross(f, n)), np.sum(f * n, axis=-1))
+        deviation = np.arctan2(np.abs(cross(f, n)), np.sum(f * n, axis=-1))
         at_edge += int((np.abs(deviation - PARAMS.friction_angle) < 1e-12).any(axis=1).sum())
     assert at_edge > 10  # the case this guards is present
 
@@ -239,14 +228,9 @@ def _features_match(a: pd.DataFrame, b: pd.DataFrame, names) -> None:
 
 
 @settings(max_examples=12, deadline=None)
-@given(
-    shape=st.sampled_from(["triangle", "trapezoid", "pentagon", "rectangle", "l_shape", "star"]),
-    angle=st.floats(-math.pi, math.pi),
-    offset=st.tuples(st.floats(-400, 400), st.floats(-400, 400)),
-)
-def test_rigid_motion_leaves_features_unchanged(shape, angle, offset):
-    obj = make_shape(shape)
-    moved = obj.transformed(angle, offset)
+@given(rigid_motions(("triangle", "trapezoid", "pentagon", "rectangle", "l_shape", "star"), 400))
+def test_rigid_motion_leaves_features_unchanged(motion: Motion):
+    obj, moved = motion.obj, motion.moved
     table = candidates(obj, PARAMS, ALL_GRASPS, regions=side_regions(obj))
     moved_table = candidates(moved, PARAMS, ALL_GRASPS, regions=side_regions(moved))
     _features_match(table, moved_table, FEATURE_NAMES)
