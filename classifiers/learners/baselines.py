@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 from sklearn.base import BaseEstimator, ClassifierMixin, RegressorMixin, TransformerMixin
 from sklearn.isotonic import IsotonicRegression
+from sklearn.utils import Tags
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 
@@ -28,6 +29,11 @@ class ColumnSelector(TransformerMixin, BaseEstimator):
 
     def __init__(self, columns: Sequence[str] = ()):
         self.columns = columns
+
+    def __sklearn_tags__(self) -> Tags:
+        tags = super().__sklearn_tags__()
+        tags.requires_fit = False  # stateless: it selects by name, whatever it was fitted on
+        return tags
 
     def fit(self, X: pd.DataFrame, y: Any = None) -> ColumnSelector:
         """Check that ``X`` holds the columns."""
@@ -65,13 +71,22 @@ class RankingClassifier(ClassifierMixin, BaseEstimator):
     def __init__(self, sign: float = -1.0):
         self.sign = sign
 
+    def __sklearn_tags__(self) -> Tags:
+        tags = super().__sklearn_tags__()
+        tags.classifier_tags.multi_class = False  # success or failure: two classes only
+        return tags
+
     def fit(self, X: Any, y: Any) -> RankingClassifier:
         """Fit the monotone map from score to success probability."""
         X, y = validate_data(self, X, y, dtype=np.float64)
         check_classification_targets(y)
         self.classes_ = np.unique(y)
-        if self.classes_.size != 2:
-            raise ValueError(f"ranking baselines are binary; got classes {self.classes_.tolist()}")
+        if self.classes_.size < 2:
+            raise ValueError(f"a ranking baseline needs both outcomes; got 1 class "
+                             f"{self.classes_.tolist()}")
+        if self.classes_.size > 2:
+            raise ValueError(f"Only binary classification is supported: a ranking baseline "
+                             f"scores success or failure; got classes {self.classes_.tolist()}")
         positive = (y == self.classes_[1]).astype(float)
         self.calibration_ = IsotonicRegression(y_min=0.0, y_max=1.0, out_of_bounds="clip")
         self.calibration_.fit(self._score(X), positive)
@@ -84,6 +99,7 @@ class RankingClassifier(ClassifierMixin, BaseEstimator):
 
     def predict_proba(self, X: Any) -> np.ndarray:
         """Calibrated probabilities, columns in the order of ``classes_``."""
+        check_is_fitted(self, "calibration_")
         positive = self.calibration_.predict(self.decision_function(X))
         return np.column_stack([1.0 - positive, positive])
 

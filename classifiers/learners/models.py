@@ -65,38 +65,58 @@ def _scaled(estimator: BaseEstimator) -> list[tuple[str, BaseEstimator]]:
     return [("scale", StandardScaler()), ("model", estimator)]
 
 
-_LEARNERS: dict[str, Callable[[int], list[tuple[str, BaseEstimator]]]] = {
-    "svm": lambda seed: _scaled(
-        CalibratedClassifierCV(SVC(random_state=seed), method="sigmoid", ensemble=False)
-    ),
-    "mlp_torch": lambda seed: [("model", TorchMLPClassifier(random_state=seed))],
-    "mlp_sklearn": lambda seed: _scaled(
-        MLPClassifier((64, 64), early_stopping=True, max_iter=500, random_state=seed)
-    ),
-    "knn": lambda seed: _scaled(KNeighborsClassifier(n_neighbors=15, weights="distance")),
-    "logreg": lambda seed: _scaled(LogisticRegression(max_iter=1000)),
-    "hgb": lambda seed: [("model", OneThreadHGBClassifier(**HGB_SETTINGS, random_state=seed))],
-}
-_BASELINE_STEPS: dict[str, Callable[[int], tuple[tuple[str, ...], BaseEstimator]]] = {
-    "rank_qc": lambda seed: (("Q_C",), RankingClassifier(sign=-1.0)),
-    "rank_qg": lambda seed: (("Q_G",), RankingClassifier(sign=-1.0)),
-    "random": lambda seed: (("Q_C",), RandomClassifier(random_state=seed)),
-}
-MODEL_NAMES = tuple(_LEARNERS) + tuple(_BASELINE_STEPS)
+#: The steps after the column selection, for a seed.
+Steps = Callable[[int], list[tuple[str, BaseEstimator]]]
+#: A registry entry: the columns the model reads (None: the features it is given), its steps.
+Entry = tuple[tuple[str, ...] | None, Steps]
 
-_REGRESSORS: dict[str, Callable[[int], list[tuple[str, BaseEstimator]]]] = {
-    "svr": lambda seed: _scaled(SVR(C=1.0, epsilon=0.1)),
-    "mlp_torch": lambda seed: [("model", TorchMLPRegressor(random_state=seed))],
-    "knn": lambda seed: _scaled(KNeighborsRegressor(n_neighbors=15, weights="distance")),
-    "ridge": lambda seed: _scaled(Ridge(alpha=1.0)),
-    "hgb": lambda seed: [("model", OneThreadHGBRegressor(**HGB_SETTINGS, random_state=seed))],
+
+def _rank_baselines(ranking: type[BaseEstimator], chance: type[BaseEstimator]) -> dict[str, Entry]:
+    """One task's :data:`BASELINES`: ``ranking`` (a ``RankingClassifier`` or
+    ``RankingRegressor``) scores -Q_C or -Q_G, ``chance`` a seeded random score."""
+    return {
+        "rank_qc": (("Q_C",), lambda seed: [("model", ranking(sign=-1.0))]),
+        "rank_qg": (("Q_G",), lambda seed: [("model", ranking(sign=-1.0))]),
+        "random": (("Q_C",), lambda seed: [("model", chance(random_state=seed))]),
+    }
+
+
+_CLASSIFIERS: dict[str, Entry] = {
+    "svm": (None, lambda seed: _scaled(
+        CalibratedClassifierCV(SVC(random_state=seed), method="sigmoid", ensemble=False)
+    )),
+    "mlp_torch": (None, lambda seed: [("model", TorchMLPClassifier(random_state=seed))]),
+    "mlp_sklearn": (None, lambda seed: _scaled(
+        MLPClassifier((64, 64), early_stopping=True, max_iter=500, random_state=seed)
+    )),
+    "knn": (None, lambda seed: _scaled(KNeighborsClassifier(n_neighbors=15, weights="distance"))),
+    "logreg": (None, lambda seed: _scaled(LogisticRegression(max_iter=1000))),
+    "hgb": (None, lambda seed: [("model", OneThreadHGBClassifier(**HGB_SETTINGS,
+                                                                 random_state=seed))]),
+    **_rank_baselines(RankingClassifier, RandomClassifier),
 }
-_RANK_REGRESSORS: dict[str, Callable[[int], tuple[tuple[str, ...], BaseEstimator]]] = {
-    "rank_qc": lambda seed: (("Q_C",), RankingRegressor(sign=-1.0)),
-    "rank_qg": lambda seed: (("Q_G",), RankingRegressor(sign=-1.0)),
-    "random": lambda seed: (("Q_C",), RandomRegressor(random_state=seed)),
+MODEL_NAMES = tuple(_CLASSIFIERS)
+
+_REGRESSORS: dict[str, Entry] = {
+    "svr": (None, lambda seed: _scaled(SVR(C=1.0, epsilon=0.1))),
+    "mlp_torch": (None, lambda seed: [("model", TorchMLPRegressor(random_state=seed))]),
+    "knn": (None, lambda seed: _scaled(KNeighborsRegressor(n_neighbors=15, weights="distance"))),
+    "ridge": (None, lambda seed: _scaled(Ridge(alpha=1.0))),
+    "hgb": (None, lambda seed: [("model", OneThreadHGBRegressor(**HGB_SETTINGS,
+                                                                random_state=seed))]),
+    **_rank_baselines(RankingRegressor, RandomRegressor),
 }
-REGRESSOR_NAMES = tuple(_REGRESSORS) + tuple(_RANK_REGRESSORS)
+REGRESSOR_NAMES = tuple(_REGRESSORS)
+
+
+def _pipeline(registry: dict[str, Entry], kind: str, name: str, seed: int,
+              features: Sequence[str]) -> Pipeline:
+    """``registry[name]``'s pipeline: its column selection, then its steps for ``seed``."""
+    features = check_features(features)
+    if name not in registry:
+        raise ValueError(f"unknown {kind} name {name!r}; known: {list(registry)}")
+    columns, steps = registry[name]
+    return Pipeline([("select", ColumnSelector(columns or features)), *steps(seed)])
 
 
 def check_features(features: Sequence[str]) -> tuple[str, ...]:
@@ -113,13 +133,7 @@ def check_features(features: Sequence[str]) -> tuple[str, ...]:
 
 def make_model(name: str, seed: int = 0, features: Sequence[str] = FEATURES) -> Pipeline:
     """A fresh, unfitted model pipeline; unknown ``name`` → ValueError listing the known ones."""
-    features = check_features(features)
-    if name in _LEARNERS:
-        return Pipeline([("select", ColumnSelector(features)), *_LEARNERS[name](seed)])
-    if name in _BASELINE_STEPS:
-        columns, estimator = _BASELINE_STEPS[name](seed)
-        return Pipeline([("select", ColumnSelector(columns)), ("model", estimator)])
-    raise ValueError(f"unknown model name {name!r}; known: {list(MODEL_NAMES)}")
+    return _pipeline(_CLASSIFIERS, "model", name, seed, features)
 
 
 def make_models(
@@ -133,10 +147,4 @@ def make_models(
 
 def make_regressor(name: str, seed: int = 0, features: Sequence[str] = FEATURES) -> Pipeline:
     """A fresh, unfitted regression pipeline; unknown ``name`` → ValueError listing the known."""
-    features = check_features(features)
-    if name in _REGRESSORS:
-        return Pipeline([("select", ColumnSelector(features)), *_REGRESSORS[name](seed)])
-    if name in _RANK_REGRESSORS:
-        columns, estimator = _RANK_REGRESSORS[name](seed)
-        return Pipeline([("select", ColumnSelector(columns)), ("model", estimator)])
-    raise ValueError(f"unknown regressor name {name!r}; known: {list(REGRESSOR_NAMES)}")
+    return _pipeline(_REGRESSORS, "regressor", name, seed, features)

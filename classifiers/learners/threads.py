@@ -14,7 +14,7 @@ model loaded by a user's own code is as fast as inside the study.
 from __future__ import annotations
 
 from contextlib import AbstractContextManager
-from typing import Any
+from typing import Any, Self
 
 import numpy as np
 from sklearn.ensemble import HistGradientBoostingClassifier, HistGradientBoostingRegressor
@@ -26,18 +26,25 @@ def single_threaded() -> AbstractContextManager[object]:
     return threadpool_limits(limits=1)
 
 
-class OneThreadHGBClassifier(HistGradientBoostingClassifier):
-    """``HistGradientBoostingClassifier`` fitted and queried on one thread."""
+class _OneThread:
+    """``fit`` and ``predict`` of the HistGradientBoosting estimator this is mixed into (listed
+    before it), run single-threaded with the same arguments."""
 
-    def fit(self, X: Any, y: Any, sample_weight: Any = None) -> OneThreadHGBClassifier:
-        """As the parent's ``fit``, single-threaded."""
+    def fit(self, X: Any, y: Any, sample_weight: Any = None, *, X_val: Any = None,
+            y_val: Any = None, sample_weight_val: Any = None) -> Self:
+        """As the parent's ``fit`` (an explicit validation set included), single-threaded."""
         with single_threaded():
-            return super().fit(X, y, sample_weight=sample_weight)
+            return super().fit(X, y, sample_weight=sample_weight, X_val=X_val,
+                               y_val=y_val, sample_weight_val=sample_weight_val)
 
     def predict(self, X: Any) -> np.ndarray:
         """As the parent's ``predict``, single-threaded."""
         with single_threaded():
             return super().predict(X)
+
+
+class OneThreadHGBClassifier(_OneThread, HistGradientBoostingClassifier):
+    """``HistGradientBoostingClassifier`` fitted and queried on one thread."""
 
     def predict_proba(self, X: Any) -> np.ndarray:
         """As the parent's ``predict_proba``, single-threaded."""
@@ -50,15 +57,5 @@ class OneThreadHGBClassifier(HistGradientBoostingClassifier):
             return super().decision_function(X)
 
 
-class OneThreadHGBRegressor(HistGradientBoostingRegressor):
+class OneThreadHGBRegressor(_OneThread, HistGradientBoostingRegressor):
     """``HistGradientBoostingRegressor`` fitted and queried on one thread."""
-
-    def fit(self, X: Any, y: Any, sample_weight: Any = None) -> OneThreadHGBRegressor:
-        """As the parent's ``fit``, single-threaded."""
-        with single_threaded():
-            return super().fit(X, y, sample_weight=sample_weight)
-
-    def predict(self, X: Any) -> np.ndarray:
-        """As the parent's ``predict``, single-threaded."""
-        with single_threaded():
-            return super().predict(X)

@@ -11,16 +11,16 @@ the standardised target (random split; target mean and scale are fitted metadata
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from numbers import Integral, Real
 from typing import Any, ClassVar
 
 import numpy as np
 import torch
-from sklearn.base import BaseEstimator, ClassifierMixin, RegressorMixin, _fit_context
+from sklearn.base import BaseEstimator, ClassifierMixin, RegressorMixin
 from sklearn.model_selection import train_test_split
-from sklearn.utils._param_validation import Interval
 from sklearn.utils.multiclass import check_classification_targets
 from sklearn.utils.validation import check_is_fitted, validate_data
 from torch import nn
@@ -43,6 +43,43 @@ class _Network(nn.Module):
         return self.layers((x - self.mean) / self.scale)
 
 
+@dataclass(frozen=True)
+class _Range:
+    """What a numeric parameter may be: an int or a float (``kind``) from ``low`` to ``high``
+    (None: unbounded), each end included or not, and perhaps None."""
+
+    kind: type[Integral] | type[Real]
+    low: float | None = None
+    high: float | None = None
+    low_included: bool = True
+    high_included: bool = False
+    or_none: bool = False
+
+    def admits(self, value: Any) -> bool:
+        if value is None:
+            return self.or_none
+        if isinstance(value, bool) or not isinstance(value, self.kind):
+            return False
+        above = self.low is None or value > self.low or (self.low_included and value == self.low)
+        below = (self.high is None or value < self.high
+                 or (self.high_included and value == self.high))
+        return bool(above and below)
+
+    def __str__(self) -> str:
+        kind = "an int" if self.kind is Integral else "a float"
+        low = f"{'[' if self.low_included else '('}{'-inf' if self.low is None else self.low}"
+        high = f"{'inf' if self.high is None else self.high}{']' if self.high_included else ')'}"
+        return f"{kind} in the range {low}, {high}{' or None' if self.or_none else ''}"
+
+
+def _hidden_sizes_ok(sizes: Any) -> bool:
+    """A sequence (list, tuple, array) of whole widths, each at least 1."""
+    if isinstance(sizes, str) or not isinstance(sizes, (Sequence, np.ndarray)):
+        return False
+    return all(isinstance(size, Real) and not isinstance(size, bool) and size == int(size) >= 1
+               for size in sizes)
+
+
 class _TorchMLP(BaseEstimator):
     """What the classifier and the regressor share: parameters, network, training loop.
 
@@ -60,20 +97,19 @@ class _TorchMLP(BaseEstimator):
     patience : epochs without validation-loss improvement before stopping.
     random_state : seed of weights, shuffling and the validation split.
 
-    Every parameter is checked against :attr:`_parameter_constraints` when ``fit`` starts
-    (scikit-learn's ``InvalidParameterError``, a ``ValueError`` naming the parameter).
+    Every parameter is checked against :attr:`_parameter_ranges` when ``fit`` starts (a
+    ``ValueError`` naming the parameter, its range and the value, in scikit-learn's words).
     """
 
-    _parameter_constraints: ClassVar[dict[str, list[Any]]] = {
-        "hidden_layer_sizes": ["array-like"],
-        "learning_rate": [Interval(Real, 0.0, None, closed="neither")],
-        "weight_decay": [Interval(Real, 0.0, None, closed="left")],
-        "dropout": [Interval(Real, 0.0, 1.0, closed="left")],
-        "batch_size": [Interval(Integral, 1, None, closed="left")],
-        "max_epochs": [Interval(Integral, 1, None, closed="left")],
-        "validation_fraction": [Interval(Real, 0.0, 1.0, closed="left")],
-        "patience": [Interval(Integral, 1, None, closed="left")],
-        "random_state": [Interval(Integral, 0, None, closed="left"), None],
+    _parameter_ranges: ClassVar[dict[str, _Range]] = {
+        "learning_rate": _Range(Real, 0.0, low_included=False),
+        "weight_decay": _Range(Real, 0.0),
+        "dropout": _Range(Real, 0.0, 1.0),
+        "batch_size": _Range(Integral, 1),
+        "max_epochs": _Range(Integral, 1),
+        "validation_fraction": _Range(Real, 0.0, 1.0),
+        "patience": _Range(Integral, 1),
+        "random_state": _Range(Integral, 0, or_none=True),
     }
 
     def __init__(
@@ -103,6 +139,18 @@ class _TorchMLP(BaseEstimator):
         """The fitted network's tensors (weights and input standardisation)."""
         check_is_fitted(self, "network_")
         return self.network_.state_dict()
+
+    def _check_parameters(self) -> None:
+        """Refuse a parameter outside its range, as scikit-learn's own estimators do in ``fit``."""
+        name = type(self).__name__
+        if not _hidden_sizes_ok(self.hidden_layer_sizes):
+            raise ValueError(f"The 'hidden_layer_sizes' parameter of {name} must be a sequence of "
+                             f"whole widths >= 1. Got {self.hidden_layer_sizes!r} instead.")
+        for key, allowed in self._parameter_ranges.items():
+            value = getattr(self, key)
+            if not allowed.admits(value):
+                raise ValueError(f"The {key!r} parameter of {name} must be {allowed}. "
+                                 f"Got {value!r} instead.")
 
     def _fit_network(self, X: np.ndarray, targets: torch.Tensor, n_outputs: int,
                      stratify: np.ndarray | None, loss_fn: nn.Module) -> None:
@@ -213,9 +261,9 @@ class TorchMLPClassifier(ClassifierMixin, _TorchMLP):
         NaN for a model rebuilt by :meth:`from_state_dict`).
     """
 
-    @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X: Any, y: Any) -> TorchMLPClassifier:
         """Train on ``X`` (n_samples, n_features) and labels ``y``."""
+        self._check_parameters()
         X, y = validate_data(self, X, y, dtype=np.float32)
         check_classification_targets(y)
         self.classes_, codes = np.unique(y, return_inverse=True)
@@ -266,9 +314,9 @@ class TorchMLPRegressor(RegressorMixin, _TorchMLP):
     target_mean_, target_scale_ : float, the target's standardisation.
     """
 
-    @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X: Any, y: Any) -> TorchMLPRegressor:
         """Train on ``X`` (n_samples, n_features) and real targets ``y``."""
+        self._check_parameters()
         X, y = validate_data(self, X, y, dtype=np.float32, y_numeric=True)
         y = np.asarray(y, dtype=np.float64)
         self.target_mean_ = float(y.mean())
