@@ -185,6 +185,13 @@ def _imported_modules(path: str) -> set[str]:
     return found
 
 
+def test_the_report_reads_result_files_and_imports_no_experiment():
+    for path in sorted((ROOT / "classifiers" / "report").glob("*.py")):
+        imported = _imported_modules(str(path.relative_to(ROOT)))
+        assert not [name for name in imported if name.startswith("classifiers.experiments")], \
+            path.name
+
+
 def test_the_study_and_its_report_do_not_import_each_other():
     study = _imported_modules("classifiers/experiments/study.py")
     report = _imported_modules("classifiers/report/study_report.py")

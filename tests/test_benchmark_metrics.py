@@ -13,10 +13,11 @@ from classifiers.experiments.benchmark.aggregate import (
     stratified_bootstrap,
 )
 from classifiers.experiments.benchmark.aggregate import mean as mean_score
-from classifiers.experiments.benchmark.leaderboard import build_leaderboard, leaderboard_markdown
+from classifiers.experiments.benchmark.leaderboard import build_leaderboard
 from classifiers.experiments.benchmark.methods import baseline_scores, choice_scores
 from classifiers.experiments.benchmark.selection import selection_metrics
 from classifiers.experiments.selector.evaluation import attempt_metrics, random_metrics
+from classifiers.report.leaderboard import leaderboard_markdown
 
 LOG3 = np.log2(3.0)
 
@@ -249,7 +250,7 @@ def test_study_benchmark_reads_the_learners_per_seed_score_files(tmp_path) -> No
     assert board["methods"]["classifier_x"]["runs"] == 3
     assert "classifier_rank_qc" not in board["methods"] and "best_qc" in board["methods"]
     assert board["split"]["seeds"] == [0, 1, 2] and board["split"]["name"] == "study"
-    assert (tmp_path / "benchmark" / "leaderboard.md").exists()
+    assert (tmp_path / "benchmark" / "leaderboard.json").exists()  # the .md is the report's
     pd.concat(frames).iloc[1:].to_parquet(tmp_path / "classifiers" / "scores.parquet")
     with pytest.raises(ValueError, match="every candidate"):
         study_benchmark(table, tmp_path, config, reps=200)

@@ -184,7 +184,7 @@ def test_stage_figures_are_the_listed_ones_not_whatever_png_lies_there(tmp_path)
     _stage_figures(report, tmp_path, "classifiers")
     shown = [b.content for b in report.blocks]
     assert shown == ["classifiers/roc.png", "classifiers/calibration.png"]
-    assert set(STAGE_FIGURES) == {"classifiers", "ablation", "selector"}
+    assert set(STAGE_FIGURES) == {"classifiers", "ablation", "selector", "benchmark"}
     source = Path("classifiers/report/study_report.py").read_text()
     assert "glob(" not in source
 

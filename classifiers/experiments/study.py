@@ -83,8 +83,12 @@ def _selector(run: StudyRun) -> object:
 
 def _benchmark(run: StudyRun) -> object:
     from classifiers.experiments.benchmark import study_benchmark
+    from classifiers.report.leaderboard import write_leaderboard_markdown
 
-    return study_benchmark(run.table, run.out, run.config)
+    board = study_benchmark(run.table, run.out, run.config)
+    if board.get("methods"):
+        write_leaderboard_markdown(board, run.out / "benchmark")
+    return board
 
 
 def _calibration(run: StudyRun) -> object:

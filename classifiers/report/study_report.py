@@ -15,7 +15,6 @@ from typing import Any
 import pandas as pd
 import yaml
 
-from classifiers.experiments.perception_effect import RESULT_FILE as PERCEPTION_FILE
 from classifiers.report import analysis, figures
 from classifiers.report.document import Report, frame_of_intervals
 from classifiers.report.judge import (
@@ -25,6 +24,7 @@ from classifiers.report.judge import (
     leaderboard_caution,
     unjudgeable,
 )
+from classifiers.report.leaderboard import leaderboard_frames, split_line, verdict_sentence
 from classifiers.report.power import power_section
 from grip_env.config import Config
 from grip_env.objects import PlanarObject, procedural_objects
@@ -324,7 +324,7 @@ def _calibration_section(report: Report, out: Path, fig_dir: Path) -> None:
 
 
 @_stage_section("Planning on the rendered contour against the true one",
-                f"perception/{PERCEPTION_FILE}")
+                "perception/perception.json")
 def _perception_section(report: Report, out: Path, result: dict[str, Any],
                         table: pd.DataFrame) -> None:
     if result["planned_on"] != "render":
@@ -467,14 +467,6 @@ def _selector_section(report: Report, out: Path, selector: dict[str, Any]) -> No
 @_stage_section("Leaderboard: the grip each method picks", "benchmark/leaderboard.json")
 def _benchmark_section(report: Report, out: Path, board: dict[str, Any]) -> None:
     """The leaderboard: every method's pick on the held-out objects, against best-Q_C."""
-    from classifiers.experiments.benchmark.leaderboard import (
-        ATTEMPTS_FILE,
-        PROFILE_FILE,
-        leaderboard_frames,
-        split_line,
-        verdict_sentence,
-    )
-
     if not board.get("methods"):
         report.text(f"No leaderboard: {board.get('skipped', 'no method was scored')}.")
         return
@@ -496,11 +488,7 @@ def _benchmark_section(report: Report, out: Path, board: dict[str, Any]) -> None
     report.table(attempts.set_index("method"), caption="Success within k attempts: the chance "
                  "that one of the method's top-k picks holds, independent trials assumed "
                  "(GripSelect-v0 with max_attempts = k; GripAccept-v0 executing those k).")
-    for name, caption in ((PROFILE_FILE, "Performance profiles (rliable): fraction of held-out "
-                           "objects x runs whose normalised score exceeds tau."),
-                          (ATTEMPTS_FILE, "Success against the number of attempts allowed.")):
-        if (out / "benchmark" / name).exists():
-            report.figure(_rel(out / "benchmark" / name, out), caption)
+    _stage_figures(report, out, "benchmark")
 
 
 def _provenance_section(report: Report, out: Path, config: Config) -> None:
@@ -593,6 +581,11 @@ STAGE_FIGURES: dict[str, tuple[tuple[str, str], ...]] = {
         ("ablation_regression.png", "Regression: Spearman of predicted and simulated "
                                     "robustness for each feature set (left) and its paired "
                                     "difference (right)."),
+    ),
+    "benchmark": (
+        ("performance_profile.png", "Performance profiles (rliable): fraction of held-out "
+                                    "objects x runs whose normalised score exceeds tau."),
+        ("attempts.png", "Success against the number of attempts allowed."),
     ),
     "selector": (
         ("learning_curve.png", "Selector episode reward while training, with the expected "

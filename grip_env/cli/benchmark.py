@@ -71,6 +71,7 @@ def benchmark(
         from classifiers.experiments.benchmark import benchmark_method
         from classifiers.experiments.benchmark.leaderboard import write_leaderboard
         from classifiers.experiments.selector.data import check_grip_table
+        from classifiers.report.leaderboard import write_leaderboard_markdown
 
         warn_label_model(data)
         table = check_grip_table(data)
@@ -80,14 +81,14 @@ def benchmark(
         board = benchmark_method(table, methods, label, cfg, reps, split_version, split.value,
                                  seed)  # fmt: skip
         _check_out(out)
-        written = write_leaderboard(board, out)
+        written = [*write_leaderboard(board, out), write_leaderboard_markdown(board, out)]
     row, chosen = board["methods"][label], board["split"]
     typer.echo(f"split {chosen['name']} v{chosen['version']}"
                + (f": {chosen['note']}" if chosen.get("note") else ""))  # fmt: skip
     typer.echo(f"{label}: top-1 success {row['success']:.3f}, normalised IQM "
                f"{row['iqm']['estimate']:.3f} [{row['iqm']['ci'][0]:.3f}, "
                f"{row['iqm']['ci'][1]:.3f}], {row['verdict']}")  # fmt: skip
-    typer.echo(f"wrote {written[0]} and {written[1]}")
+    typer.echo(f"wrote {written[0]} and {written[-1]}")
 
 
 def _default_name(spec: str) -> str:

@@ -1,4 +1,4 @@
-"""The leaderboard: per-method aggregates of the selection metrics, as JSON, Markdown and figures.
+"""The leaderboard: per-method aggregates of the selection metrics, as JSON and figures.
 
 Every method is compared with the best-Q_C pick (``best_qc``, the paper's index): the difference
 of the mean normalised score, paired over the same resampled objects, and the probability of
@@ -27,14 +27,11 @@ from classifiers.experiments.benchmark.aggregate import (
 from classifiers.experiments.benchmark.selection import MAX_ATTEMPTS
 
 REFERENCE = "best_qc"
-JSON_FILE, MARKDOWN_FILE = "leaderboard.json", "leaderboard.md"
+JSON_FILE = "leaderboard.json"
 PROFILE_FILE, ATTEMPTS_FILE = "performance_profile.png", "attempts.png"
 PLAIN = ("success", "robustness", "regret", "robustness_regret", "ndcg5",
          *(f"success_at_{k}" for k in range(1, MAX_ATTEMPTS + 1)), "attempts")  # fmt: skip
-VERDICTS = ("beats best_qc", "worse than best_qc", "not distinguishable from best_qc")
 TAUS = np.linspace(-1.0, 1.0, 201)
-#: Below this many ranked objects the leaderboard says its intervals are indicative only.
-FEW_OBJECTS = 10
 
 
 class NoRankableObject(ValueError):
@@ -92,7 +89,7 @@ def build_leaderboard(
             "probability_of_improvement": estimate(probability_of_improvement(matrix, ref),
                                                    probability_of_improvement(boot[name],
                                                                               ref_boot)),
-            "verdict": _verdict(difference["ci"], name == reference),
+            "verdict": _verdict(difference["ci"], name, reference),
             "profile": _round(performance_profile(matrix, TAUS)),
         }  # fmt: skip
     order = sorted(rows, key=lambda n: (-rows[n]["iqm"]["estimate"], -rows[n]["mean"]["estimate"]))
@@ -108,134 +105,27 @@ def build_leaderboard(
     }  # fmt: skip
 
 
-def beaten(board: Mapping[str, Any]) -> dict[str, list[str]]:
-    """Method names per verdict (the reference itself left out)."""
-    found: dict[str, list[str]] = {v: [] for v in VERDICTS}
-    for name, row in board["methods"].items():
-        if row["verdict"] in found:
-            found[row["verdict"]].append(name)
-    return found
-
-
-def verdict_sentence(board: Mapping[str, Any]) -> str:
-    """One plain sentence: who beats best-Q_C with an interval excluding zero, and who does not."""
-    groups = beaten(board)
-    ref = board["reference"]
-
-    def names(key: str) -> str:
-        return ", ".join(f"`{n}`" for n in groups[key]) or "none"
-
-    return (f"Beat the best-Q_C pick (95% interval of the difference in mean normalised score "
-            f"above zero): {names(VERDICTS[0])}. Worse than `{ref}` (interval below zero): "
-            f"{names(VERDICTS[1])}. Not distinguishable from `{ref}` (interval contains zero): "
-            f"{names(VERDICTS[2])}.")
-
-
-def leaderboard_frames(board: Mapping[str, Any]) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """(main table, attempts table) as shown in leaderboard.md and the report."""
-    main, attempts = [], []
-    for name, row in board["methods"].items():
-        main.append({
-            "method": name, "runs": row["runs"],
-            "top-1 success": _ci({"estimate": row["success"], "ci": row["success_ci"]}),
-            "top-1 robustness (g)": _f(row["robustness"], 1), "regret": _f(row["regret"]),
-            "NDCG@5": _f(row["ndcg5"]), "normalised IQM": _ci(row["iqm"]),
-            "normalised mean": _ci(row["mean"]),
-            "mean - best_qc": _ci(row["difference_vs_reference"]),
-            "P(improve over best_qc)": _ci(row["probability_of_improvement"]),
-            "verdict": row["verdict"],
-        })  # fmt: skip
-        attempts.append({"method": name, **{f"{k} attempt{'s' * (k > 1)}":
-                         _f(row[f"success_at_{k}"]) for k in range(1, MAX_ATTEMPTS + 1)},
-                         "expected attempts (budget 5)": _f(row["attempts"])})  # fmt: skip
-    return pd.DataFrame(main), pd.DataFrame(attempts)
-
-
-def leaderboard_markdown(board: Mapping[str, Any]) -> str:
-    """The leaderboard as Markdown (the same table as the study report's)."""
-    main, attempts = leaderboard_frames(board)
-    split = board["split"]
-    lines = [
-        f"# Grip-selection leaderboard ({split.get('name', 'split')})", "",
-        split_line(board), "", _table(main), "",
-        f"Normalised score: (method - random) / (oracle - random) of the top-1 pick's expected "
-        f"success, per object; {board['interval']}. {verdict_sentence(board)}", "",
-        "## Success within k attempts (GripAccept-v0 / GripSelect-v0 with max_attempts = k)", "",
-        _table(attempts), "",
-        "Chance that one of the method's top-k picks holds, from the recorded success rates, "
-        "assuming independent trials (the replay backend's draws).", "",
-    ]  # fmt: skip
-    return "\n".join(lines)
-
-
 def write_leaderboard(board: Mapping[str, Any], out: str | Path) -> list[Path]:
-    """Write leaderboard.json, leaderboard.md and the two figures into ``out``."""
+    """Write leaderboard.json and the two figures into ``out`` (the Markdown table is the
+    report's: :func:`classifiers.report.leaderboard.write_leaderboard_markdown`)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / JSON_FILE).write_text(json.dumps(board, indent=2))
-    (out / MARKDOWN_FILE).write_text(leaderboard_markdown(board))
     from classifiers.experiments.benchmark.plots import plot_attempts, plot_profiles
 
     plot_profiles(board, out / PROFILE_FILE)
     plot_attempts(board, out / ATTEMPTS_FILE)
-    return [out / name for name in (JSON_FILE, MARKDOWN_FILE, PROFILE_FILE, ATTEMPTS_FILE)]
+    return [out / name for name in (JSON_FILE, PROFILE_FILE, ATTEMPTS_FILE)]
 
 
-def split_line(board: Mapping[str, Any]) -> str:
-    """One sentence: which split, how many objects, seeds and the dataset's checksum."""
-    split = board["split"]
-    seeds = split.get("seeds")
-    return (f"Split `{split.get('name')}` (version {split.get('version')}): "
-            f"{len(board['objects']) + len(board['degenerate_objects'])} held-out objects "
-            f"({len(board['degenerate_objects'])} where every candidate has the same success "
-            f"rate are left out of the normalised score), up to {split.get('max_candidates')} "
-            f"candidates each (lowest Q_C first); training seeds {seeds}; dataset sha256 "
-            f"`{str(split.get('dataset_sha256', ''))[:12]}`." + _not_standard(split)
-            + _few_objects(board))  # fmt: skip
-
-
-def _not_standard(split: Mapping[str, Any]) -> str:
-    """Why the split is not the latest standard one, and, when it is no standard split at all,
-    that its scores do not compare with the standard leaderboards."""
-    if split.get("note"):
-        return f" Split chosen: {split['note']}."
-    if split.get("standard", True):
-        return ""
-    return " Not the standard split: do not compare these scores with its leaderboards."
-
-
-def _few_objects(board: Mapping[str, Any]) -> str:
-    """A caution when the bootstrap has too few objects to resample."""
-    n = len(board["objects"])
-    if n >= FEW_OBJECTS:
-        return ""
-    return (f" Only {n} objects enter the normalised score: a bootstrap over so few objects "
-            f"understates the uncertainty; read its intervals and verdicts as indicative only.")
-
-
-def _verdict(ci: Sequence[float], is_reference: bool) -> str:
-    if is_reference:
+def _verdict(ci: Sequence[float], name: str, reference: str) -> str:
+    """``beats``, ``worse than`` or ``not distinguishable from`` the reference, by the interval
+    of the difference (the reference itself: ``reference``)."""
+    if name == reference:
         return "reference"
     low, high = ci
-    return VERDICTS[0] if low > 0 else VERDICTS[1] if high < 0 else VERDICTS[2]
-
-
-def _table(frame: pd.DataFrame) -> str:
-    head = "| " + " | ".join(frame.columns) + " |"
-    rule = "| " + " | ".join("---" for _ in frame.columns) + " |"
-    body = ["| " + " | ".join(str(v) for v in row) + " |" for row in frame.itertuples(index=False)]
-    return "\n".join([head, rule, *body])
-
-
-def _ci(value: Mapping[str, Any]) -> str:
-    low, high = value["ci"]
-    return f"{_f(value['estimate'])} [{_f(low)}, {_f(high)}]"
-
-
-def _f(value: float | None, digits: int = 3) -> str:
-    if value is None or not np.isfinite(value):
-        return "n/a"
-    return f"{round(float(value), digits) + 0.0:.{digits}f}"  # + 0.0: no "-0.000"
+    relation = "beats" if low > 0 else "worse than" if high < 0 else "not distinguishable from"
+    return f"{relation} {reference}"
 
 
 def _round(value: Any) -> Any:
