@@ -183,3 +183,10 @@ def test_a_module_not_found_names_the_folder_and_the_form(small: Path, folder: P
     assert_refused(*cli("benchmark", "issue35_broken:pick", "--data", small, "--out", out),
                    "RuntimeError: broken at import")  # fmt: skip
     assert not out.exists()
+
+
+def test_an_auto_split_shows_as_many_candidates_as_the_config_trains_on():
+    objects = DatasetObjects(("a", "b", "c", "d"))
+    assert auto_split(objects, 0).max_candidates == 64
+    split, _ = choose_split(objects, seed=0, max_candidates=8)
+    assert split.name == "auto-not-standard" and split.max_candidates == 8

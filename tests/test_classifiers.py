@@ -318,3 +318,17 @@ def test_study_stage_keys_follow_only_what_each_stage_depends_on():
     more_steps = base.override(selector={"timesteps": 5})
     assert stage_key("selector", base, "d") != stage_key("selector", more_steps, "d")
     assert stage_key("ablation", base, "d") == stage_key("ablation", more_steps, "d")
+
+
+def test_a_model_that_cannot_learn_from_a_tiny_fold_is_named_not_a_crash():
+    from classifiers.evaluation.cross_validation import fit_fold
+    from classifiers.learners.models import make_model
+    from grip_env.columns import FEATURES
+
+    rng = np.random.default_rng(0)
+    fold = pd.DataFrame(rng.random((6, len(FEATURES))), columns=list(FEATURES)).assign(
+        object_id=["a", "a", "b", "b", "c", "c"])
+    labels = np.array([True, False, True, False, True, False])
+    with pytest.raises(ValueError, match=r"model 'mlp_sklearn' cannot be fitted on a training "
+                                         r"fold of 6 grips on 3 objects .*leave 'mlp_sklearn' out"):
+        fit_fold("mlp_sklearn", make_model("mlp_sklearn"), fold, labels)

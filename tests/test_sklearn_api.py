@@ -21,9 +21,8 @@ strict, so a check that starts to pass fails here and the list stays true. The c
 - the gradient-boosted trees stop early on a seeded random validation share of the rows, so a
   repeated row is not a weighted one.
 - scikit-learn's own estimators keep the registry's settings: 15 neighbours need 15 training
-  rows, the MLP's early stopping needs a validation row per class; ``CalibratedClassifierCV`` with
-  ``ensemble=False`` fails on a column-vector target, and ``Pipeline`` fits its steps in place
-  (scikit-learn's own test suite expects those last two failures of ``Pipeline``).
+  rows, the MLP's early stopping needs a validation row per class, and ``Pipeline`` fits its
+  steps in place (scikit-learn's own test suite expects that failure of ``Pipeline``).
 """
 
 from __future__ import annotations
@@ -111,8 +110,6 @@ NEIGHBOURS = "15 neighbours need at least 15 training rows"
 EARLY_STOPPING = "the MLP's early stopping needs a validation row per class"
 EARLY_STOPPING_SPLIT = ("early stopping holds out a seeded random share of the rows: a repeated "
                         "row is not a weighted one (another split)")
-CALIBRATION_Y_2D = ("scikit-learn's CalibratedClassifierCV(ensemble=False) fails on a column "
-                    "vector y: cross_val_predict reads it as a label matrix (IndexError)")
 
 EXPECTED_FAILURES: dict[str, dict[str, str]] = {
     "column_selector": {
@@ -146,7 +143,7 @@ EXPECTED_FAILURES: dict[str, dict[str, str]] = {
         "check_methods_sample_order_invariance": BY_POSITION,
         "check_methods_subset_invariance": BY_POSITION,
     },
-    "classifier/svm": {**PIPELINE_STEPS, "check_supervised_y_2d": CALIBRATION_Y_2D},
+    "classifier/svm": PIPELINE_STEPS,
     "classifier/hgb": {"check_sample_weight_equivalence_on_dense_data": EARLY_STOPPING_SPLIT},
     "regressor/hgb": {"check_sample_weight_equivalence_on_dense_data": EARLY_STOPPING_SPLIT},
     "classifier/mlp_sklearn": {
@@ -234,3 +231,17 @@ def _output(estimator: BaseEstimator, table: Any) -> np.ndarray:
     method = next(getattr(estimator, name) for name in ("predict", "transform")
                   if hasattr(estimator, name))
     return np.asarray(method(table))
+
+
+def test_the_svm_fits_its_probabilities_on_as_few_grips_of_a_class_as_it_can():
+    from classifiers.learners.svm import PlattSVC
+
+    rng = np.random.default_rng(0)
+    X = rng.normal(size=(40, 3))
+    y = np.r_[np.ones(3, bool), np.zeros(37, bool)]  # 3 positives: fewer than 5 folds
+    model = PlattSVC(random_state=0).fit(X, y)
+    assert model.folds_ == 3 and model.predict_proba(X).shape == (40, 2)
+    assert PlattSVC(random_state=0).fit(X, ~y).folds_ == 3
+    assert PlattSVC(random_state=0).fit(np.r_[X, X], np.r_[y, y]).folds_ == 5
+    with pytest.raises(ValueError, match="at least 2 training grips of each class, got 1"):
+        PlattSVC().fit(X, np.r_[True, np.zeros(39, bool)])

@@ -281,11 +281,24 @@ def grouped_cv(
                     bar.advance()
                     continue
                 for name, model in fresh(seed).items():
-                    model.fit(table.iloc[train], target[train])
+                    fit_fold(name, model, table.iloc[train], target[train])
                     metrics = score(model, table.iloc[test])
                     records.append({"model": name, "repeat": repeat, "fold": fold, **metrics})
                 bar.advance()
     return pd.DataFrame.from_records(records)
+
+
+def fit_fold(name: str, model: BaseEstimator, train: pd.DataFrame, target: np.ndarray) -> None:
+    """Fit ``model`` on a training fold; a model that cannot learn from so few grips (an early
+    stopping split or internal folds larger than a class) is a ``ValueError`` naming it."""
+    try:
+        model.fit(train, target)
+    except ValueError as exc:
+        objects = train[GROUP_COLUMN].nunique()
+        raise ValueError(
+            f"model {name!r} cannot be fitted on a training fold of {len(train)} grips on "
+            f"{objects} objects ({exc}); use a dataset of more grips, or leave {name!r} out of "
+            "the learning settings (learning.models, .regressors or .rankers)") from exc
 
 
 def evaluate_models(

@@ -6,9 +6,10 @@ table and pick their columns) and ends with a step named ``"model"``, so hyper-p
 as ``pipeline.set_params(model__C=...)``. The baselines ignore ``features``: ``rank_qc`` reads
 ``Q_C``, ``rank_qg`` reads ``Q_G`` and ``random`` reads nothing but the row count.
 
-"svm" is an RBF ``SVC`` with Platt (sigmoid) probabilities fitted by internal 5-fold CV:
-``CalibratedClassifierCV(SVC(), ensemble=False)``, the replacement scikit-learn 1.9 gives for the
-deprecated ``SVC(probability=True)``.
+"svm" is an RBF ``SVC`` with Platt (sigmoid) probabilities fitted by internal CV of at most 5
+folds, fewer when a class has fewer training grips (:class:`~classifiers.learners.svm.PlattSVC`,
+wrapping ``CalibratedClassifierCV(SVC(), ensemble=False)``, the replacement scikit-learn 1.9 gives
+for the deprecated ``SVC(probability=True)``).
 
 "hgb" is scikit-learn's ``HistGradientBoostingClassifier`` (gradient-boosted trees, the usual
 strongest learner on small tabular data) on the raw features (trees need no scaling), with
@@ -29,13 +30,12 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 
 from sklearn.base import BaseEstimator
-from sklearn.calibration import CalibratedClassifierCV
 from sklearn.linear_model import LogisticRegression, Ridge
 from sklearn.neighbors import KNeighborsClassifier, KNeighborsRegressor
 from sklearn.neural_network import MLPClassifier
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
-from sklearn.svm import SVC, SVR
+from sklearn.svm import SVR
 
 from classifiers.learners.baselines import (
     ColumnSelector,
@@ -44,6 +44,7 @@ from classifiers.learners.baselines import (
     RankingClassifier,
     RankingRegressor,
 )
+from classifiers.learners.svm import PlattSVC
 from classifiers.learners.threads import OneThreadHGBClassifier, OneThreadHGBRegressor
 from classifiers.learners.torch_mlp import TorchMLPClassifier, TorchMLPRegressor
 from grip_env.columns import FEATURES
@@ -83,7 +84,7 @@ def _rank_baselines(ranking: type[BaseEstimator], chance: type[BaseEstimator]) -
 
 _CLASSIFIERS: dict[str, Entry] = {
     "svm": (None, lambda seed: _scaled(
-        CalibratedClassifierCV(SVC(random_state=seed), method="sigmoid", ensemble=False)
+        PlattSVC(random_state=seed)
     )),
     "mlp_torch": (None, lambda seed: [("model", TorchMLPClassifier(random_state=seed))]),
     "mlp_sklearn": (None, lambda seed: _scaled(

@@ -42,6 +42,7 @@ TRUSTED_TYPES = frozenset(
         "classifiers.learners.baselines.RandomRegressor",
         "classifiers.learners.threads.OneThreadHGBClassifier",
         "classifiers.learners.threads.OneThreadHGBRegressor",
+        "classifiers.learners.svm.PlattSVC",
     }
 )
 _TORCH_MODELS = {cls.__name__: cls for cls in (TorchMLPClassifier, TorchMLPRegressor)}

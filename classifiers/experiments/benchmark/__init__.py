@@ -69,7 +69,8 @@ def benchmark_method(
     kinds = {method_kind(s) for s in specs}
     if len(kinds) > 1:
         raise ValueError(f"the runs of one method must be of one kind, got {sorted(kinds)}")
-    chosen, note = choose_split(DatasetObjects.of(table), split, split_version, seed)
+    chosen, note = choose_split(DatasetObjects.of(table), split, split_version, seed,
+                                config.selector.max_candidates)
     table = _bare(table)
     sets = candidate_sets(table, config, chosen)
     candidates = candidate_table(sets)

@@ -195,27 +195,31 @@ def check_standard_objects(objects: DatasetObjects, split: BenchmarkSplit = STAN
                      f"objects, not comparable with standard-split scores)")  # fmt: skip
 
 
-def auto_split(objects: DatasetObjects, seed: int = 0) -> BenchmarkSplit:
+def auto_split(objects: DatasetObjects, seed: int = 0,
+               max_candidates: int = STANDARD_SPLIT.max_candidates) -> BenchmarkSplit:
     """The seeded split of the dataset's own objects with grips (:func:`split_objects` with the
-    standard split's ``test_fraction``, seed ``seed``): named :data:`AUTO_SPLIT_NAME`, version 0,
-    so it is never taken for the standard split."""
+    standard split's ``test_fraction``, seed ``seed``), up to ``max_candidates`` candidates an
+    object (the config's ``selector.max_candidates``, so an agent trained on it fits): named
+    :data:`AUTO_SPLIT_NAME`, version 0, so it is never taken for the standard split."""
     if len(objects.with_grips) < 2:
         raise ValueError(f"an auto split needs at least 2 objects with grips (one to hold out), "
                          f"the dataset has {len(objects.with_grips)}")  # fmt: skip
     fraction = STANDARD_SPLIT.test_fraction
     _, test = split_objects(objects.with_grips, fraction, seed)
-    return BenchmarkSplit(AUTO_SPLIT_NAME, 0, test, _SEEDS, test_fraction=fraction,
-                          split_seed=seed)  # fmt: skip
+    return BenchmarkSplit(AUTO_SPLIT_NAME, 0, test, _SEEDS, max_candidates,
+                          test_fraction=fraction, split_seed=seed)  # fmt: skip
 
 
 def choose_split(objects: DatasetObjects, mode: str = "auto", version: int | None = None,
-                 seed: int = 0) -> tuple[BenchmarkSplit, str]:  # fmt: skip
+                 seed: int = 0, max_candidates: int = STANDARD_SPLIT.max_candidates,
+                 ) -> tuple[BenchmarkSplit, str]:  # fmt: skip
     """The split to score a dataset on, and a sentence saying why when it is not the latest
     standard split.
 
     ``mode="standard"`` (or a ``version`` given): that standard split, or ValueError when the
     dataset lacks grips of its objects. ``mode="auto"``: the latest standard version whose
-    held-out objects all have grips, else :func:`auto_split` with ``seed``.
+    held-out objects all have grips, else :func:`auto_split` with ``seed`` and
+    ``max_candidates``.
     """
     if mode not in SPLIT_MODES:
         raise ValueError(f"--split must be one of {list(SPLIT_MODES)}, got {mode!r}")
@@ -230,7 +234,7 @@ def choose_split(objects: DatasetObjects, mode: str = "auto", version: int | Non
     if fits:
         split = STANDARD_SPLITS[fits[-1]]
         return split, f"{gap}; scored on v{split.version}, whose held-out objects are all here"
-    split = auto_split(objects, seed)
+    split = auto_split(objects, seed, max_candidates)
     return split, (f"not the standard split: {gap}; scored on a seeded split (seed {seed}) of "
                    f"this dataset's own {len(objects.with_grips)} objects with grips, "
                    f"{len(split.test_objects)} held out: do not compare its scores with "
