@@ -221,3 +221,16 @@ def test_power_cli_writes_the_curve(tmp_path, generated_dataset_dir):
     summary = json.loads((tmp_path / "p" / "power.json").read_text())
     assert set(summary["laws"]) == {"roc_auc", "hand_difference"}
     assert (tmp_path / "p" / "power.png").exists() and "wrote" in output
+
+
+def test_a_quantity_no_subsample_can_measure_is_named_not_fitted(tmp_path):
+    curve = _curve()
+    curve.loc[curve["quantity"] == "rl_minus_best_qc", "half_width"] = 0.0  # too few objects
+    summary = power.summarise_curve(curve)
+    assert summary["unmeasured"] == ["rl_minus_best_qc"]
+    assert set(summary["laws"]) == {"roc_auc", "hand_difference"}
+    assert "rl_minus_best_qc" not in summary["projection"]
+    plot_power(summary, tmp_path / "power.png")
+    curve["half_width"] = float("nan")
+    with pytest.raises(ValueError, match=r"no subsample of this dataset \(40 objects at most\)"):
+        power.summarise_curve(curve)

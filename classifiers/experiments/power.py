@@ -205,10 +205,22 @@ def _measure(
 
 
 def fit_curve(curve: pd.DataFrame) -> dict[str, Law]:
-    """One :class:`Law` per quantity from :func:`power_curve`'s rows (mean over replicates)."""
+    """One :class:`Law` per quantity from :func:`power_curve`'s rows (mean over replicates); a
+    quantity no subsample gives a finite positive half-width for (too few objects to resample)
+    has none.
+
+    Raises:
+        ValueError: no quantity has one: the dataset is too small to measure power on.
+    """
     means = curve.groupby(["quantity", "objects", "trials"], as_index=False)["half_width"].mean()
-    return {str(q): fit_law(g["objects"], g["trials"], g["half_width"])
-            for q, g in means.groupby("quantity", sort=False)}  # fmt: skip
+    measurable = means[np.isfinite(means["half_width"]) & (means["half_width"] > 0)]
+    laws = {str(q): fit_law(g["objects"], g["trials"], g["half_width"])
+            for q, g in measurable.groupby("quantity", sort=False)}  # fmt: skip
+    if not laws:
+        raise ValueError(f"power: no subsample of this dataset ({int(curve['objects'].max())} "
+                         "objects at most) gives a positive interval half-width to fit; use a "
+                         "dataset of more objects (--data standard, the shipped one)")
+    return laws
 
 
 def pool(tables: Sequence[pd.DataFrame], trials: int | None = None, seed: int = 0) -> pd.DataFrame:
@@ -246,6 +258,7 @@ def summarise_curve(
     targets = dict(targets or TARGETS)
     laws = fit_curve(curve)
     summary: dict[str, Any] = {"targets": targets, "laws": {}, "projection": {},
+                               "unmeasured": sorted(set(curve["quantity"]) - set(laws)),
                                "curve": curve.to_dict(orient="records")}  # fmt: skip
     for quantity, law in laws.items():
         along = curve[(curve["quantity"] == quantity) & (curve["axis"] == "objects")]

@@ -72,7 +72,8 @@ def plot_power(summary: dict[str, Any], path: Path) -> Path:
     fitted laws (lines) and the targets (dotted)."""
     curve = pd.DataFrame(summary["curve"])
     figure, (left, right) = plt.subplots(1, 2, figsize=(10, 4.2))
-    for k, quantity in enumerate(q for q in LABELS if q in set(curve["quantity"])):
+    fitted = summary["laws"]
+    for k, quantity in enumerate(q for q in LABELS if q in set(curve["quantity"]) & set(fitted)):
         color = f"C{k}"
         rows = curve[curve["quantity"] == quantity]
         law = Law(**{f: summary["laws"][quantity][f] for f in ("a", "b", "points")})
@@ -190,6 +191,10 @@ def _curve_tables(report: Report, summary: dict[str, Any]) -> None:
         report.table(table.rename_axis("half-width"), float_format="{:.3f}",
                      caption=f"Measured half-width against {axis} (mean over seeded subsamples; "
                      f"{_held(rows, axis)}).")
+    if summary.get("unmeasured"):
+        report.text("Not measurable on this dataset (no subsample gives a positive half-width, "
+                    "too few objects to resample): "
+                    + ", ".join(LABELS.get(q, q) for q in summary["unmeasured"]) + ".")
     projection = {
         LABELS.get(q, q): {f"t = {t}": str(n) for t, n in found.items()}
         | {"target": f"{summary['targets'][q]:g}",
