@@ -63,3 +63,14 @@ def test_a_dataset_planned_on_the_polygons_has_nothing_to_compare(tmp_path) -> N
                     job=toy_job)
     assert run_perception_effect(config, data, tmp_path / "p") == {"planned_on": "polygon",
                                                                    "objects": 0}
+
+
+def test_a_large_dataset_is_paired_on_a_seeded_sample_of_its_objects():
+    from classifiers.experiments.perception_effect import MAX_OBJECTS, sampled_objects
+
+    small = pd.DataFrame({"object_id": [f"o{i}" for i in range(MAX_OBJECTS)] * 2})
+    assert sampled_objects(small, seed=0) == set(small["object_id"])  # the default study: all
+    large = pd.DataFrame({"object_id": [f"o{i}" for i in range(500)]})
+    chosen = sampled_objects(large, seed=3)
+    assert len(chosen) == MAX_OBJECTS and chosen <= set(large["object_id"])
+    assert sampled_objects(large, seed=3) == chosen != sampled_objects(large, seed=4)

@@ -339,7 +339,8 @@ def _perception_section(report: Report, out: Path, result: dict[str, Any],
         "on their true contours; per object, the best grip by Q_C of each plan is paired (the "
         "true plan's simulated on the true body with the dataset's trials), and the table gives "
         "the mean over objects on each plan and the mean paired difference, rendered − true, "
-        f"with a 95 % bootstrap interval over the {result['objects']} objects."
+        f"with a 95 % bootstrap interval over the {result['objects']} objects"
+        + (" (a seeded sample of the dataset's objects)." if result.get("sampled") else ".")
     )
     rows = {name: {"true plan": value["true"], "rendered plan": value["render"],
                    "difference": {"mean": value["mean"], "ci": value["ci"]}}
