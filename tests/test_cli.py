@@ -74,7 +74,7 @@ def test_help_names_only_options_the_command_has(name):
 def test_study_does_not_advise_an_option_it_lacks(generated_dataset_dir, tmp_path):
     out = tmp_path / "study"
     shutil.copytree(generated_dataset_dir, out / "dataset")  # made with other settings
-    result = RUNNER.invoke(app, ["study", "--out", str(out)])
+    result = RUNNER.invoke(app, ["study", "--regenerate", "--out", str(out)])
     assert result.exit_code == 2, result.output
     message = result.output.strip().splitlines()[-1]
     assert message.startswith("error: ") and "other settings" in message

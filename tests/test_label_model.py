@@ -148,7 +148,7 @@ def test_study_refuses_a_dataset_of_another_label_model(toy, variant, tmp_path):
 
     out = tmp_path / "study"
     shutil.copytree(toy[variant], out / "dataset")
-    code, output = cli("study", "--out", out)
+    code, output = cli("study", "--regenerate", "--out", out)
     found = repr(RECORDS[variant] or UNRECORDED)
     assert_refused(code, output, found, repr(LABEL_MODEL), "does not mix label models",
                    "empty folder")  # fmt: skip

@@ -56,3 +56,26 @@ def test_study_with_a_folder_that_holds_no_dataset_writes_nothing(tmp_path):
     assert result.exit_code == 2
     assert "holds no grip-env dataset" in result.output
     assert not out.exists()
+
+
+def test_the_study_learns_on_the_standard_dataset_unless_told_to_generate(tmp_path):
+    from grip_env.cli.study import study_data
+    from grip_env.datasets import SHIPPED
+
+    assert study_data(tmp_path, regenerate=False, quick=False) == tmp_path
+    assert study_data(None, regenerate=True, quick=False) is None
+    assert study_data(None, regenerate=False, quick=True) is None  # the tiny profile generates
+    assert study_data(tmp_path, regenerate=False, quick=True) == tmp_path
+    manifest = json.loads((SHIPPED / "manifest.json").read_text())
+    if manifest.get("complete"):
+        assert study_data(None, regenerate=False, quick=False) == SHIPPED
+
+
+def test_study_with_both_data_and_regenerate_writes_nothing(tmp_path):
+    _register_commands()
+    out = tmp_path / "study"
+    result = CliRunner().invoke(app, ["study", "--data", str(tmp_path), "--regenerate",
+                                      "--out", str(out)])
+    assert result.exit_code == 2
+    assert "--regenerate: give one" in result.output.splitlines()[-1]
+    assert not out.exists()

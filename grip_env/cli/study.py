@@ -24,10 +24,14 @@ def study(
     ] = False,
     data: Annotated[
         Path | None,
-        typer.Option("--data", "-d", callback=dataset_folder,
-                     help=f"learn on this {DATA_HELP} (its own recipe; a seeded sample of it "
-                          "is re-simulated first) instead of generating one into OUT/dataset"),
+        typer.Option("--data", "-d", help=f"learn on this {DATA_HELP} (its own recipe; a seeded "
+                     "sample of it is re-simulated first); default: standard"),
     ] = None,
+    regenerate: Annotated[
+        bool,
+        typer.Option("--regenerate", help="generate the dataset from the config's recipe into "
+                                          "OUT/dataset instead of learning on --data"),
+    ] = False,
     update_readme: Annotated[
         bool,
         typer.Option("--update-readme",
@@ -39,14 +43,17 @@ def study(
 ) -> None:
     """Run the whole study and write OUT/report.md and OUT/report.html.
 
-    Generates the dataset (or, with --data, re-simulates a seeded sample of the given one),
-    trains and evaluates the classifiers, runs the ablation, trains and evaluates the RL
-    selector, then writes the report. A rerun reuses every stage whose inputs
+    Learns on the shipped standard dataset (or the one --data names), after re-simulating a
+    seeded sample of it; --regenerate (and --quick, unless --data is given) generates the
+    dataset from the config's recipe into OUT/dataset instead. Then it trains and evaluates
+    the classifiers, runs the ablation, trains and evaluates the RL selector, and writes the
+    report. A rerun reuses every stage whose inputs
     (config fields, dataset, grip-env version) are unchanged and recomputes the others.
     Exit codes: 0 done, 1 internal error, 2 bad input, 130/143/129 stopped by a signal.
     """
     with stop_on_signals(f"rerun the same command to finish {out}"), user_errors(), shown():
         check_output_dir(out)
+        data = study_data(data, regenerate, quick)
         if update_readme and not readme.is_file():
             raise ValueError(f"--readme {readme} is not a file")
         from classifiers.experiments.study import run_study
@@ -64,6 +71,19 @@ def study(
         if update_readme:
             _update_readme(out, readme)
     typer.echo(f"report: {report}")
+
+
+def study_data(data: Path | None, regenerate: bool, quick: bool) -> Path | None:
+    """The dataset folder the study learns on, or None to generate one from the recipe: the
+    standard dataset unless ``--regenerate`` (or ``--quick`` without ``--data``) is given."""
+    if regenerate and data is not None:
+        raise ValueError(f"--data {data} and --regenerate: give one (--regenerate generates the "
+                         "dataset into OUT/dataset, --data learns on a given one)")
+    if regenerate or (quick and data is None):
+        return None
+    from grip_env.datasets import STANDARD
+
+    return dataset_folder(data or Path(STANDARD))
 
 
 def _update_readme(out: Path, readme: Path) -> None:
