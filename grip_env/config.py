@@ -288,6 +288,11 @@ class LearningConfig(_Section):
     )
     folds: int = Field(5, ge=2, le=100, description="grouped CV folds")
     repeats: int = Field(3, ge=1, le=100, description="CV repeats over seeds")
+    workers: int = Field(
+        2, ge=1, le=1024,
+        description="processes the cross-validation folds are fitted in (one thread each; the "
+        "results do not depend on it)",
+    )
     seed: int = Field(0, ge=0, le=MAX_SEED, description="learning seed")
     test_fraction: float = Field(0.25, gt=0.0, lt=1.0, description="held-out object fraction")
 

@@ -245,3 +245,24 @@ def test_the_svm_fits_its_probabilities_on_as_few_grips_of_a_class_as_it_can():
     assert PlattSVC(random_state=0).fit(np.r_[X, X], np.r_[y, y]).folds_ == 5
     with pytest.raises(ValueError, match="at least 2 training grips of each class, got 1"):
         PlattSVC().fit(X, np.r_[True, np.zeros(39, bool)])
+
+
+def test_kernel_learners_fit_a_stated_seeded_sample_of_a_large_training_set():
+    from classifiers.learners.svm import PlattSVC, SampledSVR, kernel_sample
+
+    rng = np.random.default_rng(0)
+    X = rng.normal(size=(300, 3))
+    y = X[:, 0] + 0.3 * rng.normal(size=300) > 0.8  # about a fifth positive
+    small = PlattSVC(max_grips=None, random_state=0).fit(X, y)
+    assert small.n_fit_grips_ == 300
+    sampled = PlattSVC(max_grips=100, random_state=0).fit(X, y)
+    assert sampled.n_fit_grips_ == 100
+    rows = kernel_sample(y, 100, 0, stratify=True)
+    assert abs(y[rows].mean() - y.mean()) < 0.01  # each class its share
+    assert np.array_equal(rows, kernel_sample(y, 100, 0, stratify=True))  # seeded
+    assert not np.array_equal(rows, kernel_sample(y, 100, 1, stratify=True))
+    svr = SampledSVR(max_grips=50, random_state=0).fit(X, X[:, 0])
+    assert svr.n_fit_grips_ == 50 and svr.predict(X).shape == (300,)
+    assert np.corrcoef(svr.predict(X), X[:, 0])[0, 1] > 0.9
+    with pytest.raises(ValueError, match="max_grips must be at least 2"):
+        PlattSVC(max_grips=1).fit(X, y)

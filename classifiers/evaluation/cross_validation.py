@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from joblib import Parallel, delayed
 from scipy import stats
 from sklearn.base import BaseEstimator, clone
 from sklearn.metrics import (
@@ -42,6 +43,8 @@ from grip_env.progress import progress_bar
 METRICS = ("accuracy", "balanced_accuracy", "roc_auc", "f1", "brier", "top1_success", "top1_rate")
 GROUP_COLUMN = "object_id"
 LABEL_COLUMN = "success"
+#: The fewest grips whose cross-validation is spread over ``learning.workers`` processes.
+PARALLEL_MIN_GRIPS = 2000
 
 
 def check_dataset(table: pd.DataFrame, features: Sequence[str], folds: int) -> None:
@@ -266,26 +269,46 @@ def grouped_cv(
     """The repeated grouped folds: ``fresh(seed)`` estimators fitted on each training fold,
     ``score(model, test)`` on its test fold; one row per (model, repeat, fold).
 
+    The folds are fitted in ``config.workers`` processes, each on one thread, when the table
+    has at least :data:`PARALLEL_MIN_GRIPS` grips (below that, starting the processes costs more
+    than it saves); every fit is seeded by its repeat alone, so the rows are the same whatever
+    the number of workers.
     A fold whose training grips all have one class (a boolean ``target``; possible on a few
     objects) has nothing to learn from and gives no row, for every model alike, so paired
     differences stay matched on the folds both sides have.
     """
-    records = []
-    total = config.repeats * config.folds
-    one_class = target.dtype == bool
-    with single_threaded(), progress_bar(total, "cross-validation") as bar:
-        for repeat in range(config.repeats):
-            seed = config.seed + repeat
-            for fold, (train, test) in enumerate(grouped_folds(table, config.folds, seed)):
-                if one_class and np.unique(target[train]).size < 2:
-                    bar.advance()
-                    continue
-                for name, model in fresh(seed).items():
-                    fit_fold(name, model, table.iloc[train], target[train])
-                    metrics = score(model, table.iloc[test])
-                    records.append({"model": name, "repeat": repeat, "fold": fold, **metrics})
-                bar.advance()
+    jobs = [(repeat, fold, train, test)
+            for repeat in range(config.repeats)
+            for fold, (train, test) in enumerate(grouped_folds(table, config.folds,
+                                                               config.seed + repeat))]
+    run_fold = delayed(_fold_records)
+    records: list[dict[str, Any]] = []
+    with progress_bar(len(jobs), "cross-validation") as bar:
+        workers = config.workers if len(table) >= PARALLEL_MIN_GRIPS else 1
+        found = Parallel(n_jobs=min(workers, len(jobs)), return_as="generator")(
+            run_fold(table, target, fresh, score, config.seed + repeat, repeat, fold, train, test)
+            for repeat, fold, train, test in jobs)
+        for rows in found:
+            records += rows
+            bar.advance()
     return pd.DataFrame.from_records(records)
+
+
+def _fold_records(
+    table: pd.DataFrame, target: np.ndarray, fresh: Callable[[int], Mapping[str, BaseEstimator]],
+    score: Callable[[BaseEstimator, pd.DataFrame], Mapping[str, float]], seed: int, repeat: int,
+    fold: int, train: np.ndarray, test: np.ndarray,
+) -> list[dict[str, Any]]:
+    """One fold of :func:`grouped_cv`: every model fitted and scored, on one thread."""
+    if target.dtype == bool and np.unique(target[train]).size < 2:
+        return []
+    records = []
+    with single_threaded():
+        for name, model in fresh(seed).items():
+            fit_fold(name, model, table.iloc[train], target[train])
+            records.append({"model": name, "repeat": repeat, "fold": fold,
+                            **score(model, table.iloc[test])})
+    return records
 
 
 def fit_fold(name: str, model: BaseEstimator, train: pd.DataFrame, target: np.ndarray) -> None:

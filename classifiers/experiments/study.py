@@ -352,13 +352,19 @@ def stage_key(name: str, config: Config, dataset_sha256: str, quick: bool = Fals
     return stage_record(name, config, dataset_sha256, quick)["key"]
 
 
+#: Fields that say how a stage runs, not what it computes: no result depends on them.
+HOW_TO_RUN = frozenset({"workers", "backend"})
+
+
 def stage_inputs(name: str, config: Config) -> dict[str, Any]:
-    """The values of the config fields :data:`STAGE_INPUTS` lists for ``name``."""
+    """The values of the config fields :data:`STAGE_INPUTS` lists for ``name`` (a whole section
+    without its :data:`HOW_TO_RUN` fields)."""
     data = config.model_dump(mode="json")
     found = {}
     for path in STAGE_INPUTS[name]:
         section, _, field = path.partition(".")
-        found[path] = data[section][field] if field else data[section]
+        found[path] = data[section][field] if field else {
+            key: value for key, value in data[section].items() if key not in HOW_TO_RUN}
     return found
 
 

@@ -9,7 +9,9 @@ as ``pipeline.set_params(model__C=...)``. The baselines ignore ``features``: ``r
 "svm" is an RBF ``SVC`` with Platt (sigmoid) probabilities fitted by internal CV of at most 5
 folds, fewer when a class has fewer training grips (:class:`~classifiers.learners.svm.PlattSVC`,
 wrapping ``CalibratedClassifierCV(SVC(), ensemble=False)``, the replacement scikit-learn 1.9 gives
-for the deprecated ``SVC(probability=True)``).
+for the deprecated ``SVC(probability=True)``). It and "svr" are fitted on a seeded sample of at
+most 4,000 grips (:data:`~classifiers.learners.svm.MAX_KERNEL_GRIPS`): a kernel machine's cost
+grows with the square of its grips, so on the standard dataset they are stated subsamples.
 
 "hgb" is scikit-learn's ``HistGradientBoostingClassifier`` (gradient-boosted trees, the usual
 strongest learner on small tabular data) on the raw features (trees need no scaling), with
@@ -18,7 +20,8 @@ grips stop the boosting, so "hgb" is a stochastic learner whose seeds give diffe
 runs on one thread (:class:`~classifiers.learners.threads.OneThreadHGBClassifier`, 13x faster here).
 
 ``make_regressor(name, seed, features)`` is the same for the regression task (predicting a grip's
-``robustness_mean``): "svr" (RBF ``SVR`` on standardised features), "mlp_torch"
+``robustness_mean``): "svr" (RBF ``SVR`` on standardised features,
+:class:`~classifiers.learners.svm.SampledSVR`), "mlp_torch"
 (:class:`~classifiers.learners.torch_mlp.TorchMLPRegressor`), "knn", "ridge", "hgb"
 (``HistGradientBoostingRegressor``, squared error, early stopping as the classifier's), and the
 rank baselines
@@ -35,7 +38,6 @@ from sklearn.neighbors import KNeighborsClassifier, KNeighborsRegressor
 from sklearn.neural_network import MLPClassifier
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
-from sklearn.svm import SVR
 
 from classifiers.learners.baselines import (
     ColumnSelector,
@@ -44,7 +46,7 @@ from classifiers.learners.baselines import (
     RankingClassifier,
     RankingRegressor,
 )
-from classifiers.learners.svm import PlattSVC
+from classifiers.learners.svm import PlattSVC, SampledSVR
 from classifiers.learners.threads import OneThreadHGBClassifier, OneThreadHGBRegressor
 from classifiers.learners.torch_mlp import TorchMLPClassifier, TorchMLPRegressor
 from grip_env.columns import FEATURES
@@ -99,7 +101,7 @@ _CLASSIFIERS: dict[str, Entry] = {
 MODEL_NAMES = tuple(_CLASSIFIERS)
 
 _REGRESSORS: dict[str, Entry] = {
-    "svr": (None, lambda seed: _scaled(SVR(C=1.0, epsilon=0.1))),
+    "svr": (None, lambda seed: _scaled(SampledSVR(C=1.0, epsilon=0.1, random_state=seed))),
     "mlp_torch": (None, lambda seed: [("model", TorchMLPRegressor(random_state=seed))]),
     "knn": (None, lambda seed: _scaled(KNeighborsRegressor(n_neighbors=15, weights="distance"))),
     "ridge": (None, lambda seed: _scaled(Ridge(alpha=1.0))),

@@ -43,6 +43,7 @@ TRUSTED_TYPES = frozenset(
         "classifiers.learners.threads.OneThreadHGBClassifier",
         "classifiers.learners.threads.OneThreadHGBRegressor",
         "classifiers.learners.svm.PlattSVC",
+        "classifiers.learners.svm.SampledSVR",
     }
 )
 _TORCH_MODELS = {cls.__name__: cls for cls in (TorchMLPClassifier, TorchMLPRegressor)}

@@ -250,6 +250,12 @@ def _classifier_section(report: Report, out: Path, metrics: dict[str, Any]) -> N
             _winner("ROC-AUC", best, models[best]["roc_auc"], objects, SPANS["roc_auc"]),
             _winner("top-1 (does the model's top-ranked grip on a test object hold)", top,
                     models[top]["top1_success"], objects, SPANS["top1_success"])))
+    sampled = metrics.get("sampled") or {}
+    if sampled:
+        report.text("Fitted on a seeded sample of their training grips (a kernel machine's cost "
+                    "grows with the square of its grips): " + ", ".join(
+                        f"{name} at most {grips:,} of {metrics['dataset']['rows']:,}"
+                        for name, grips in sampled.items()) + ".")
     _held_out_table(report, metrics.get("held_out"))
     _family_holdout_table(report, metrics.get("family_holdout"))
     _stage_figures(report, out, "classifiers")
