@@ -13,7 +13,7 @@ from grip_env import __version__  # noqa: E402
 
 project = "grip-env"
 author = "the grip-env authors"
-copyright = "grip-env authors, MIT licence"  # noqa: A001
+copyright = "grip-env authors, MIT licence"
 release = version = __version__
 
 extensions = [
@@ -46,5 +46,6 @@ html_theme = "furo"
 html_title = f"grip-env {release}"
 html_static_path: list[str] = []
 html_theme_options = {"source_directory": "docs/", "navigation_with_keys": True}
+smartquotes = False  # "--sim" in help texts stays two hyphens, not an en dash
 pygments_style = "sphinx"
 pygments_dark_style = "monokai"

@@ -9,7 +9,7 @@ code the site documents, never from a copy kept by hand:
   Typer/click command tree (:func:`cli_reference_markdown`);
 - ``_generated/env-<id>.md``: one page body per registered environment in Gymnasium's form: a
   summary table and spaces from a live ``gymnasium.make(id)``, the sections of the class docstring,
-  the ``info`` keys of a replayed episode and the arguments of ``make`` from the constructor's
+  the ``info`` keys of a live episode and the arguments of ``make`` from the constructor's
   signature (:func:`env_page_markdown`).
 
 The pages in ``docs/`` include these files (MyST ``{include}``); ``_generated/`` is not committed.
@@ -75,7 +75,7 @@ def _command_lines(command: Any, context: Any) -> list[str]:
         if record is not None:
             rows.append(f"| `{_cell(record[0])}` | {_cell(record[1])} |")
     epilog = [inspect.cleandoc(command.epilog), ""] if getattr(command, "epilog", None) else []
-    return [text, "", "```text", command.get_usage(context), "```", "", *epilog, *rows]
+    return [text, "", "```text", command.get_usage(context), "```", "", *rows, "", *epilog]
 
 
 def _cell(text: str) -> str:
@@ -146,25 +146,36 @@ def _myst_roles(text: str, qualified: str) -> str:
 
 
 def _info_table(env_id: str) -> list[str]:
-    """The keys of ``reset``'s and ``step``'s ``info`` in one replayed episode, with their types."""
+    """The keys of ``reset``'s and ``step``'s ``info`` in one live episode, with their types (a
+    key that is None live is typed from a replayed episode too)."""
     import gymnasium
 
     from classifiers.evaluation.synthetic import synthetic_grips
 
-    env = gymnasium.make(env_id, data=synthetic_grips(n_objects=4, seed=0), max_candidates=8)
-    try:
-        _, reset_info = env.reset(seed=0)
-        *_, step_info = env.step(1)
-    finally:
-        env.close()
-    rows = ["Measured on one replayed episode (the types are those of a replay; live, "
-            "`success_rate` is `None`):", "",
+    live = _first_step_infos(gymnasium.make(env_id, objects=["rectangle"], max_candidates=8))
+    replay = _first_step_infos(gymnasium.make(env_id, data=synthetic_grips(n_objects=4, seed=0),
+                                              max_candidates=8))
+    rows = ["Measured on one live episode (`objects=[\"rectangle\"]`) when the site was built:", "",
             "| key | in `reset` | in `step` | type |", "| --- | --- | --- | --- |"]
+    reset_info, step_info = live
     for key in dict.fromkeys([*reset_info, *step_info]):
         value = step_info.get(key, reset_info.get(key))
+        kind = f"`{type(value).__name__}`"
+        if value is None:
+            kind = f"`None` live, `{type(replay[1][key]).__name__}` replayed"
         rows.append(f"| `{key}` | {'yes' if key in reset_info else ''} | "
-                    f"{'yes' if key in step_info else ''} | `{type(value).__name__}` |")
+                    f"{'yes' if key in step_info else ''} | {kind} |")
     return rows
+
+
+def _first_step_infos(env: Any) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The ``info`` of ``reset(seed=0)`` and of executing the first candidate, then close."""
+    try:
+        _, reset_info = env.reset(seed=0)
+        *_, step_info = env.step(1)  # GripSelect: slot 1; GripAccept: execute
+    finally:
+        env.close()
+    return reset_info, step_info
 
 
 def _arguments_table(env_class: type) -> list[str]:
