@@ -461,15 +461,51 @@ def _one_line(exc: Exception) -> str:
 
 
 def config_reference_markdown() -> str:
-    """The configuration reference table (README's), generated from the fields above."""
-    lines = ["| key | default | meaning |", "| --- | --- | --- |"]
+    """The configuration reference table (the documentation's), generated from the fields above:
+    every key with its default, the values it accepts and its description."""
+    lines = ["| key | default | accepted | meaning |", "| --- | --- | --- | --- |"]
     defaults = Config()
     for section in Config.model_fields:
         values = getattr(defaults, section)
+        schema = type(values).model_json_schema()["properties"]
         for name, field in type(values).model_fields.items():
             value = _show(getattr(values, name))
-            lines.append(f"| `{section}.{name}` | {value} | {field.description or ''} |")
+            accepted = _accepted(schema[name])
+            lines.append(f"| `{section}.{name}` | {value} | {accepted} | "
+                         f"{field.description or ''} |")
     return "\n".join(lines)
+
+
+def _accepted(schema: dict[str, Any]) -> str:
+    """The values a field's JSON schema accepts, in words: its range, its choices or its kind."""
+    if "enum" in schema:
+        return ", ".join(f"`{choice}`" for choice in schema["enum"])
+    if schema.get("type") == "array":
+        items = schema.get("prefixItems") or [schema.get("items", {})]
+        each = _accepted(items[0])
+        count = len(items) if "prefixItems" in schema else None
+        shape = f"{count} values" if count else "a list"
+        return f"{shape}, each {each}" if each else shape
+    kind = {"integer": "integer", "number": "number", "boolean": "true or false",
+            "string": "text"}.get(schema.get("type", ""), "")
+    low, high = _bound(schema, "minimum", "["), _bound(schema, "maximum", "]")
+    if low and high:
+        return f"{kind} in {low[0]}{low[1]}, {high[1]}{high[0]}"
+    if low or high:
+        words = {"[": "≥", "(": ">", "]": "≤", ")": "<"}
+        bracket, value = low or high
+        return f"{kind} {words[bracket]} {value}"
+    return kind
+
+
+def _bound(schema: dict[str, Any], key: str, closed: str) -> tuple[str, str] | None:
+    """A schema's ``minimum``/``maximum`` (bracket ``closed``) or exclusive one, shown."""
+    if key in schema:
+        return closed, _show(schema[key])
+    exclusive = f"exclusive{key.capitalize()}"
+    if exclusive not in schema:
+        return None
+    return "(" if closed == "[" else ")", _show(schema[exclusive])
 
 
 def _show(value: Any) -> str:

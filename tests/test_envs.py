@@ -484,17 +484,18 @@ def test_missing_dataset_path_is_a_value_error(tmp_path):
 
 
 @pytest.mark.slow
-def test_readme_sb3_snippet_runs_on_a_generated_dataset(generated_dataset_dir, capsys):
-    """The README's SB3 block, shortened (fewer steps and episodes), on a real dataset."""
+def test_docs_sb3_snippet_runs_on_a_generated_dataset(generated_dataset_dir, capsys):
+    """The SB3 block of ``docs/environments/sb3.md``, shortened (fewer steps and episodes), on a
+    real dataset."""
     from pathlib import Path
 
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
-    section = readme[readme.index("### The environment from SB3"):]
+    page = Path(__file__).resolve().parents[1] / "docs" / "environments" / "sb3.md"
+    section = page.read_text()
     code = section[section.index("```python") + len("```python"):section.index("```\n\n")]
     assert 'data = "data"' in code and "learn(5_000)" in code and "range(500)" in code
     code = code.replace('data = "data"', f"data = {str(generated_dataset_dir)!r}")
     code = code.replace("learn(5_000)", "learn(64)").replace("range(500)", "range(10)")
-    exec(compile(code, "README.md", "exec"), {})
+    exec(compile(code, str(page), "exec"), {})
     line = capsys.readouterr().out.strip().splitlines()[-1]
     assert line.startswith("first pick holds: selector ") and ", best Q_C " in line
 

@@ -1,0 +1,204 @@
+"""The documentation's code runs: every code block of ``docs/`` and the README either runs here (on
+a small dataset generated for real), is run by the test its marker names, or says why it is not run.
+
+A block is marked by an HTML comment on the line before its fence, which the site does not show:
+``<!-- not run: REASON -->`` or ``<!-- run by: tests/FILE.py::TEST -->``. The first ``bash`` block
+of the commands page is walked line by line by ``tests/test_readme_commands.py``. The generated
+pages (``docs/_generated``, written by ``docs/_ext/grip_docs.py`` at build time) are checked
+against the code they are generated from.
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+from classifiers.report.readme import BEGIN, END
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+COMMANDS_PAGE = DOCS / "reference" / "commands.md"
+#: Fence languages that are code a reader may run; other fences (text, bibtex) are pictures and
+#: output, and ``{directive}`` fences are MyST's.
+CODE = ("python", "pycon", "bash", "sh", "shell", "console")
+#: How a page's Python is made small here: (page, [(text, replaced by)]); each text must be there.
+SMALL: dict[str, list[tuple[str, str]]] = {
+    "docs/datasets.md": [("grips.head(5), trials=5", "grips.head(2), trials=1")],
+}
+_FENCE = re.compile(r"^(`{3,})\s*(\S*)")
+_MARKER = re.compile(r"^<!-- (not run|run by): (.+?) -->$")
+
+
+@dataclass(frozen=True)
+class Block:
+    """One fenced block of a page: where it starts, its language, its text and its marker."""
+
+    page: str
+    line: int
+    language: str
+    text: str
+    marker: tuple[str, str] | None
+
+    def __str__(self) -> str:
+        return f"{self.page}:{self.line} ({self.language})"
+
+
+def pages() -> list[Path]:
+    """Every Markdown source of the site (not the build, not the generated pages) and the README."""
+    found = [path for path in DOCS.rglob("*.md")
+             if not {"_build", "_generated"} & set(path.relative_to(DOCS).parts)]
+    return [*sorted(found), ROOT / "README.md"]
+
+
+def blocks(path: Path) -> list[Block]:
+    """The fenced blocks of ``path`` with the marker on the line before each."""
+    lines = path.read_text().splitlines()
+    found, index = [], 0
+    while index < len(lines):
+        opening = _FENCE.match(lines[index])
+        if not opening:
+            index += 1
+            continue
+        fence, language = opening.groups()
+        end = next(i for i in range(index + 1, len(lines)) if lines[i].startswith(fence))
+        before = lines[index - 1].strip() if index else ""
+        marker = _MARKER.match(before)
+        found.append(Block(str(path.relative_to(ROOT)), index + 1, language,
+                           "\n".join(lines[index + 1:end]) + "\n",
+                           marker.groups() if marker else None))  # type: ignore[arg-type]
+        index = end + 1
+    return found
+
+
+def walked_commands_block() -> Block:
+    """The commands page's block that tests/test_readme_commands.py walks."""
+    return next(block for block in blocks(COMMANDS_PAGE) if block.language == "bash")
+
+
+def runnable(path: Path) -> list[Block]:
+    """The Python blocks of ``path`` that run here (unmarked)."""
+    return [block for block in blocks(path) if block.language == "python" and not block.marker]
+
+
+def test_every_code_block_runs_or_says_why_not():
+    walked = walked_commands_block()
+    unaccounted = []
+    for path in pages():
+        for block in blocks(path):
+            if block.language not in CODE or block == walked:
+                continue
+            if block.marker is None and block.language != "python":
+                unaccounted.append(str(block))
+            elif block.marker is not None and not block.marker[1].strip():
+                unaccounted.append(f"{block}: a marker without its reason")
+    assert not unaccounted, f"code blocks neither run nor marked: {unaccounted}"
+
+
+def test_run_by_markers_name_existing_tests():
+    for path in pages():
+        for block in blocks(path):
+            if block.marker and block.marker[0] == "run by":
+                file, _, test = block.marker[1].partition("::")
+                assert test and f"def {test}(" in (ROOT / file).read_text(), str(block)
+
+
+def test_yaml_blocks_are_valid_configs(tmp_path):
+    from grip_env.config import load_config
+
+    checked = 0
+    for path in pages():
+        for block in blocks(path):
+            if block.language == "yaml":
+                config = tmp_path / "block.yaml"
+                config.write_text(block.text)
+                load_config(config)  # raises naming the bad key
+                checked += 1
+    assert checked
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "page", [str(path.relative_to(ROOT)) for path in pages() if runnable(path)]
+)
+def test_python_blocks_run(page, generated_dataset_dir, tmp_path, monkeypatch, capsys):
+    """A page's unmarked Python blocks, in order and in one namespace, in an empty folder, with the
+    small generated dataset standing in for the standard one (unfinished while it is generated)."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr("grip_env.datasets.standard_path", lambda: generated_dataset_dir)
+    namespace: dict[str, object] = {"__name__": "__main__"}
+    for block in runnable(ROOT / page):
+        code = block.text
+        for old, new in SMALL.get(page, []):
+            if old in code:
+                code = code.replace(old, new)
+        exec(compile(code, f"{page}:{block.line}", "exec"), namespace)
+    for old, _ in SMALL.get(page, []):
+        assert any(old in block.text for block in runnable(ROOT / page)), f"{page}: {old!r} gone"
+    capsys.readouterr()
+
+
+# ------------------------------------------------------------------ generated pages
+def _grip_docs():
+    sys.path.insert(0, str(DOCS / "_ext"))
+    try:
+        import grip_docs
+    finally:
+        sys.path.remove(str(DOCS / "_ext"))
+    return grip_docs
+
+
+def test_generated_pages_are_included_and_none_is_committed():
+    grip_docs = _grip_docs()
+    included = {match for path in pages()
+                for match in re.findall(r"```\{include\} \.\./_generated/(\S+)", path.read_text())}
+    assert included == set(grip_docs.generated_file_names())
+    assert not (DOCS / "_generated").exists() or not any(
+        (DOCS / "_generated" / name).is_file() and _tracked(DOCS / "_generated" / name)
+        for name in included)
+
+
+def _tracked(path: Path) -> bool:
+    """Whether git tracks ``path`` (False outside a git checkout)."""
+    import subprocess
+
+    result = subprocess.run(["git", "ls-files", "--error-unmatch", str(path)], cwd=ROOT,
+                            capture_output=True, check=False)
+    return result.returncode == 0
+
+
+def test_the_cli_reference_is_every_command_as_its_help_shows_it():
+    from grip_env.cli import _COMMAND_MODULES
+
+    text = _grip_docs().cli_reference_markdown()
+    for name in _COMMAND_MODULES:
+        assert f"\n## grip-env {name}\n" in text, name
+        assert f"Usage: grip-env {name} [OPTIONS]" in text, name
+    assert "| `-d, --data <path>` |" in text and "{classifiers}" not in text
+
+
+@pytest.mark.parametrize("env_id", ["GripSelect-v0", "GripAccept-v0"])
+def test_environment_pages_have_gymnasiums_sections_from_a_live_env(env_id):
+    grip_docs = _grip_docs()
+    text = grip_docs.env_page_markdown(env_id)
+    for title in (*grip_docs.ENV_SECTIONS, "Info keys", "Example"):
+        assert f"\n## {title}\n" in text, title
+    import gymnasium
+
+    env = gymnasium.make(env_id)
+    assert f"| Action Space | `{env.action_space}` |" in text
+    assert f"| Observation Space | `{env.observation_space}` |" in text
+    env.close()
+    for key in ("object_id", "grip_id", "success", "is_success", "attempts"):
+        assert f"| `{key}` |" in text
+    assert ":meth:" not in text and ":class:" not in text  # RST roles made MyST's
+
+
+def test_the_results_page_includes_the_readme_block_the_study_writes():
+    page = (DOCS / "results.md").read_text()
+    assert f':start-after: "{BEGIN}"' in page and f':end-before: "{END}"' in page
+    readme = (ROOT / "README.md").read_text()
+    assert readme.index(BEGIN) < readme.index(END)
