@@ -70,9 +70,9 @@ def _classifiers(run: StudyRun) -> object:
 
 
 def _ablation(run: StudyRun) -> object:
-    from classifiers.experiments.ablation import run_ablation
+    from classifiers.experiments.ablation import named_feature_sets, run_ablation
 
-    return run_ablation(run.table, run.out / "ablation", run.config)
+    return run_ablation(run.table, run.out / "ablation", run.config, sets=named_feature_sets())
 
 
 def _selector(run: StudyRun) -> object:

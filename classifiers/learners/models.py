@@ -22,7 +22,8 @@ runs on one thread (:class:`~classifiers.learners.threads.OneThreadHGBClassifier
 ``make_regressor(name, seed, features)`` is the same for the regression task (predicting a grip's
 ``robustness_mean``): "svr" (RBF ``SVR`` on standardised features,
 :class:`~classifiers.learners.svm.SampledSVR`), "mlp_torch"
-(:class:`~classifiers.learners.torch_mlp.TorchMLPRegressor`), "knn", "ridge", "hgb"
+(:class:`~classifiers.learners.torch_mlp.TorchMLPRegressor`), "mlp_sklearn" (scikit-learn's
+``MLPRegressor``, the classifier's architecture), "knn", "ridge", "hgb"
 (``HistGradientBoostingRegressor``, squared error, early stopping as the classifier's), and the
 rank baselines
 "rank_qc", "rank_qg" and "random" (:class:`~classifiers.learners.baselines.RankingRegressor`).
@@ -35,7 +36,7 @@ from collections.abc import Callable, Sequence
 from sklearn.base import BaseEstimator
 from sklearn.linear_model import LogisticRegression, Ridge
 from sklearn.neighbors import KNeighborsClassifier, KNeighborsRegressor
-from sklearn.neural_network import MLPClassifier
+from sklearn.neural_network import MLPClassifier, MLPRegressor
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import StandardScaler
 
@@ -103,6 +104,10 @@ MODEL_NAMES = tuple(_CLASSIFIERS)
 _REGRESSORS: dict[str, Entry] = {
     "svr": (None, lambda seed: _scaled(SampledSVR(C=1.0, epsilon=0.1, random_state=seed))),
     "mlp_torch": (None, lambda seed: [("model", TorchMLPRegressor(random_state=seed))]),
+    "mlp_sklearn": (None, lambda seed: _scaled(
+        MLPRegressor(hidden_layer_sizes=(64, 64), early_stopping=True, max_iter=500,
+                     random_state=seed)
+    )),
     "knn": (None, lambda seed: _scaled(KNeighborsRegressor(n_neighbors=15, weights="distance"))),
     "ridge": (None, lambda seed: _scaled(Ridge(alpha=1.0))),
     "hgb": (None, lambda seed: [("model", OneThreadHGBRegressor(**HGB_SETTINGS,
