@@ -308,6 +308,11 @@ class SelectorConfig(_Section):
     )
     seed: int = Field(0, ge=0, le=MAX_SEED, description="training seed")
     seeds: int = Field(5, ge=1, le=100, description="training runs, seeds seed, seed+1, ...")
+    workers: int = Field(
+        2, ge=1, le=1024,
+        description="processes the training runs share (each on one thread; the runs do not "
+        "depend on it)",
+    )
     n_envs: int = Field(4, ge=1, le=256, description="environment copies stepped together")
     rollout_steps: int = Field(
         512, ge=16, le=1_000_000, description="PPO rollout, steps over all environment copies"

@@ -39,4 +39,5 @@ def test_selector_seeds_differ_and_repeat(tmp_path):
     run_selectors(grips, tmp_path / "b", config.override(selector={"seeds": 1}), progress=False)
     again = pd.read_parquet(tmp_path / "b" / "scores.parquet")
     first = scores[scores["seed"] == 3].reset_index(drop=True)
-    pd.testing.assert_frame_equal(first, again)  # the same seed, the same policy
+    # the same seed, the same policy: trained in a second process above, in this one here
+    pd.testing.assert_frame_equal(first, again)

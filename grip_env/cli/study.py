@@ -53,16 +53,17 @@ def study(
     """
     with stop_on_signals(f"rerun the same command to finish {out}"), user_errors(), shown():
         check_output_dir(out)
+        from grip_env.config import load_config
+
+        settings = load_config(config)
         data = study_data(data, regenerate, quick)
         if update_readme and not readme.is_file():
             raise ValueError(f"--readme {readme} is not a file")
         from classifiers.experiments.study import run_study
-        from grip_env.config import load_config
         from grip_env.dataset import DatasetMismatchError
 
         try:
-            report = run_study(load_config(config), out, quick=quick, log=typer.echo,
-                               data=data)
+            report = run_study(settings, out, quick=quick, log=typer.echo, data=data)
         except DatasetMismatchError as exc:  # its advice names generate's --overwrite
             reason = str(exc).split("; use --overwrite", 1)[0]
             raise ValueError(

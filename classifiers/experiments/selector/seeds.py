@@ -1,10 +1,11 @@
 """The RL selector trained with several seeds, each run kept, every candidate scored per seed.
 
-:func:`run_selectors` trains ``selector.seeds`` selectors, seeds ``selector.seed + k``, each
-with :func:`classifiers.experiments.selector.run_selector` into ``out/seed_<s>/``. The first seed's
-``selector.json``, ``model.zip`` and ``learning_curve.png`` are copied to ``out/`` (what a
-single-seed run writes there), with ``"seeds"``: every run's seed, folder, training time and
-held-out first-pick success.
+:func:`run_selectors` trains ``selector.seeds`` selectors, seeds ``selector.seed + k``, in
+``selector.workers`` processes (each run is seeded and single-threaded, so its result does not
+depend on them), each with :func:`classifiers.experiments.selector.run_selector` into
+``out/seed_<s>/``. The first seed's ``selector.json``, ``model.zip`` and
+``learning_curve.png`` are copied to ``out/`` (what a single-seed run writes there), with
+``"seeds"``: every run's seed, folder, training time and held-out first-pick success.
 ``out/scores.parquet`` holds each run's action probabilities for every candidate of every
 held-out object, in the layout of :mod:`classifiers.experiments.candidate_scores` (method ``"rl"``).
 """
@@ -58,30 +59,46 @@ def run_selectors(
     table: pd.DataFrame, out_dir: str | Path, config: Config, policy: str = "set",
     progress: bool = True,
 ) -> dict[str, Any]:
-    """Train and evaluate one selector per seed; returns the first seed's report (with
-    ``"seeds"``), which is also written to ``out_dir/selector.json``."""
+    """Train and evaluate one selector per seed, the runs shared among ``selector.workers``
+    processes; returns the first seed's report (with ``"seeds"``), which is also written to
+    ``out_dir/selector.json``."""
+    from joblib import Parallel, delayed
+
     from classifiers.experiments.candidate_scores import SCORES_FILE, training_seeds, write_scores
-    from classifiers.experiments.selector import REPORT_FILE, run_selector
+    from classifiers.experiments.selector import REPORT_FILE
+
     table = check_grip_table(table)
     out = Path(out_dir)
     settings = config.selector
-    runs, scores, first = [], [], None
-    for seed in training_seeds(settings.seed, settings.seeds):
-        seeded = config.override(selector={"seed": seed})
-        folder = seed_dir(out, seed)
-        report = run_selector(table, folder, seeded, policy, progress=progress)
-        from sb3_contrib import MaskablePPO
-
-        model = MaskablePPO.load(folder / "model.zip", device="cpu")
-        scores.append(policy_scores(model, table, seeded, seed))
-        rl = report["policies"]["rl"]["success_rate"]["mean"]
-        runs.append({"seed": seed, "dir": folder.name, "held_out_success_rate": rl,
-                     "seconds": report["training"]["seconds"]})  # fmt: skip
-        first = first or report
+    seeds = training_seeds(settings.seed, settings.seeds)
+    workers = min(settings.workers, len(seeds))
+    finished = Parallel(n_jobs=workers)(
+        delayed(_seed_run)(table, out, config, seed, policy, progress and workers == 1)
+        for seed in seeds)
+    reports, scores = zip(*finished, strict=True)
+    runs = [{"seed": seed, "dir": seed_dir(out, seed).name,
+             "held_out_success_rate": report["policies"]["rl"]["success_rate"]["mean"],
+             "seconds": report["training"]["seconds"]}
+            for seed, report in zip(seeds, reports, strict=True)]  # fmt: skip
     for name in _COPIED:
         shutil.copyfile(seed_dir(out, settings.seed) / name, out / name)
+    first = reports[0]
     training = {**first["training"], "tensorboard": f"{seed_dir(out, settings.seed).name}/tb"}
     first = {**first, "training": training, "seeds": runs, "scores": SCORES_FILE}
     (out / REPORT_FILE).write_text(json.dumps(first, indent=2))
-    write_scores(scores, out / SCORES_FILE)
+    write_scores(list(scores), out / SCORES_FILE)
     return first
+
+
+def _seed_run(table: pd.DataFrame, out: Path, config: Config, seed: int, policy: str,
+              progress: bool) -> tuple[dict[str, Any], pd.DataFrame]:
+    """One seed's run into ``out/seed_<seed>``: its report and its held-out scores."""
+    from sb3_contrib import MaskablePPO
+
+    from classifiers.experiments.selector import run_selector
+
+    seeded = config.override(selector={"seed": seed})
+    folder = seed_dir(out, seed)
+    report = run_selector(table, folder, seeded, policy, progress=progress)
+    model = MaskablePPO.load(folder / "model.zip", device="cpu")
+    return report, policy_scores(model, table, seeded, seed)
