@@ -8,15 +8,15 @@ import typer
 
 from grip_env.cli.errors import user_errors
 from grip_env.cli.inputs import learning_table
-from grip_env.cli.options import MODEL_NAMES_HELP, ConfigFile, DatasetDir, OutputDir
+from grip_env.cli.options import MODEL_NAMES_HELP, STANDARD_DATA, ConfigFile, DatasetDir, OutputDir
 from grip_env.cli.paths import check_output_dir, output_dir
 from grip_env.progress import shown
 from grip_env.shutdown import stop_on_signals
 
 
 def ablate(
-    data: DatasetDir,
     out: OutputDir,
+    data: DatasetDir = STANDARD_DATA,
     config: ConfigFile = None,
     model: Annotated[
         str | None,

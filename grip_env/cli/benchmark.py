@@ -11,7 +11,7 @@ import typer
 
 from grip_env.cli.errors import user_errors
 from grip_env.cli.notices import warn_label_model
-from grip_env.cli.options import ConfigFile, DatasetDir, OutputDir
+from grip_env.cli.options import STANDARD_DATA, ConfigFile, DatasetDir, OutputDir
 from grip_env.shutdown import stop_on_signals
 
 
@@ -30,8 +30,8 @@ def benchmark(
                             ".skops model, or module:function; several = runs (seeds) of one "
                             "method", show_default=False),
     ],
-    data: DatasetDir,
     out: OutputDir,
+    data: DatasetDir = STANDARD_DATA,
     name: Annotated[str | None, typer.Option(help="method name [default: the first METHOD's "
                                                   "file stem or function name]")] = None,
     config: ConfigFile = None,

@@ -31,6 +31,8 @@ def dataset_folders(values: list[Path]) -> list[Path]:
 
 DATA_HELP = "dataset directory (written by grip-env generate), or 'standard' for the shipped one"
 DatasetDir = Annotated[Path, typer.Option("--data", "-d", help=DATA_HELP, callback=dataset_folder)]
+#: The default of a learning command's ``--data``: the shipped standard dataset.
+STANDARD_DATA = Path("standard")
 OutputDir = Annotated[
     Path, typer.Option("--out", "-o", help="output directory (created if needed)")
 ]

@@ -8,7 +8,7 @@ from typing import Annotated
 import typer
 
 from grip_env.cli.errors import user_errors
-from grip_env.cli.options import ConfigFile, DatasetDir, OutputDir
+from grip_env.cli.options import STANDARD_DATA, ConfigFile, DatasetDir, OutputDir
 from grip_env.cli.paths import check_output_dir, output_dir
 from grip_env.shutdown import stop_on_signals
 
@@ -21,8 +21,8 @@ class Policy(StrEnum):
 
 
 def select(
-    data: DatasetDir,
     out: OutputDir,
+    data: DatasetDir = STANDARD_DATA,
     config: ConfigFile = None,
     timesteps: Annotated[
         int | None,

@@ -11,15 +11,15 @@ from grip_env.cli.errors import user_errors
 from grip_env.cli.helptext import LearnerHelp
 from grip_env.cli.inputs import learning_table
 from grip_env.cli.notices import warn_label_model
-from grip_env.cli.options import ConfigFile, DatasetDir, OutputDir
+from grip_env.cli.options import STANDARD_DATA, ConfigFile, DatasetDir, OutputDir
 from grip_env.cli.paths import check_output_dir, output_dir
 from grip_env.progress import shown
 from grip_env.shutdown import stop_on_signals
 
 
 def train(
-    data: DatasetDir,
     out: OutputDir,
+    data: DatasetDir = STANDARD_DATA,
     config: ConfigFile = None,
     models: Annotated[
         str | None,
