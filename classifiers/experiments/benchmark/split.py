@@ -12,7 +12,11 @@ instead. Each version's objects are
 grips of the default dataset of its time (``grip-env generate`` with the default config), listed
 in :data:`DEFAULT_OBJECTS` (a test re-derives each version's objects from that list):
 
-- v3 (:data:`STANDARD_SPLITS` ``[3]``, the default): the 69 objects with grips of the default
+- v4 (:data:`STANDARD_SPLITS` ``[4]``, the default): 128 held-out objects of the 510 with grips
+  of the shipped standard dataset (``grip_env.datasets``, ``configs/standard.yaml``: 23 named
+  shapes and named meshes, 279 procedural shapes, 208 ``pybullet_data`` meshes), each showing
+  all its grips (at most 24);
+- v3: the 69 objects with grips of the default
   study's dataset at commit fc22e61 (80 objects: 18 named, 44 procedural, 18 meshes; planned on
   the render; 11 get no grip);
 - v2: 53 objects of the default set at commit 423a072 (18 named, 24 procedural, 18 meshes);
@@ -62,6 +66,27 @@ DEFAULT_OBJECTS_V2 = object_ids(f"{_NAMED} {_NAMED_MESHES}", "0-12 14-18 20-23",
 DEFAULT_OBJECTS_V3 = object_ids(f"{_NAMED} {_NAMED_MESHES} lego",
                                 "0-12 14-18 20-30 32 34-35 37 39-43",
                                 "206 222 264 459 518 683 711 814")  # fmt: skip
+#: The standard dataset's 510 objects with grips (``configs/standard.yaml``, label model
+#: ``2026.12-xm``; its meshes are numbered with three digits).
+_STANDARD_MESHES = (
+    "002 005 013 019 023 026 028 031 045 046 049 053 054 056 068 074 077 081 084 089 094 098 "
+    "099 100 103 105 106 111 112 117 121 136 138 141 142 144 150 153 160 164 173 181 186 189 "
+    "194 195 201 206 208 209 212 220 222 234 238 244 253 264 269 270 274 281 284 292 296 297 "
+    "313 314 323 325 329 330 334 337 340 344 346 356 363 365 371 374 380 386 388 391 398 401 "
+    "403 406 412 416 421 423 429 436 439 445 447 450 451 459 464 471 472 474 477 480 481 498 "
+    "502 505 508 509 511 519 522 529 530 534 539 544 555 556 558 566 567 577 579 580 583 584 "
+    "590 611 625 626 628 629 631 635 641 647 651 652 665 672 673 674 676 679 683 705 707 711 "
+    "714 734 735 762 767 768 769 785 786 793 812 813 814 821 829 843 853 859 862 863 865 870 "
+    "876 878 879 882 890 898 901 903 905 912 920 922 926 927 928 930 931 945 946 947 953 954 "
+    "958 968 972 978 979 984 989 990 991 994"
+)
+DEFAULT_OBJECTS_V4 = object_ids(
+    f"{_NAMED} {_NAMED_MESHES} lego",
+    "0-12 14-18 20-30 32 34-35 37 39-44 47-64 66-88 90-97 99-104 106-108 110-114 116 118-122 "
+    "124-128 131-138 140-143 145-159 162-163 165-171 175-178 180-184 186-188 191-211 213-229 "
+    "231-239 241-270 272-274 276-280 282-287 289-292 295-303 305-311 313-319",
+    _STANDARD_MESHES,
+)  # fmt: skip
 
 STANDARD_TEST_OBJECTS_V1: tuple[str, ...] = (
     "l_shape", "proc_0_00003", "proc_0_00004", "proc_0_00011", "proc_0_00015", "proc_0_00017",
@@ -113,16 +138,43 @@ STANDARD_TEST_OBJECTS: tuple[str, ...] = (
     "proc_0_00014", "proc_0_00022", "proc_0_00024", "proc_0_00032", "proc_0_00034", "proc_0_00039",
     "square", "trapezoid", "urdf_264", "urdf_518",
 )  # fmt: skip
+#: v4: 128 of the standard dataset's 510 objects with grips.
+STANDARD_TEST_OBJECTS_V4: tuple[str, ...] = (
+    "cube", "duck", "proc_0_00001", "proc_0_00004", "proc_0_00005", "proc_0_00014",
+    "proc_0_00024", "proc_0_00026", "proc_0_00027", "proc_0_00029", "proc_0_00044",
+    "proc_0_00048", "proc_0_00049", "proc_0_00057", "proc_0_00062", "proc_0_00066",
+    "proc_0_00070", "proc_0_00078", "proc_0_00079", "proc_0_00080", "proc_0_00083",
+    "proc_0_00084", "proc_0_00085", "proc_0_00090", "proc_0_00094", "proc_0_00095",
+    "proc_0_00100", "proc_0_00107", "proc_0_00110", "proc_0_00120", "proc_0_00126",
+    "proc_0_00128", "proc_0_00137", "proc_0_00141", "proc_0_00148", "proc_0_00151",
+    "proc_0_00153", "proc_0_00154", "proc_0_00159", "proc_0_00163", "proc_0_00169",
+    "proc_0_00176", "proc_0_00180", "proc_0_00197", "proc_0_00205", "proc_0_00213",
+    "proc_0_00215", "proc_0_00216", "proc_0_00217", "proc_0_00218", "proc_0_00219",
+    "proc_0_00225", "proc_0_00226", "proc_0_00229", "proc_0_00237", "proc_0_00238",
+    "proc_0_00239", "proc_0_00241", "proc_0_00242", "proc_0_00248", "proc_0_00251",
+    "proc_0_00269", "proc_0_00270", "proc_0_00272", "proc_0_00277", "proc_0_00286",
+    "proc_0_00298", "proc_0_00299", "proc_0_00307", "proc_0_00311", "proc_0_00318",
+    "rounded_rectangle", "square", "urdf_005", "urdf_023", "urdf_049", "urdf_053", "urdf_068",
+    "urdf_084", "urdf_089", "urdf_103", "urdf_105", "urdf_111", "urdf_150", "urdf_153",
+    "urdf_160", "urdf_173", "urdf_189", "urdf_206", "urdf_208", "urdf_220", "urdf_234",
+    "urdf_238", "urdf_244", "urdf_253", "urdf_270", "urdf_292", "urdf_297", "urdf_325",
+    "urdf_340", "urdf_363", "urdf_386", "urdf_388", "urdf_391", "urdf_398", "urdf_401",
+    "urdf_471", "urdf_481", "urdf_505", "urdf_519", "urdf_647", "urdf_665", "urdf_674",
+    "urdf_683", "urdf_711", "urdf_769", "urdf_813", "urdf_878", "urdf_890", "urdf_901",
+    "urdf_905", "urdf_927", "urdf_930", "urdf_945", "urdf_946", "urdf_958", "urdf_968",
+    "urdf_991"
+)  # fmt: skip
 _SEEDS = (0, 1, 2, 3, 4)
 STANDARD_SPLITS: dict[int, BenchmarkSplit] = {
     1: BenchmarkSplit(STANDARD_NAME, 1, STANDARD_TEST_OBJECTS_V1, _SEEDS),
     2: BenchmarkSplit(STANDARD_NAME, 2, STANDARD_TEST_OBJECTS_V2, _SEEDS),
     3: BenchmarkSplit(STANDARD_NAME, 3, STANDARD_TEST_OBJECTS, _SEEDS),
+    4: BenchmarkSplit(STANDARD_NAME, 4, STANDARD_TEST_OBJECTS_V4, _SEEDS),
 }
 STANDARD_SPLIT = STANDARD_SPLITS[max(STANDARD_SPLITS)]
 #: The objects each version's held-out objects were drawn from.
 DEFAULT_OBJECTS: dict[int, tuple[str, ...]] = {
-    1: DEFAULT_OBJECTS_V1, 2: DEFAULT_OBJECTS_V2, 3: DEFAULT_OBJECTS_V3,
+    1: DEFAULT_OBJECTS_V1, 2: DEFAULT_OBJECTS_V2, 3: DEFAULT_OBJECTS_V3, 4: DEFAULT_OBJECTS_V4,
 }
 
 
