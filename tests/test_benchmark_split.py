@@ -84,7 +84,7 @@ def test_explicit_standard_split_on_a_small_dataset_says_what_to_run(
     out = folder / "never"
     code, output = cli("benchmark", "issue35_pick2:pick", "--data", small, "--out", out,
                        "--split", "standard")  # fmt: skip
-    assert_refused(code, output, "lacks 16 of the 17", "grip-select-standard v3",
+    assert_refused(code, output, "lacks 127 of the 128", "grip-select-standard v4",
                    "not in it", "--split auto")  # fmt: skip
     assert "generate" not in output
     assert not out.exists()
@@ -130,7 +130,7 @@ def test_an_object_with_no_grips_is_named_and_auto_takes_the_version_that_fits()
     assert (split.name, split.version) == ("grip-select-standard", 2)
     assert "urdf_518 is in it with no grips" in note and "scored on v2" in note
     with pytest.raises(ValueError) as refused:
-        choose_split(objects, "standard")
+        choose_split(objects, "standard", version=3)
     message = str(refused.value)
     for fragment in ("lacks 1 of the 17", "urdf_518 is in it with no grips",
                      "--split-version 2", "--split auto"):  # fmt: skip
@@ -190,3 +190,13 @@ def test_an_auto_split_shows_as_many_candidates_as_the_config_trains_on():
     assert auto_split(objects, 0).max_candidates == 64
     split, _ = choose_split(objects, seed=0, max_candidates=8)
     assert split.name == "auto-not-standard" and split.max_candidates == 8
+
+
+def test_split_v4_holds_out_a_quarter_of_the_shipped_standard_datasets_objects() -> None:
+    from classifiers.experiments.benchmark.split import DEFAULT_OBJECTS, STANDARD_SPLIT
+    from grip_env.datasets import SHIPPED
+
+    shipped = pd.read_parquet(SHIPPED / "grips", columns=["object_id"])["object_id"]
+    assert DEFAULT_OBJECTS[4] == tuple(sorted(set(shipped.astype(str))))
+    assert STANDARD_SPLIT.version == 4 and len(STANDARD_SPLIT.test_objects) == 128
+    assert sum(oid.startswith("urdf_") for oid in STANDARD_SPLIT.test_objects) >= 30

@@ -505,3 +505,17 @@ def test_validate_checks_the_perceived_contours(tmp_path: Path) -> None:
     (out / "manifest.json").write_text(json.dumps(manifest))
     assert validate(out) == ["objects.parquet: object triangle: perceived_contour is not a "
                              "contour of >= 3 finite points"]
+
+
+def test_frames_derived_from_a_loaded_table_share_its_manifest(generated_dataset_dir):
+    """pandas deep-copies attrs on every operation: the manifest is shared, so selecting one
+    object's rows of the standard dataset does not copy 598 objects' records."""
+    import copy
+
+    from grip_env.dataset import load
+
+    table = load(generated_dataset_dir)
+    manifest = table.attrs["manifest"]
+    part = table[table["object_id"] == table["object_id"].iloc[0]][["Q_C", "success"]]
+    assert part.attrs["manifest"] is manifest and copy.deepcopy(manifest) is manifest
+    assert json.loads(json.dumps(manifest)) == dict(manifest)  # still plain JSON

@@ -44,13 +44,13 @@ def benchmark(
              "saying what fits")] = SplitMode.auto,
     split_version: Annotated[int | None, typer.Option(
         min=1,
-        help="standard split version (implies --split standard) [default: the latest, 3]; 2 = "
-             "default datasets of the 60-object set with meshes, 1 = before the default objects "
-             "gained meshes")] = None,
+        help="standard split version (implies --split standard) [default: the latest, 4: the "
+             "standard dataset]; 3 = the default study's dataset of 80 objects, 2 = of the "
+             "60-object set with meshes, 1 = before the default objects gained meshes")] = None,
     seed: Annotated[int, typer.Option(min=0, help="seed of the auto split")] = 0,
 ) -> None:
-    """Score METHODS on the standard split (grip-select-standard v3: 17 held-out objects of the
-    default dataset, their 64 best candidates by Q_C) against best-Q_C, best-Q_G, epsilon, random
+    """Score METHODS on the standard split (grip-select-standard v4: 128 held-out objects of the
+    standard dataset, their 64 best candidates by Q_C) against best-Q_C, best-Q_G, epsilon, random
     and the oracle. A dataset without grips of the standard objects (a small one, or one whose
     planning kept no grip of one of them) is scored on a seeded split of its own objects,
     named auto-not-standard, unless --split standard is given.

@@ -23,7 +23,8 @@ def load(path: str | Path, verify: bool = True, allow_partial: bool = False) -> 
 
     Returns:
         A DataFrame with :data:`~grip_env.columns.DATASET_COLUMNS` and a fresh RangeIndex;
-        ``attrs["params"]`` holds the GraspParams as a dict and ``attrs["manifest"]`` the manifest.
+        ``attrs["params"]`` holds the GraspParams as a dict and ``attrs["manifest"]`` the manifest
+        (a :class:`SharedManifest`).
 
     Raises:
         ValueError: not a dataset, missing or corrupt shard, unfinished run, or another format
@@ -45,8 +46,20 @@ def load(path: str | Path, verify: bool = True, allow_partial: bool = False) -> 
     grips = pd.concat(parts, ignore_index=True) if parts else _empty_grips()
     grips = grips.loc[:, list(DATASET_COLUMNS)]
     grips.attrs["params"] = dict(manifest["params"])
-    grips.attrs["manifest"] = manifest
+    grips.attrs["manifest"] = SharedManifest(manifest)
     return grips
+
+
+class SharedManifest(dict):
+    """A loaded table's manifest, shared (not copied) by every frame derived from the table.
+
+    pandas deep-copies ``attrs`` into the result of nearly every operation; a standard-dataset
+    manifest (598 objects and their shards) made each column selection of one object's
+    candidates cost milliseconds, most of the learning stages' time. Treat it as read-only.
+    """
+
+    def __deepcopy__(self, memo: dict[int, object]) -> SharedManifest:
+        return self
 
 
 def dataset_manifest(path: str | Path) -> Manifest:
