@@ -13,7 +13,7 @@ import skops.io as sio
 from cli_runs import assert_refused, cli
 
 from classifiers.evaluation.synthetic import synthetic_grips
-from classifiers.experiments.benchmark.split import STANDARD_SPLIT, STANDARD_TEST_OBJECTS
+from classifiers.experiments.benchmark.split import STANDARD_SPLIT
 from classifiers.learners.models import make_model
 
 METHODS = textwrap.dedent("""
@@ -42,10 +42,13 @@ METHODS = textwrap.dedent("""
 """)
 
 
+STANDARD_TEST_OBJECTS = STANDARD_SPLIT.test_objects  # the latest version's
+
+
 @pytest.fixture(scope="module")
 def data(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Synthetic grips whose first objects carry the standard split's ids, as a parquet."""
-    table = synthetic_grips(n_objects=30, grips=(6, 12), seed=4)
+    table = synthetic_grips(n_objects=len(STANDARD_TEST_OBJECTS) + 13, grips=(6, 12), seed=4)
     ids = {i: name for i, name in enumerate(STANDARD_TEST_OBJECTS)}
     table["object_id"] = [ids.get(int(i), f"train_{i}") for i in table["object_id"]]
     table["grip_id"] = table["grip_id"].astype(str)
