@@ -272,3 +272,17 @@ def test_kernel_learners_fit_a_stated_seeded_sample_of_a_large_training_set():
     assert np.corrcoef(svr.predict(X), X[:, 0])[0, 1] > 0.9
     with pytest.raises(ValueError, match="max_grips must be at least 2"):
         PlattSVC(max_grips=1).fit(X, y)
+
+
+def test_a_sampled_fit_is_named_with_its_grip_count():
+    from classifiers.experiments.training import sampled_fit
+    from classifiers.learners.models import make_regressor
+    from grip_env.columns import FEATURES
+
+    rng = np.random.default_rng(1)
+    table = pd.DataFrame(rng.normal(size=(120, len(FEATURES))), columns=list(FEATURES))
+    model = make_regressor("svr", 0).set_params(model__max_grips=50)
+    model.fit(table, table["S1"].to_numpy())
+    assert sampled_fit("svr", model, 120) == {"svr": 50}
+    whole = make_regressor("ridge", 0).fit(table, table["S1"].to_numpy())
+    assert sampled_fit("ridge", whole, 120) == {}

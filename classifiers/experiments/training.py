@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from sklearn.pipeline import Pipeline
 
 from classifiers.evaluation.cross_validation import (
     LABEL_COLUMN,
@@ -78,9 +79,7 @@ def _train_and_save(table: pd.DataFrame, out_dir: str | Path, config: Config) ->
         model = make_model(name, learning.seed, FEATURES).fit(table, labels)
         meta = {"features": list(FEATURES), "dataset_sha256": checksum, "seed": learning.seed}
         save_model(model, out_dir / "models", name, meta)
-        fitted_on = getattr(model[-1], "n_fit_grips_", len(table))
-        if fitted_on < len(table):
-            sampled[name] = fitted_on
+        sampled |= sampled_fit(name, model, len(table))
     metrics["sampled"] = sampled  # the kernel learners' stated subsamples (all grips: absent)
     (out_dir / "metrics.json").write_text(json.dumps(metrics, indent=2))
     _held_out_plots(table, config, out_dir)
@@ -114,14 +113,23 @@ def train_regressors(
     learning = config.learning
     result = evaluate_regressors(table, learning.regressors, FEATURES, learning)
     result["dataset"] = {"sha256": checksum, "rows": len(table)}
-    (out_dir / "regression.json").write_text(json.dumps(result, indent=2))
     target = table[TARGET_COLUMN].to_numpy(float)
+    result["sampled"] = {}
     for name in learning.regressors:
         model = make_regressor(name, learning.seed, FEATURES).fit(table, target)
         meta = {"features": list(FEATURES), "target": TARGET_COLUMN, "dataset_sha256": checksum,
                 "seed": learning.seed}  # fmt: skip
         save_model(model, out_dir / "models", f"regressor_{name}", meta)
+        result["sampled"] |= sampled_fit(name, model, len(table))
+    (out_dir / "regression.json").write_text(json.dumps(result, indent=2))
     return result
+
+
+def sampled_fit(name: str, model: Pipeline, rows: int) -> dict[str, int]:
+    """``{name: grips}`` when the fitted ``model`` learnt from a sample of its ``rows`` grips
+    (:mod:`classifiers.learners.svm`), else nothing."""
+    fitted_on = getattr(model[-1], "n_fit_grips_", rows)
+    return {name: int(fitted_on)} if fitted_on < rows else {}
 
 
 def train_rankers(
