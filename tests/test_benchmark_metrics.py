@@ -254,3 +254,28 @@ def test_study_benchmark_reads_the_learners_per_seed_score_files(tmp_path) -> No
     pd.concat(frames).iloc[1:].to_parquet(tmp_path / "classifiers" / "scores.parquet")
     with pytest.raises(ValueError, match="every candidate"):
         study_benchmark(table, tmp_path, config, reps=200)
+
+
+def test_the_success_difference_to_best_qc_is_paired_over_every_held_out_object(tmp_path) -> None:
+    """A method that succeeds 0.2 more than best-Q_C on every object has difference 0.2 with a
+    zero-width interval (paired: the objects' spread cancels), although each method's own
+    success interval is wide; degenerate objects (no normalised score) still count."""
+    rng = np.random.default_rng(1)
+    base = rng.uniform(0.1, 0.7, 20)
+    rows = [{"method": m, "seed": 0, "object_id": f"o{i}", "normalised": np.nan if i < 4 else
+             0.1 + shift + 0.01 * i, **_plain(), "success": base[i] + shift}
+            for i in range(20) for m, shift in (("best_qc", 0.0), ("rl", 0.2))]
+    board = build_leaderboard(pd.DataFrame(rows), {"name": "t", "version": 0}, reps=300)
+    found = board["methods"]["rl"]["success_difference_vs_reference"]
+    assert found["estimate"] == pytest.approx(0.2)
+    assert found["ci"] == pytest.approx([0.2, 0.2])
+    low, high = board["methods"]["rl"]["success_ci"]
+    assert high - low > 0.1
+    assert len(board["objects"]) == 16 and len(board["degenerate_objects"]) == 4
+    from classifiers.experiments.benchmark.leaderboard import write_leaderboard
+    from classifiers.report.readme import _leaderboard_lines, _rl_against_qc
+
+    write_leaderboard(board, tmp_path / "benchmark")
+    assert "+0.200 [+0.200, +0.200] more often, paired over 20 held-out" in _rl_against_qc(
+        tmp_path)
+    assert "(20 held-out objects, 16 rankable)" in "\n".join(_leaderboard_lines(tmp_path))

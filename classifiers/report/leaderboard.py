@@ -51,6 +51,7 @@ def leaderboard_frames(board: Mapping[str, Any]) -> tuple[pd.DataFrame, pd.DataF
         main.append({
             "method": name, "runs": row["runs"],
             "top-1 success": _ci({"estimate": row["success"], "ci": row["success_ci"]}),
+            "success - best_qc": _ci(row["success_difference_vs_reference"]),
             "top-1 robustness (g)": _f(row["robustness"], 1), "regret": _f(row["regret"]),
             "NDCG@5": _f(row["ndcg5"]), "normalised IQM": _ci(row["iqm"]),
             "normalised mean": _ci(row["mean"]),

@@ -71,8 +71,23 @@ def results_block(out: Path, table: pd.DataFrame, commit: str, version: str) -> 
     lines += [f"| {name} | {interval_text(scores['success_rate'], 2)} |"
               for name, scores in policies.items()]
     lines += _leaderboard_lines(out)
-    lines += ["", _meaning(metrics, policies)]
+    lines += ["", _meaning(metrics, policies) + _rl_against_qc(out)]
     return "\n".join(lines)
+
+
+def _rl_against_qc(out: Path) -> str:
+    """The three questions' last answer in plain units: the RL selector's first pick against the
+    best-Q_C pick, paired over the leaderboard's held-out objects ("" without it)."""
+    path = out / "benchmark" / "leaderboard.json"
+    board = json.loads(path.read_text()) if path.is_file() else {}
+    row = board.get("methods", {}).get("rl", {}).get("success_difference_vs_reference")
+    if row is None:
+        return ""
+    low, high = row["ci"]
+    held_out = len(board["objects"]) + len(board["degenerate_objects"])
+    return (f" Against the best-Q_C pick, the RL selector's first pick holds "
+            f"{row['estimate']:+.3f} [{low:+.3f}, {high:+.3f}] more often, paired over "
+            f"{held_out} held-out objects.")
 
 
 def _leaderboard_lines(out: Path) -> list[str]:
@@ -82,11 +97,14 @@ def _leaderboard_lines(out: Path) -> list[str]:
     if not board.get("methods"):
         return []
     main, _ = leaderboard_frames(board)
-    shown = main[["method", "runs", "top-1 success", "normalised IQM", "mean - best_qc"]]
+    shown = main[["method", "runs", "top-1 success", "success - best_qc", "normalised IQM",
+                  "mean - best_qc"]]
     caution = leaderboard_caution(board)
-    lines = ["", f"| leaderboard ({len(board['objects'])} held-out objects) | runs | top-1 "
-             "success | normalised IQM (95 % stratified bootstrap) | mean - best_qc |",
-             "| --- | --- | --- | --- | --- |"]  # fmt: skip
+    held_out = len(board["objects"]) + len(board["degenerate_objects"])
+    lines = ["", f"| leaderboard ({held_out} held-out objects, {len(board['objects'])} rankable) "
+             "| runs | top-1 success | success - best_qc | normalised IQM (95 % stratified "
+             "bootstrap) | normalised mean - best_qc |",
+             "| --- | --- | --- | --- | --- | --- |"]  # fmt: skip
     rows = shown.itertuples(index=False)
     lines += ["| " + " | ".join(str(v) for v in row) + " |" for row in rows]
     return [*lines, "", caution or verdict_sentence(board)]
