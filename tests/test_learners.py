@@ -147,6 +147,28 @@ def test_learner_scores_cover_every_held_out_candidate_and_seed(grips):
     pd.testing.assert_frame_equal(scores, learner_scores(grips, config))  # reproducible
 
 
+def test_learner_scores_are_the_same_in_two_processes(grips, monkeypatch):
+    """The fits spread over two processes (the threshold lowered for this small table) give the
+    same table, row for row, as one process; seed-free learners are fitted once."""
+    import classifiers.experiments.candidate_scores as module
+
+    config = Config().override(
+        learning={"models": ("hgb", "knn", "random"), "regressors": ("ridge",),
+                  "rankers": ("rank_qc",), "seeds": 3, "workers": 1},
+        selector={"max_candidates": 12},
+    )  # fmt: skip
+    alone = learner_scores(grips, config)
+    monkeypatch.setattr(module, "PARALLEL_MIN_GRIPS", 0)
+    together = learner_scores(grips, config.override(learning={"workers": 2}))
+    pd.testing.assert_frame_equal(alone, together)
+    seed_free = {name: module.seed_free(module._maker(make_model, name))
+                 for name in ("hgb", "knn", "random", "svm", "logreg")}  # fmt: skip
+    assert seed_free == {"hgb": False, "knn": True, "random": False, "svm": False,
+                         "logreg": True}
+    assert module.seed_free(module._maker(make_regressor, "ridge"))
+    assert not module.seed_free(module._maker(make_ranker, "lambdarank"))
+
+
 def test_score_frame_refuses_nan_or_wrong_length():
     rows = pd.DataFrame({"grip_id": [1, 2]})
     with pytest.raises(ValueError, match="2 candidates"):

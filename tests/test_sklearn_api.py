@@ -33,6 +33,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from sklearn.base import BaseEstimator, clone
+from sklearn.compose import TransformedTargetRegressor
 from sklearn.exceptions import NotFittedError
 from sklearn.pipeline import Pipeline
 from sklearn.utils import get_tags
@@ -61,9 +62,10 @@ def _registry_estimators() -> dict[str, BaseEstimator]:
             fast = FAST.get(name, {})
             if len(rest) == 1:
                 found[f"{task}/{name}"] = rest[-1].set_params(**fast)
-            else:
+            else:  # a regressor on a standardised target: its settings are the inner model's
+                inner = "regressor__" * isinstance(rest[-1], TransformedTargetRegressor)
                 found[f"{task}/{name}"] = rest.set_params(
-                    **{f"model__{key}": value for key, value in fast.items()})
+                    **{f"model__{inner}{key}": value for key, value in fast.items()})
     found["ranker/lambdarank"] = make_ranker("lambdarank", seed=0).set_params(n_estimators=20)
     return found
 

@@ -42,9 +42,15 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from joblib import Parallel, delayed
 from sklearn.base import BaseEstimator
 
-from classifiers.evaluation.cross_validation import GROUP_COLUMN, LABEL_COLUMN, ranking_score
+from classifiers.evaluation.cross_validation import (
+    GROUP_COLUMN,
+    LABEL_COLUMN,
+    PARALLEL_MIN_GRIPS,
+    ranking_score,
+)
 from classifiers.evaluation.regression import TARGET_COLUMN, has_target
 from classifiers.learners.models import make_model, make_regressor
 from classifiers.learners.ranking import make_ranker, relevance
@@ -89,33 +95,73 @@ def score_frame(object_id: str, seed: int, method: str, rows: pd.DataFrame,
 
 
 def learner_scores(table: pd.DataFrame, config: Config) -> pd.DataFrame:
-    """The scores of every configured learner and seed (see the module docstring)."""
+    """The scores of every configured learner and seed (see the module docstring).
+
+    The fits run in ``learning.workers`` processes, one thread each, when the training grips
+    number at least :data:`~classifiers.evaluation.cross_validation.PARALLEL_MIN_GRIPS`; a
+    learner that no seed changes (:func:`seed_free`: knn, logreg, ridge, the rank baselines) is
+    fitted once and its scores repeated for every seed. The table is the same whatever the
+    number of workers.
+    """
     learning = config.learning
     train, _ = split_table(table, learning)
     candidates = held_out_candidates(table, config)
     if not candidates or train[LABEL_COLUMN].nunique() < 2:
         return empty_scores()
-    jobs: list[tuple[str, Callable[[int], BaseEstimator], np.ndarray]] = [
-        (f"classifier_{n}", _maker(make_model, n), train[LABEL_COLUMN].to_numpy().astype(bool))
-        for n in learning.models
-    ]
-    if has_target(table):
-        target = train[TARGET_COLUMN].to_numpy(float)
-        jobs += [(f"regressor_{n}", _maker(make_regressor, n), target)
-                 for n in learning.regressors]  # fmt: skip
-    grades = relevance(train, config.sim)
-    jobs += [(f"ranker_{n}", _maker(make_ranker, n), grades) for n in learning.rankers]
-    frames = []
-    with single_threaded():
-        for seed in training_seeds(learning.seed, learning.seeds):
-            for method, make, target in jobs:
-                model = make(seed).fit(train, target)
-                frames += [score_frame(oid, seed, method, rows, _score(method, model, rows))
-                           for oid, rows in candidates.items()]  # fmt: skip
+    jobs = _jobs(train, table, config)
+    seeds = training_seeds(learning.seed, learning.seeds)
+    fitted_seed = {(method, seed): seeds[0] if seed_free(make) else seed
+                   for method, (make, _) in jobs.items() for seed in seeds}  # fmt: skip
+    fits = list(dict.fromkeys((method, fitted) for (method, _), fitted in fitted_seed.items()))
+    workers = learning.workers if len(train) >= PARALLEL_MIN_GRIPS else 1
+    found = Parallel(n_jobs=min(workers, len(fits)))(
+        delayed(_fitted_scores)(train, candidates, method, *jobs[method], seed)
+        for method, seed in fits)
+    scores = dict(zip(fits, found, strict=True))
+    frames = [score_frame(oid, seed, method, rows, scores[method, fitted_seed[method, seed]][oid])
+              for seed in seeds for method in jobs for oid, rows in candidates.items()]
     return pd.concat(frames, ignore_index=True)
 
 
-def _maker(factory: Callable[..., BaseEstimator], name: str) -> Callable[[int], BaseEstimator]:
+Maker = Callable[[int], BaseEstimator]
+
+
+def _jobs(train: pd.DataFrame, table: pd.DataFrame,
+          config: Config) -> dict[str, tuple[Maker, np.ndarray]]:
+    """Method → (estimator factory by seed, training target), for every configured learner."""
+    learning = config.learning
+    labels = train[LABEL_COLUMN].to_numpy().astype(bool)
+    jobs = {f"classifier_{n}": (_maker(make_model, n), labels) for n in learning.models}
+    if has_target(table):
+        target = train[TARGET_COLUMN].to_numpy(float)
+        jobs |= {f"regressor_{n}": (_maker(make_regressor, n), target)
+                 for n in learning.regressors}  # fmt: skip
+    grades = relevance(train, config.sim)
+    return jobs | {f"ranker_{n}": (_maker(make_ranker, n), grades) for n in learning.rankers}
+
+
+def seed_free(make: Maker) -> bool:
+    """Whether no parameter of ``make(seed)`` depends on the seed: such a learner (fitted by a
+    deterministic algorithm, as every registered one without a ``random_state`` is) gives the
+    same scores for every seed."""
+    return _plain_params(make(0)) == _plain_params(make(1))
+
+
+def _plain_params(estimator: BaseEstimator) -> dict[str, object]:
+    """The estimator's nested parameters that are values, not estimators or step lists."""
+    return {key: value for key, value in estimator.get_params(deep=True).items()
+            if not isinstance(value, BaseEstimator | list)}  # fmt: skip
+
+
+def _fitted_scores(train: pd.DataFrame, candidates: dict[str, pd.DataFrame], method: str,
+                   make: Maker, target: np.ndarray, seed: int) -> dict[str, np.ndarray]:
+    """Each held-out object's candidate scores by ``make(seed)`` fitted on ``train``."""
+    with single_threaded():
+        model = make(seed).fit(train, target)
+        return {oid: _score(method, model, rows) for oid, rows in candidates.items()}
+
+
+def _maker(factory: Callable[..., BaseEstimator], name: str) -> Maker:
     return lambda seed: factory(name, seed, FEATURES)
 
 

@@ -23,10 +23,12 @@ runs on one thread (:class:`~classifiers.learners.threads.OneThreadHGBClassifier
 ``robustness_mean``): "svr" (RBF ``SVR`` on standardised features,
 :class:`~classifiers.learners.svm.SampledSVR`), "mlp_torch"
 (:class:`~classifiers.learners.torch_mlp.TorchMLPRegressor`), "mlp_sklearn" (scikit-learn's
-``MLPRegressor``, the classifier's architecture), "knn", "ridge", "hgb"
-(``HistGradientBoostingRegressor``, squared error, early stopping as the classifier's), and the
-rank baselines
-"rank_qc", "rank_qg" and "random" (:class:`~classifiers.learners.baselines.RankingRegressor`).
+``MLPRegressor``, the classifier's architecture, on the standardised target: on grams, with a
+spread of 34 g, Adam took 225-273 epochs and 11-13 s to stop on the standard dataset's training
+grips, on the standardised target 83-135 epochs and 5-7 s for the same Spearman), "knn",
+"ridge", "hgb" (``HistGradientBoostingRegressor``, squared error, early stopping as the
+classifier's), and the rank baselines "rank_qc", "rank_qg" and "random"
+(:class:`~classifiers.learners.baselines.RankingRegressor`).
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 
 from sklearn.base import BaseEstimator
+from sklearn.compose import TransformedTargetRegressor
 from sklearn.linear_model import LogisticRegression, Ridge
 from sklearn.neighbors import KNeighborsClassifier, KNeighborsRegressor
 from sklearn.neural_network import MLPClassifier, MLPRegressor
@@ -104,10 +107,10 @@ MODEL_NAMES = tuple(_CLASSIFIERS)
 _REGRESSORS: dict[str, Entry] = {
     "svr": (None, lambda seed: _scaled(SampledSVR(C=1.0, epsilon=0.1, random_state=seed))),
     "mlp_torch": (None, lambda seed: [("model", TorchMLPRegressor(random_state=seed))]),
-    "mlp_sklearn": (None, lambda seed: _scaled(
+    "mlp_sklearn": (None, lambda seed: _scaled(TransformedTargetRegressor(
         MLPRegressor(hidden_layer_sizes=(64, 64), early_stopping=True, max_iter=500,
-                     random_state=seed)
-    )),
+                     random_state=seed), transformer=StandardScaler(),
+    ))),
     "knn": (None, lambda seed: _scaled(KNeighborsRegressor(n_neighbors=15, weights="distance"))),
     "ridge": (None, lambda seed: _scaled(Ridge(alpha=1.0))),
     "hgb": (None, lambda seed: [("model", OneThreadHGBRegressor(**HGB_SETTINGS,
