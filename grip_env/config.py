@@ -287,7 +287,7 @@ class LearningConfig(_Section):
         description="classifier the feature ablation and the power curve cross-validate",
     )
     folds: int = Field(5, ge=2, le=100, description="grouped CV folds")
-    repeats: int = Field(3, ge=1, le=100, description="CV repeats over seeds")
+    repeats: int = Field(2, ge=1, le=100, description="CV repeats over seeds")
     workers: int = Field(
         2, ge=1, le=1024,
         description="processes the cross-validation folds are fitted in (one thread each; the "
