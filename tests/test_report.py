@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pandas as pd
 import pytest
 
 from classifiers.report import analysis
 from classifiers.report.document import Report
+from grip_env.config import Config
 
 
 def _candidates() -> pd.DataFrame:
@@ -257,3 +260,38 @@ def test_perception_section_states_each_paired_difference_and_the_cost(tmp_path)
     report = Report("t")
     _perception_section(report, tmp_path, table)
     assert "no rendered plan" in report.write(tmp_path / "p")[0].read_text()
+
+
+def test_a_calibration_recorded_with_the_dataset_stands_for_the_study_only_when_it_matches(
+        tmp_path):
+    """The study's calibration stage reuses a dataset's recorded calibration only when it is
+    this label model's, on the same config fields, at full size; the copy says it was recorded."""
+    from dataclasses import asdict
+
+    from classifiers.experiments.study import copy_calibration, recorded_calibration
+    from classifiers.report.calibration import write_calibration
+    from grip_env.calibration import CalibrationSettings, cone_check, design_check
+    from grip_env.label_model import LABEL_MODEL
+
+    trials = _calibration_trials()
+    config = Config()
+    result = {"label_model": LABEL_MODEL, "reference_level_g": 4.0, "mu": 0.4,
+              "settings": asdict(CalibrationSettings(workers=1)), "trials": len(trials),
+              "checks": {c["name"]: c for c in (design_check(trials, 4.0), cone_check(trials))},
+              "config": config.model_dump(mode="json")}  # fmt: skip
+    dataset = tmp_path / "data"
+    write_calibration(dataset / "calibration", result, trials)
+    recorded = dataset / "calibration" / "calibration.json"
+    assert recorded_calibration(dataset, config) == recorded
+    assert recorded_calibration(dataset, config.override(learning={"seeds": 2})) == recorded
+    assert recorded_calibration(dataset, config.override(sim={"finger_force_n": 12.0})) is None
+    assert recorded_calibration(tmp_path / "elsewhere", config) is None
+    for key, value in (("label_model", "2020.01-old"), ("settings", asdict(
+            CalibrationSettings.quick()))):  # fmt: skip
+        write_calibration(dataset / "calibration", {**result, key: value}, trials)
+        assert recorded_calibration(dataset, config) is None, key
+    write_calibration(dataset / "calibration", result, trials)
+    text = copy_calibration(recorded, tmp_path / "study" / "calibration").read_text()
+    assert f"Recorded with the dataset `{dataset}` (label model `{LABEL_MODEL}`)" in text
+    copied = json.loads((tmp_path / "study" / "calibration" / "calibration.json").read_text())
+    assert copied["checks"] == json.loads(recorded.read_text())["checks"]

@@ -92,7 +92,12 @@ def _benchmark(run: StudyRun) -> object:
 
 
 def _calibration(run: StudyRun) -> object:
-    return run_calibration(run.config, run.out / "calibration", run.table, run.quick, run.log)
+    recorded = None if run.quick else recorded_calibration(run.data_dir, run.config)
+    if recorded is None:
+        return run_calibration(run.config, run.out / "calibration", run.table, run.quick, run.log)
+    run.log(f"[study] calibration: the one recorded with the dataset ({recorded.parent}), of "
+            "this label model and recipe at full size: not measured again")
+    return copy_calibration(recorded, run.out / "calibration")
 
 
 def _replication(run: StudyRun) -> object:
@@ -435,6 +440,49 @@ def run_calibration(
     settings = CalibrationSettings.quick(workers) if quick else CalibrationSettings(workers=workers)
     has_robustness = table is not None and "robustness_mean" in table.columns
     result, trials = calibrate(config, settings, table if has_robustness else None, log)
+    return write_calibration(out, result, trials)
+
+
+#: Where a dataset keeps the calibration of the label model on its recipe (``grip-env calibrate
+#: --config RECIPE --data DIR --out DIR/calibration``): the shipped standard dataset has one.
+RECORDED_CALIBRATION = Path("calibration") / "calibration.json"
+
+
+def recorded_calibration(data_dir: Path, config: Config) -> Path | None:
+    """The dataset's recorded ``calibration.json`` when it is what the study's calibration stage
+    would measure: this code's label model, the stage's config fields equal to ``config``'s and
+    the full-size settings of :class:`~grip_env.calibration.CalibrationSettings`; else None.
+
+    A calibration costs about 45 minutes of 2 cores on the standard recipe; like the labels it
+    checks, it is measured once with the dataset, and the study's replication stage shows that
+    the labels are still this code's.
+    """
+    from grip_env.calibration import CalibrationSettings
+    from grip_env.label_model import LABEL_MODEL
+
+    path = Path(data_dir) / RECORDED_CALIBRATION
+    found = _stored(path)
+    if not found or found.get("label_model") != LABEL_MODEL or "config" not in found:
+        return None
+    try:
+        recipe = Config.model_validate(found["config"])
+    except ValueError:
+        return None
+    full = asdict(CalibrationSettings())
+    settings = {k: v for k, v in (found.get("settings") or {}).items() if k != "workers"}
+    same = (stage_inputs("calibration", recipe) == stage_inputs("calibration", config)
+            and settings == {k: v for k, v in full.items() if k != "workers"})  # fmt: skip
+    return path if same else None
+
+
+def copy_calibration(recorded: Path, out: Path) -> Path:
+    """Write a recorded calibration (its JSON, marked as recorded, and its trials) into ``out``
+    as the study's own, with its Markdown and figures; returns ``calibration.md``."""
+    from classifiers.report.calibration import TRIALS_FILE, write_calibration
+
+    result = json.loads(recorded.read_text())
+    result["recorded_with"] = str(recorded.parent.parent)
+    trials = pd.read_parquet(recorded.parent / TRIALS_FILE)
     return write_calibration(out, result, trials)
 
 

@@ -54,6 +54,10 @@ def calibration_section(report: Report, result: dict[str, Any], trials: pd.DataF
         f"{_conditions(result.get('config'))}. Each check states its target, the sample it "
         "was measured on and whether the measured figure meets it."
     )
+    if result.get("recorded_with"):
+        report.text(f"Recorded with the dataset `{result['recorded_with']}` (label model "
+                    f"`{result.get('label_model')}`): measured once on its recipe, not by this "
+                    "run, whose replication stage shows that this code still makes its labels.")
     report.table(summary_table(checks, settings), caption="Checks against their targets.")
     small = {name: check["too_small"] for name, check in checks.items() if check["too_small"]}
     if small:
