@@ -198,4 +198,20 @@ def test_the_card_reports_the_dataset_s_own_figures(small):
     assert card.startswith(f"# Dataset card: 8 grips on 2 objects (label model `{LABEL_MODEL}`)")
     assert f"| named | 2 | 2 | 8 | {grips['success'].mean():.1%} |" in card
     assert "RESIM" in card and "RETEST" in card and "Unfinished" not in card
+    assert "Not recorded with this dataset: `grip-env calibrate" in card
     assert ("core-hours" in card and "AMD" in card) or "x " in card
+
+
+def test_the_card_shows_the_calibration_recorded_with_the_dataset():
+    """The shipped standard dataset carries its label model's calibration on its recipe: the
+    card tabulates every check, and says how to record one when a dataset has none."""
+    from grip_env.datasets import standard_path
+
+    card = dataset_card(standard_path())
+    section = card.split("## Label-model calibration")[1].split("\n## ")[0]
+    recorded = json.loads((standard_path() / "calibration" / "calibration.json").read_text())
+    assert recorded["label_model"] == LABEL_MODEL
+    for name in ("design_hold", "cone", "retest", "icc", "within_object", "decile_Q_C"):
+        assert f"| {name} | " in section
+    within = recorded["checks"]["within_object"]
+    assert f"{within['measured']:.3f} [{within['ci'][0]:.3f}, {within['ci'][1]:.3f}]" in section

@@ -32,7 +32,8 @@ def dataset_card(directory: str | Path, report: dict[str, Any] | None = None) ->
     families = pd.Series({e["object_id"]: e["family"] for e in manifest["objects"]})
     sections = [_heading(manifest, grips), _making(manifest, grips),
                 _composition(grips, families, manifest), _outcomes(grips, manifest),
-                _reliability(report), _limits(manifest), _licence()]
+                _reliability(report), _calibration(Path(directory)), _limits(manifest),
+                _licence()]
     return "\n\n".join(sections) + "\n"
 
 
@@ -135,6 +136,45 @@ def _reliability(report: dict[str, Any] | None) -> str:
         lines.append("- Within-object test-retest not measured yet: `grip-env validate "
                      "--retest K DIR`.")
     return "\n".join(lines)
+
+
+#: The label model's calibration recorded with a dataset (``grip-env calibrate --config RECIPE
+#: --data DIR --out DIR/calibration``).
+CALIBRATION_FILE = Path("calibration") / "calibration.json"
+
+
+def _calibration(directory: Path) -> str:
+    """The recorded calibration's checks, one row each (a pointer to the command without it)."""
+    path = directory / CALIBRATION_FILE
+    if not path.is_file():
+        return ("## Label-model calibration\n\nNot recorded with this dataset: `grip-env calibrate "
+                "--config RECIPE --data DIR --out DIR/calibration`.")
+    found = json.loads(path.read_text())
+    rows = [f"| {name} | {_measured(check)} | {check.get('target', '')} | "
+            f"{_verdict(check.get('passed'))} |" for name, check in found["checks"].items()]
+    return "\n".join([
+        "## Label-model calibration", "",
+        f"`grip-env calibrate --config configs/standard.yaml --data DIR --out DIR/calibration` "
+        f"(label model `{found.get('label_model')}`, {found['trials']:,} trials, recorded in "
+        f"`{CALIBRATION_FILE}` and read by the study): do the labels measure the grip?", "",
+        "| check | measured [95 % interval] | target | verdict |", "| --- | --- | --- | --- |",
+        *rows,
+    ])
+
+
+def _measured(check: dict[str, Any]) -> str:
+    value, ci = check.get("measured"), check.get("ci")
+    if isinstance(value, dict):  # per object (the design boxes)
+        return ", ".join(f"{name} {level:.1f} g" for name, level in value.items())
+    if value is None:
+        return "–"
+    shown = f"{value:.3f}" + (f" [{ci[0]:.3f}, {ci[1]:.3f}]" if ci and None not in ci else "")
+    sample = ", ".join(f"{check[k]} {k}" for k in ("objects", "grips") if k in check)
+    return shown + (f" ({sample})" if sample else "")
+
+
+def _verdict(passed: bool | None) -> str:
+    return "not judged" if passed is None else "pass" if passed else "fail"
 
 
 def _limits(manifest: dict[str, Any]) -> str:
