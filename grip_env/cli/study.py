@@ -46,7 +46,9 @@ def study(
     Learns on the shipped standard dataset (or the one --data names), after re-simulating a
     seeded sample of it; --regenerate (and --quick, unless --data is given) generates the
     dataset from the config's recipe into OUT/dataset instead. Then it trains and evaluates
-    the classifiers, runs the ablation, trains and evaluates the RL selector, and writes the
+    the classifiers, runs the ablation, trains and evaluates the RL selector, scores every
+    method on the benchmark's split, checks the labels (the calibration the dataset records
+    for its label model and recipe, or grip-env calibrate's checks run anew), and writes the
     report. A rerun reuses every stage whose inputs
     (config fields, dataset, grip-env version) are unchanged and recomputes the others.
     Exit codes: 0 done, 1 internal error, 2 bad input, 130/143/129 stopped by a signal.
