@@ -15,7 +15,14 @@ import pytest
 from PIL import Image
 from typer.testing import CliRunner
 
-from classifiers.report.readme import BEGIN, END, interval_text, readme_block
+from classifiers.report.readme import (
+    BEGIN,
+    END,
+    LEADERBOARD_BEGIN,
+    LEADERBOARD_END,
+    interval_text,
+    readme_block,
+)
 from grip_env.cli import _register_commands, app
 from grip_env.envs import GripSelectEnv
 
@@ -63,6 +70,9 @@ def test_quick_study_reports_and_a_rerun_recomputes_only_what_changed(tmp_path):
     config.write_text("learning:\n  models: [" + ", ".join([*QUICK_MODELS, "svm"]) + "]\n")
     readme = tmp_path / "README.md"
     readme.write_text(f"# x\n\n{BEGIN}\nold numbers\n{END}\n\nafter\n")
+    page = tmp_path / "docs" / "benchmark.md"
+    page.parent.mkdir()
+    page.write_text(f"# b\n\n{LEADERBOARD_BEGIN}\nold board\n{LEADERBOARD_END}\n")
     again = CliRunner().invoke(app, ["study", "--quick", "--config", str(config), "--out",
                                      str(out), "--update-readme", "--readme", str(readme)])
     assert again.exit_code == 0, again.output
@@ -82,6 +92,10 @@ def test_quick_study_reports_and_a_rerun_recomputes_only_what_changed(tmp_path):
     assert stage["inputs"]["learning"]["models"][-1] == "svm"
     _assert_readme_is_the_run(readme, metrics, json.loads(
         (out / "selector" / "selector.json").read_text()))
+    board = json.loads((out / "benchmark" / "leaderboard.json").read_text())
+    if board.get("methods"):  # the benchmark page shows the run's leaderboard
+        text = page.read_text()
+        assert "old board" not in text and "Split `" in text and "| best_qc |" in text
 
 
 def _assert_one_split(out: Path, metrics: dict, selector: dict) -> None:

@@ -90,17 +90,29 @@ def study_data(data: Path | None, regenerate: bool, quick: bool) -> Path | None:
 
 
 def _update_readme(out: Path, readme: Path) -> None:
+    """Rewrite the README's results block, and the leaderboard block of the benchmark page
+    beside it (``docs/benchmark.md``, when it has the markers)."""
     from classifiers.experiments.study import package_version, study_dataset
-    from classifiers.report.readme import results_block, update_readme
+    from classifiers.report.readme import (
+        LEADERBOARD_BEGIN,
+        LEADERBOARD_END,
+        leaderboard_block,
+        results_block,
+        update_readme,
+    )
     from classifiers.report.study_report import source_commit
     from grip_env.dataset import dataset_manifest, load
 
-    # The commit that generated the stored run's dataset, not the checkout rewriting the README.
     data_dir = study_dataset(out)
-    commit = (dataset_manifest(data_dir).get("git_commit") or source_commit())[:7]
+    generated = (dataset_manifest(data_dir).get("git_commit") or "unknown")[:7]
+    commit = f"{source_commit()} (its dataset generated at {generated})"
     block = results_block(out, load(data_dir), commit, package_version())
     update_readme(readme, block)
     typer.echo(f"updated the results block of {readme}")
+    page, board = readme.parent / "docs" / "benchmark.md", leaderboard_block(out)
+    if board is not None and page.is_file() and LEADERBOARD_BEGIN in page.read_text():
+        update_readme(page, board, LEADERBOARD_BEGIN, LEADERBOARD_END)
+        typer.echo(f"updated the leaderboard of {page}")
 
 
 def register(app: typer.Typer) -> None:
