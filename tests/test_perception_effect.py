@@ -52,6 +52,9 @@ def test_the_stage_pairs_each_objects_best_grips(generated_dataset_dir: Path, tm
         assert value["mean"] == pytest.approx(value["render"] - value["true"])
     assert set(result["timing_s"]) == {"plan_true_s", "simulate_true_best_s"}
     assert np.isfinite(grips.attrs["manifest"]["perception_seconds"])
+    two = run_perception_effect(config.override(dataset={"workers": 2}), generated_dataset_dir,
+                                tmp_path / "two")  # fmt: skip
+    assert two["pairs"] == result["pairs"] and two["differences"] == result["differences"]
 
 
 def test_a_dataset_planned_on_the_polygons_has_nothing_to_compare(tmp_path) -> None:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -67,34 +68,53 @@ def _paired_best(
     config: Config, table: pd.DataFrame, manifest: dict[str, Any], objects: list,
     perceived: list, chosen: set[str],
 ) -> tuple[pd.DataFrame, dict[str, float]]:
-    """One row per object with grips on both plans: the two best grips' compared values."""
-    from grip_env.objects.meshes import execution_height_mm
-    from grip_env.planning.pipeline import candidates
-    from grip_env.sim import run_trials
+    """One row per object with grips on both plans: the two best grips' compared values.
 
-    rows, plan_s, sim_s = [], 0.0, 0.0
+    The objects are planned and simulated in ``dataset.workers`` processes; each row depends on
+    its object alone, so the rows are the same whatever the number of workers.
+    """
+    tasks = []
     for entry, obj, seen in zip(manifest["objects"], objects, perceived, strict=True):
         kept = table[table["object_id"] == entry["object_id"]]
         if seen is None or kept.empty or entry["object_id"] not in chosen:
             continue
-        start = time.perf_counter()
-        height = execution_height_mm(obj, config.objects)
-        true_plan = candidates(obj, config.grasp, config, height_mm=height)
-        plan_s += time.perf_counter() - start
-        if true_plan.empty:
-            continue
-        start = time.perf_counter()
-        best = true_plan.iloc[:1].assign(object_id=entry["object_id"])  # the dataset's draws
-        outcome = run_trials(obj, best, config, config.dataset.trials, config.dataset.seed)
-        sim_s += time.perf_counter() - start
-        true_best = best.iloc[0].to_dict() | {
-            "success_rate": outcome["successes"].iloc[0] / outcome["trials"].iloc[0],
-            "robustness_mean": outcome["robustness_mean"].iloc[0]}
         seen_best = kept.sort_values("Q_C", kind="stable").iloc[0]
-        rows.append({"object_id": entry["object_id"]}
-                    | {f"true_{n}": float(true_best[n]) for n in COMPARED}
-                    | {f"render_{n}": float(seen_best[n]) for n in COMPARED})
-    return pd.DataFrame(rows), {"plan_true_s": plan_s, "simulate_true_best_s": sim_s}
+        tasks.append((config, entry["object_id"], obj, {n: float(seen_best[n]) for n in COMPARED}))
+    workers = min(config.dataset.workers, len(tasks))
+    if workers > 1:
+        with ProcessPoolExecutor(workers) as pool:
+            found = list(pool.map(_pair, *zip(*tasks, strict=True)))
+    else:
+        found = [_pair(*task) for task in tasks]
+    rows = [row for row, _ in found if row is not None]
+    timing = {"plan_true_s": sum(t[0] for _, t in found),
+              "simulate_true_best_s": sum(t[1] for _, t in found)}
+    return pd.DataFrame(rows), timing
+
+
+def _pair(config: Config, object_id: str, obj: Any, seen_best: dict[str, float],
+          ) -> tuple[dict[str, Any] | None, tuple[float, float]]:
+    """One object's row (None when its true contour gives no grip) and (plan, simulate) s."""
+    from grip_env.objects.meshes import execution_height_mm
+    from grip_env.planning.pipeline import candidates
+    from grip_env.sim import run_trials
+
+    start = time.perf_counter()
+    height = execution_height_mm(obj, config.objects)
+    true_plan = candidates(obj, config.grasp, config, height_mm=height)
+    plan_s = time.perf_counter() - start
+    if true_plan.empty:
+        return None, (plan_s, 0.0)
+    start = time.perf_counter()
+    best = true_plan.iloc[:1].assign(object_id=object_id)  # the dataset's draws
+    outcome = run_trials(obj, best, config, config.dataset.trials, config.dataset.seed)
+    sim_s = time.perf_counter() - start
+    true_best = best.iloc[0].to_dict() | {
+        "success_rate": outcome["successes"].iloc[0] / outcome["trials"].iloc[0],
+        "robustness_mean": outcome["robustness_mean"].iloc[0]}
+    row = ({"object_id": object_id} | {f"true_{n}": float(true_best[n]) for n in COMPARED}
+           | {f"render_{n}": value for n, value in seen_best.items()})
+    return row, (plan_s, sim_s)
 
 
 def paired_differences(rows: pd.DataFrame, seed: int) -> dict[str, dict[str, Any]]:
