@@ -110,8 +110,9 @@ def learner_scores(table: pd.DataFrame, config: Config) -> pd.DataFrame:
         return empty_scores()
     jobs = _jobs(train, table, config)
     seeds = training_seeds(learning.seed, learning.seeds)
-    fitted_seed = {(method, seed): seeds[0] if seed_free(make) else seed
-                   for method, (make, _) in jobs.items() for seed in seeds}  # fmt: skip
+    free = {method for method, (make, _) in jobs.items() if seed_free(make)}
+    fitted_seed = {(method, seed): seeds[0] if method in free else seed
+                   for method in jobs for seed in seeds}  # fmt: skip
     fits = list(dict.fromkeys((method, fitted) for (method, _), fitted in fitted_seed.items()))
     workers = learning.workers if len(train) >= PARALLEL_MIN_GRIPS else 1
     found = Parallel(n_jobs=min(workers, len(fits)))(
