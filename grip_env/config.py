@@ -307,7 +307,7 @@ class SelectorConfig(_Section):
         "success", description="reward of a pick: success (0/1) or robustness / reference level"
     )
     seed: int = Field(0, ge=0, le=MAX_SEED, description="training seed")
-    seeds: int = Field(5, ge=1, le=100, description="training runs, seeds seed, seed+1, ...")
+    seeds: int = Field(4, ge=1, le=100, description="training runs, seeds seed, seed+1, ...")
     workers: int = Field(
         2, ge=1, le=1024,
         description="processes the training runs share (each on one thread; the runs do not "

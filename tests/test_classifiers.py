@@ -93,12 +93,12 @@ def test_a_fold_with_one_training_class_is_left_out_for_every_model():
 
 
 def test_cross_validation_gives_the_same_rows_on_any_number_of_workers(monkeypatch):
-    import classifiers.evaluation.cross_validation as cv
+    import classifiers.learners.parallel as parallel
 
     table = synthetic_grips(n_objects=12, grips=(8, 12), seed=2)
     config = LearningConfig(folds=3, repeats=2, workers=1)
     alone = cross_validate_models(table, ["logreg", "hgb", "random"], config=config)
-    monkeypatch.setattr(cv, "PARALLEL_MIN_GRIPS", 0)  # spread even this small table
+    monkeypatch.setattr(parallel, "PARALLEL_MIN_GRIPS", 0)  # spread even this small table
     spread = cross_validate_models(table, ["logreg", "hgb", "random"],
                                    config=config.model_copy(update={"workers": 2}))
     pd.testing.assert_frame_equal(alone, spread)

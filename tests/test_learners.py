@@ -151,6 +151,7 @@ def test_learner_scores_are_the_same_in_two_processes(grips, monkeypatch):
     """The fits spread over two processes (the threshold lowered for this small table) give the
     same table, row for row, as one process; seed-free learners are fitted once."""
     import classifiers.experiments.candidate_scores as module
+    import classifiers.learners.parallel as parallel
 
     config = Config().override(
         learning={"models": ("hgb", "knn", "random"), "regressors": ("ridge",),
@@ -158,7 +159,7 @@ def test_learner_scores_are_the_same_in_two_processes(grips, monkeypatch):
         selector={"max_candidates": 12},
     )  # fmt: skip
     alone = learner_scores(grips, config)
-    monkeypatch.setattr(module, "PARALLEL_MIN_GRIPS", 0)
+    monkeypatch.setattr(parallel, "PARALLEL_MIN_GRIPS", 0)
     together = learner_scores(grips, config.override(learning={"workers": 2}))
     pd.testing.assert_frame_equal(alone, together)
     seed_free = {name: module.seed_free(module._maker(make_model, name))
@@ -175,3 +176,29 @@ def test_score_frame_refuses_nan_or_wrong_length():
         score_frame("a", 0, "m", rows, np.array([0.1, np.nan]))
     with pytest.raises(ValueError, match="2 candidates"):
         score_frame("a", 0, "m", rows, np.array([0.1]))
+
+
+def test_held_out_family_and_importance_fits_are_the_same_in_two_processes(grips, monkeypatch):
+    """The stage's independent fits (held-out split, each family held out, permutation
+    importance per fold) give the same numbers spread over two processes as in one."""
+    import classifiers.learners.parallel as parallel
+    from classifiers.evaluation.cross_validation import family_holdout_metrics, held_out_metrics
+    from classifiers.experiments.ablation import importance
+
+    models = {name: make_model(name, 0) for name in ("hgb", "logreg")}
+    ids = sorted(grips["object_id"].astype(str).unique())
+    families = {oid: "named" if k % 3 else "mesh" for k, oid in enumerate(ids)}
+
+    def run(learning: LearningConfig) -> tuple:
+        return (held_out_metrics(grips, learning, models),
+                family_holdout_metrics(grips, families, models, learning.workers),
+                importance(grips, "hgb", learning, n_repeats=2))  # fmt: skip
+
+    learning = LearningConfig(folds=3, repeats=2, workers=1)
+    alone = run(learning)
+    monkeypatch.setattr(parallel, "PARALLEL_MIN_GRIPS", 0)
+    assert run(learning.model_copy(update={"workers": 2})) == alone
+    held_out, by_family, _ = alone
+    assert set(held_out["models"]) == {"hgb", "logreg"}
+    assert set(by_family["families"]) == {"mesh", "named"}
+    assert all(set(f["models"]) == {"hgb", "logreg"} for f in by_family["families"].values())

@@ -34,6 +34,7 @@ from sklearn.metrics import (
 from sklearn.model_selection import GridSearchCV, GroupKFold, StratifiedGroupKFold
 
 from classifiers.learners.models import check_features, make_model
+from classifiers.learners.parallel import run_all, worker_count
 from classifiers.learners.threads import single_threaded
 from grip_env.columns import FEATURES
 from grip_env.config import LearningConfig
@@ -43,8 +44,6 @@ from grip_env.progress import progress_bar
 METRICS = ("accuracy", "balanced_accuracy", "roc_auc", "f1", "brier", "top1_success", "top1_rate")
 GROUP_COLUMN = "object_id"
 LABEL_COLUMN = "success"
-#: The fewest grips whose cross-validation is spread over ``learning.workers`` processes.
-PARALLEL_MIN_GRIPS = 2000
 
 
 def check_dataset(table: pd.DataFrame, features: Sequence[str], folds: int) -> None:
@@ -142,13 +141,22 @@ def held_out_metrics(
     labels = train[LABEL_COLUMN].to_numpy().astype(bool)
     if test.empty or np.unique(labels).size < 2:
         return {"split": split, "models": {}}
-    scores = {}
-    with single_threaded():
-        for name, model in models.items():
-            fitted = clone(model).fit(train, labels)
-            scores[name] = {k: (float(v) if np.isfinite(v) else None)
-                            for k, v in fold_metrics(fitted, test).items()}  # fmt: skip
-    return {"split": split, "models": scores}
+    return {"split": split, "models": fitted_metrics(models, train, labels, test, learning.workers)}
+
+
+def fitted_metrics(models: Mapping[str, BaseEstimator], train: pd.DataFrame, labels: np.ndarray,
+                   test: pd.DataFrame, workers: int = 1) -> dict[str, dict[str, float | None]]:
+    """Each model (cloned) fitted on ``train`` and scored on ``test`` (None where a metric is
+    undefined), in up to ``workers`` processes."""
+    jobs = [(clone(model), train, labels, test) for model in models.values()]
+    found = run_all(_fit_and_score, jobs, len(train), workers)
+    return dict(zip(models, found, strict=True))
+
+
+def _fit_and_score(model: BaseEstimator, train: pd.DataFrame, labels: np.ndarray,
+                   test: pd.DataFrame) -> dict[str, float | None]:
+    metrics = fold_metrics(model.fit(train, labels), test)
+    return {k: (float(v) if np.isfinite(v) else None) for k, v in metrics.items()}
 
 
 def object_families(table: pd.DataFrame) -> dict[str, str]:
@@ -160,7 +168,8 @@ def object_families(table: pd.DataFrame) -> dict[str, str]:
 
 
 def family_holdout_metrics(
-    table: pd.DataFrame, families: Mapping[str, str], models: Mapping[str, BaseEstimator]
+    table: pd.DataFrame, families: Mapping[str, str], models: Mapping[str, BaseEstimator],
+    workers: int = 1,
 ) -> dict[str, Any]:
     """Each model (cloned) fitted on every family but one and scored on that family's objects,
     for each family: does what is learnt on drawn shapes hold on real silhouettes, and back?
@@ -174,18 +183,19 @@ def family_holdout_metrics(
     result: dict[str, Any] = {"families": {}}
     if len(present) < 2:
         return result
+    jobs = []
     for name in present:
         held = (family == name).to_numpy()
         train, test = table[~held], table[held]
         labels = train[LABEL_COLUMN].to_numpy().astype(bool)
-        scores = {}
-        if np.unique(labels).size == 2:
-            for model_name, model in models.items():
-                fitted = clone(model).fit(train, labels)
-                scores[model_name] = {k: (float(v) if np.isfinite(v) else None)
-                                      for k, v in fold_metrics(fitted, test).items()}
+        learnable = np.unique(labels).size == 2
+        jobs += [(name, model_name, (clone(model), train, labels, test))
+                 for model_name, model in models.items() if learnable]  # fmt: skip
         result["families"][name] = {"objects": int(test[GROUP_COLUMN].nunique()),
-                                    "grips": len(test), "models": scores}
+                                    "grips": len(test), "models": {}}
+    found = run_all(_fit_and_score, [job for *_, job in jobs], len(table), workers)
+    for (name, model_name, _), metrics in zip(jobs, found, strict=True):
+        result["families"][name]["models"][model_name] = metrics
     return result
 
 
@@ -269,10 +279,9 @@ def grouped_cv(
     """The repeated grouped folds: ``fresh(seed)`` estimators fitted on each training fold,
     ``score(model, test)`` on its test fold; one row per (model, repeat, fold).
 
-    The folds are fitted in ``config.workers`` processes, each on one thread, when the table
-    has at least :data:`PARALLEL_MIN_GRIPS` grips (below that, starting the processes costs more
-    than it saves); every fit is seeded by its repeat alone, so the rows are the same whatever
-    the number of workers.
+    The folds are fitted in ``config.workers`` processes (:mod:`classifiers.learners.parallel`);
+    every fit is seeded by its repeat alone, so the rows are the same whatever the number of
+    workers.
     A fold whose training grips all have one class (a boolean ``target``; possible on a few
     objects) has nothing to learn from and gives no row, for every model alike, so paired
     differences stay matched on the folds both sides have.
@@ -284,8 +293,8 @@ def grouped_cv(
     run_fold = delayed(_fold_records)
     records: list[dict[str, Any]] = []
     with progress_bar(len(jobs), "cross-validation") as bar:
-        workers = config.workers if len(table) >= PARALLEL_MIN_GRIPS else 1
-        found = Parallel(n_jobs=min(workers, len(jobs)), return_as="generator")(
+        workers = worker_count(len(table), config.workers, len(jobs))
+        found = Parallel(n_jobs=workers, return_as="generator")(
             run_fold(table, target, fresh, score, config.seed + repeat, repeat, fold, train, test)
             for repeat, fold, train, test in jobs)
         for rows in found:

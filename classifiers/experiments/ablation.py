@@ -37,6 +37,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+from sklearn.base import BaseEstimator
 from sklearn.inspection import permutation_importance
 
 from classifiers.evaluation.cross_validation import (
@@ -66,6 +67,7 @@ from classifiers.evaluation.regression import (
 )
 from classifiers.experiments.plots import plot_ablation
 from classifiers.learners.models import make_model
+from classifiers.learners.parallel import run_all
 from classifiers.learners.threads import single_threaded
 from grip_env.columns import FEATURES, GRASP_FEATURES, HAND_FEATURES, SHARED_FEATURES
 from grip_env.config import Config, LearningConfig
@@ -250,21 +252,24 @@ def importance(
     """Permutation importance (ROC-AUC drop) of the twelve features on held-out folds."""
     table = table.reset_index(drop=True)
     labels = table[LABEL_COLUMN].to_numpy().astype(bool)
-    rows = []
-    for repeat in range(learning.repeats):
-        seed = learning.seed + repeat
-        for train, test in grouped_folds(table, learning.folds, seed):
-            if np.unique(labels[test]).size < 2:
-                continue
-            fitted = make_model(model, seed, FEATURES).fit(table.iloc[train], labels[train])
-            held_out = table.iloc[test][list(FEATURES)]
-            result = permutation_importance(
-                fitted, held_out, labels[test], scoring="roc_auc", n_repeats=n_repeats,
-                random_state=seed,
-            )  # fmt: skip
-            rows.append(result.importances_mean)
+    jobs = [(make_model(model, seed, FEATURES), table.iloc[train], labels[train],
+             table.iloc[test], labels[test], n_repeats, seed)
+            for seed in range(learning.seed, learning.seed + learning.repeats)
+            for train, test in grouped_folds(table, learning.folds, seed)
+            if np.unique(labels[test]).size == 2]  # fmt: skip
+    rows = run_all(_fold_importance, jobs, len(table), learning.workers)
     values = np.array(rows).reshape(-1, len(FEATURES))
     return {f: interval(values[:, k], learning.folds) for k, f in enumerate(FEATURES)}
+
+
+def _fold_importance(model: BaseEstimator, train: pd.DataFrame, labels: np.ndarray,
+                     test: pd.DataFrame, test_labels: np.ndarray, n_repeats: int,
+                     seed: int) -> np.ndarray:
+    """Mean ROC-AUC drop of each of the twelve features, shuffled in one held-out fold."""
+    fitted = model.fit(train, labels)
+    result = permutation_importance(fitted, test[list(FEATURES)], test_labels,
+                                    scoring="roc_auc", n_repeats=n_repeats, random_state=seed)
+    return result.importances_mean
 
 
 def run_ablation(

@@ -42,19 +42,17 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from joblib import Parallel, delayed
 from sklearn.base import BaseEstimator
 
 from classifiers.evaluation.cross_validation import (
     GROUP_COLUMN,
     LABEL_COLUMN,
-    PARALLEL_MIN_GRIPS,
     ranking_score,
 )
 from classifiers.evaluation.regression import TARGET_COLUMN, has_target
 from classifiers.learners.models import make_model, make_regressor
+from classifiers.learners.parallel import run_all
 from classifiers.learners.ranking import make_ranker, relevance
-from classifiers.learners.threads import single_threaded
 from grip_env.columns import FEATURES
 from grip_env.config import Config
 from grip_env.dataset.split import split_table
@@ -98,7 +96,7 @@ def learner_scores(table: pd.DataFrame, config: Config) -> pd.DataFrame:
     """The scores of every configured learner and seed (see the module docstring).
 
     The fits run in ``learning.workers`` processes, one thread each, when the training grips
-    number at least :data:`~classifiers.evaluation.cross_validation.PARALLEL_MIN_GRIPS`; a
+    number at least :data:`~classifiers.learners.parallel.PARALLEL_MIN_GRIPS`; a
     learner that no seed changes (:func:`seed_free`: knn, logreg, ridge, the rank baselines) is
     fitted once and its scores repeated for every seed. The table is the same whatever the
     number of workers.
@@ -114,10 +112,8 @@ def learner_scores(table: pd.DataFrame, config: Config) -> pd.DataFrame:
     fitted_seed = {(method, seed): seeds[0] if method in free else seed
                    for method in jobs for seed in seeds}  # fmt: skip
     fits = list(dict.fromkeys((method, fitted) for (method, _), fitted in fitted_seed.items()))
-    workers = learning.workers if len(train) >= PARALLEL_MIN_GRIPS else 1
-    found = Parallel(n_jobs=min(workers, len(fits)))(
-        delayed(_fitted_scores)(train, candidates, method, *jobs[method], seed)
-        for method, seed in fits)
+    found = run_all(_fitted_scores, [(train, candidates, method, *jobs[method], seed)
+                                     for method, seed in fits], len(train), learning.workers)
     scores = dict(zip(fits, found, strict=True))
     frames = [score_frame(oid, seed, method, rows, scores[method, fitted_seed[method, seed]][oid])
               for seed in seeds for method in jobs for oid, rows in candidates.items()]
@@ -157,9 +153,8 @@ def _plain_params(estimator: BaseEstimator) -> dict[str, object]:
 def _fitted_scores(train: pd.DataFrame, candidates: dict[str, pd.DataFrame], method: str,
                    make: Maker, target: np.ndarray, seed: int) -> dict[str, np.ndarray]:
     """Each held-out object's candidate scores by ``make(seed)`` fitted on ``train``."""
-    with single_threaded():
-        model = make(seed).fit(train, target)
-        return {oid: _score(method, model, rows) for oid, rows in candidates.items()}
+    model = make(seed).fit(train, target)
+    return {oid: _score(method, model, rows) for oid, rows in candidates.items()}
 
 
 def _maker(factory: Callable[..., BaseEstimator], name: str) -> Maker:

@@ -49,6 +49,7 @@ from classifiers.evaluation.regression import TARGET_COLUMN, evaluate_regressors
 from classifiers.experiments.candidate_scores import SCORES_FILE, learner_scores, write_scores
 from classifiers.experiments.plots import plot_calibration, plot_roc
 from classifiers.learners.models import make_model, make_regressor
+from classifiers.learners.parallel import fit_all, run_all
 from classifiers.learners.persistence import dataset_checksum, save_model
 from classifiers.learners.ranking import GroupedRanker, make_ranker, relevance
 from classifiers.learners.threads import single_threaded
@@ -75,8 +76,9 @@ def _train_and_save(table: pd.DataFrame, out_dir: str | Path, config: Config) ->
     metrics["dataset"] = {"sha256": checksum, "rows": len(table)}
     labels = table[LABEL_COLUMN].to_numpy().astype(bool)
     sampled = {}
-    for name in learning.models:
-        model = make_model(name, learning.seed, FEATURES).fit(table, labels)
+    fitted = fit_all(((make_model(name, learning.seed, FEATURES), table, labels)
+                      for name in learning.models), learning.workers)  # fmt: skip
+    for name, model in zip(learning.models, fitted, strict=True):
         meta = {"features": list(FEATURES), "dataset_sha256": checksum, "seed": learning.seed}
         save_model(model, out_dir / "models", name, meta)
         sampled |= sampled_fit(name, model, len(table))
@@ -103,7 +105,7 @@ def family_holdout_scores(table: pd.DataFrame, config: Config) -> dict[str, Any]
     (:func:`classifiers.evaluation.cross_validation.family_holdout_metrics`)."""
     learning = config.learning
     models = {name: make_model(name, learning.seed, FEATURES) for name in learning.models}
-    return family_holdout_metrics(table, object_families(table), models)
+    return family_holdout_metrics(table, object_families(table), models, learning.workers)
 
 
 def train_regressors(
@@ -115,8 +117,9 @@ def train_regressors(
     result["dataset"] = {"sha256": checksum, "rows": len(table)}
     target = table[TARGET_COLUMN].to_numpy(float)
     result["sampled"] = {}
-    for name in learning.regressors:
-        model = make_regressor(name, learning.seed, FEATURES).fit(table, target)
+    fitted = fit_all(((make_regressor(name, learning.seed, FEATURES), table, target)
+                      for name in learning.regressors), learning.workers)  # fmt: skip
+    for name, model in zip(learning.regressors, fitted, strict=True):
         meta = {"features": list(FEATURES), "target": TARGET_COLUMN, "dataset_sha256": checksum,
                 "seed": learning.seed}  # fmt: skip
         save_model(model, out_dir / "models", f"regressor_{name}", meta)
@@ -141,8 +144,9 @@ def train_rankers(
     result["dataset"] = {"sha256": checksum, "rows": len(table)}
     (out_dir / "ranking.json").write_text(json.dumps(result, indent=2))
     grades = relevance(table, config.sim)
-    for name in learning.rankers:
-        model = make_ranker(name, learning.seed, FEATURES).fit(table, grades)
+    fitted = fit_all(((make_ranker(name, learning.seed, FEATURES), table, grades)
+                      for name in learning.rankers), learning.workers)  # fmt: skip
+    for name, model in zip(learning.rankers, fitted, strict=True):
         meta = {"features": list(FEATURES), "target": result["relevance"],
                 "dataset_sha256": checksum, "seed": learning.seed}  # fmt: skip
         if isinstance(model, GroupedRanker):
@@ -162,15 +166,23 @@ def _held_out_plots(table: pd.DataFrame, config: Config, out_dir: Path) -> None:
     labels = table[LABEL_COLUMN].to_numpy().astype(bool)
     if np.unique(labels).size < 2:
         return  # curves are undefined with one class
+    folds = [(train, test) for train, test in grouped_folds(table, learning.folds, learning.seed)
+             if np.unique(labels[train]).size == 2]  # fmt: skip
+    fits = [(name, train, test) for train, test in folds for name in learning.models]
+    jobs = [(make_model(name, learning.seed, FEATURES), table.iloc[train], labels[train],
+             table.iloc[test]) for name, train, test in fits]  # fmt: skip
+    found = run_all(_fitted_probability, jobs, len(table), learning.workers)
     probabilities = {name: np.full(len(table), np.nan) for name in learning.models}
-    for train, test in grouped_folds(table, learning.folds, learning.seed):
-        if np.unique(labels[train]).size < 2:
-            continue
-        for name in learning.models:
-            model = make_model(name, learning.seed, FEATURES).fit(table.iloc[train], labels[train])
-            probabilities[name][test] = positive_probability(model, table.iloc[test])
+    for (name, _, test), probability in zip(fits, found, strict=True):
+        probabilities[name][test] = probability
     scored = np.all([np.isfinite(p) for p in probabilities.values()], axis=0)
     pooled = {name: p[scored] for name, p in probabilities.items()}
     title = f"{learning.folds}-fold grouped CV, out-of-fold predictions pooled"
     plot_roc(labels[scored], pooled, out_dir / "roc.png", title)
     plot_calibration(labels[scored], pooled, out_dir / "calibration.png", title=title)
+
+
+def _fitted_probability(model: Pipeline, train: pd.DataFrame, labels: np.ndarray,
+                        test: pd.DataFrame) -> np.ndarray:
+    """``model`` fitted on ``train``; its positive-class probability on ``test``."""
+    return positive_probability(model.fit(train, labels), test)
