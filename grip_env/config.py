@@ -268,9 +268,11 @@ class LearningConfig(_Section):
         "times mlp_sklearn's cost a fit)",
     )
     regressors: tuple[str, ...] = Field(
-        ("svr", "mlp_sklearn", "ridge", "hgb", "rank_qc", "rank_qg", "random"),
+        ("svr", "ridge", "hgb", "rank_qc", "rank_qg", "random"),
         min_length=1,
-        description="regressors of robustness_mean trained and compared",
+        description="regressors of robustness_mean trained and compared (the registry's "
+        "mlp_sklearn and mlp_torch too; on the standard dataset mlp_sklearn cost seven times hgb a "
+        "fit and ranked worse)",
     )
     rankers: tuple[str, ...] = Field(
         ("lambdarank", "rank_qc", "rank_qg", "random"),
@@ -278,7 +280,7 @@ class LearningConfig(_Section):
         description="learning-to-rank models (a group: one object's grips) trained and compared",
     )
     seeds: int = Field(
-        5, ge=1, le=100,
+        4, ge=1, le=100,
         description="training seeds (seed, seed+1, ...) of every learner scored on the held-out "
         "objects",
     )

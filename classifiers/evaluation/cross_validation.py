@@ -225,11 +225,16 @@ def cross_validate(table: pd.DataFrame, task: Task, models: Models,
     ``models`` is a list of registry names (built with ``task.make(name, seed, features)`` for
     each repeat's seed) or a mapping of name → estimator (cloned for each fold).
     """
-    config = config or LearningConfig()
+    return _cross_validate(table, task, models, features, config or LearningConfig())[0]
+
+
+def _cross_validate(table: pd.DataFrame, task: Task, models: Models, features: Sequence[str],
+                    config: LearningConfig, predict: Predict | None = None) -> CVResult:
     check_dataset(table, features, config.folds)
     table = table.reset_index(drop=True)
     return grouped_cv(table, task.target(table),
-                      lambda seed: fresh_models(task, models, seed, features), task.score, config)
+                      lambda seed: fresh_models(task, models, seed, features), task.score, config,
+                      predict)
 
 
 def fresh_models(task: Task, models: Models, seed: int,
@@ -272,12 +277,21 @@ def cross_validate_models(table: pd.DataFrame, models: Models,
     return cross_validate(table, CLASSIFICATION, models, features, config)
 
 
+Predict = Callable[[BaseEstimator, pd.DataFrame], np.ndarray]
+#: Per-fold rows, and each model's out-of-fold ``predict`` of the first repeat (one value per
+#: table row, NaN on a fold left out; empty without ``predict``).
+CVResult = tuple[pd.DataFrame, dict[str, np.ndarray]]
+
+
 def grouped_cv(
     table: pd.DataFrame, target: np.ndarray, fresh: Callable[[int], Mapping[str, BaseEstimator]],
     score: Callable[[BaseEstimator, pd.DataFrame], Mapping[str, float]], config: LearningConfig,
-) -> pd.DataFrame:
+    predict: Predict | None = None,
+) -> CVResult:
     """The repeated grouped folds: ``fresh(seed)`` estimators fitted on each training fold,
-    ``score(model, test)`` on its test fold; one row per (model, repeat, fold).
+    ``score(model, test)`` on its test fold; one row per (model, repeat, fold). With
+    ``predict``, the first repeat's fitted models also give ``predict(model, test)``, pooled
+    into one out-of-fold prediction per row (what a ROC curve of the CV plots, at no extra fit).
 
     The folds are fitted in ``config.workers`` processes (:mod:`classifiers.learners.parallel`);
     every fit is seeded by its repeat alone, so the rows are the same whatever the number of
@@ -292,32 +306,39 @@ def grouped_cv(
                                                                config.seed + repeat))]
     run_fold = delayed(_fold_records)
     records: list[dict[str, Any]] = []
+    pooled: dict[str, np.ndarray] = {}
     with progress_bar(len(jobs), "cross-validation") as bar:
         workers = worker_count(len(table), config.workers, len(jobs))
         found = Parallel(n_jobs=workers, return_as="generator")(
-            run_fold(table, target, fresh, score, config.seed + repeat, repeat, fold, train, test)
+            run_fold(table, target, fresh, score, config.seed + repeat, repeat, fold, train, test,
+                     predict if repeat == 0 else None)
             for repeat, fold, train, test in jobs)
-        for rows in found:
+        for (rows, predictions), (_, _, _, test) in zip(found, jobs, strict=True):
             records += rows
+            for name, values in predictions.items():
+                pooled.setdefault(name, np.full(len(table), np.nan))[test] = values
             bar.advance()
-    return pd.DataFrame.from_records(records)
+    return pd.DataFrame.from_records(records), pooled
 
 
 def _fold_records(
     table: pd.DataFrame, target: np.ndarray, fresh: Callable[[int], Mapping[str, BaseEstimator]],
     score: Callable[[BaseEstimator, pd.DataFrame], Mapping[str, float]], seed: int, repeat: int,
-    fold: int, train: np.ndarray, test: np.ndarray,
-) -> list[dict[str, Any]]:
-    """One fold of :func:`grouped_cv`: every model fitted and scored, on one thread."""
+    fold: int, train: np.ndarray, test: np.ndarray, predict: Predict | None,
+) -> tuple[list[dict[str, Any]], dict[str, np.ndarray]]:
+    """One fold of :func:`grouped_cv`: every model fitted and scored (and its ``predict`` on
+    the test fold, when given), on one thread."""
     if target.dtype == bool and np.unique(target[train]).size < 2:
-        return []
-    records = []
+        return [], {}
+    records, predictions = [], {}
     with single_threaded():
         for name, model in fresh(seed).items():
             fit_fold(name, model, table.iloc[train], target[train])
             records.append({"model": name, "repeat": repeat, "fold": fold,
                             **score(model, table.iloc[test])})
-    return records
+            if predict is not None:
+                predictions[name] = predict(model, table.iloc[test])
+    return records, predictions
 
 
 def fit_fold(name: str, model: BaseEstimator, train: pd.DataFrame, target: np.ndarray) -> None:
@@ -343,12 +364,24 @@ def evaluate_models(
 
     ``{"models": {name: {metric: {"mean": m, "ci": [lo, hi]}}}, "cv": {...}}``
     """
+    return evaluate_models_out_of_fold(table, models, features, config)[0]
+
+
+def evaluate_models_out_of_fold(
+    table: pd.DataFrame,
+    models: Sequence[str] | Mapping[str, BaseEstimator],
+    features: Sequence[str] = FEATURES,
+    config: LearningConfig | None = None,
+) -> tuple[dict[str, Any], dict[str, np.ndarray]]:
+    """:func:`evaluate_models`, and each model's positive-class probability of every grip from
+    the first repeat's fold that held it out (NaN on a fold left out), in the table's row
+    order."""
     config = config or LearningConfig()
-    per_fold = cross_validate_models(table, models, features, config)
-    return {
-        "models": summarise(per_fold, config.folds),
-        "cv": cv_description(table, features, config),
-    }
+    per_fold, probabilities = _cross_validate(table, CLASSIFICATION, models, features, config,
+                                              positive_probability)
+    summary = {"models": summarise(per_fold, config.folds),
+               "cv": cv_description(table, features, config)}
+    return summary, probabilities
 
 
 def summarise(per_fold: pd.DataFrame, folds: int) -> dict[str, dict[str, dict[str, Any]]]:

@@ -81,15 +81,20 @@ def held_out_candidates(table: pd.DataFrame, config: Config) -> dict[str, pd.Dat
 def score_frame(object_id: str, seed: int, method: str, rows: pd.DataFrame,
                 score: np.ndarray) -> pd.DataFrame:
     """One object's rows of :data:`SCORE_COLUMNS`; wrong length or NaN scores → ValueError."""
-    score = np.asarray(score, dtype=np.float64)
-    if score.shape != (len(rows),) or not np.isfinite(score).all():
-        raise ValueError(f"{method} seed {seed}: scores of shape {score.shape} (finite: "
-                         f"{bool(np.isfinite(score).all())}) for {len(rows)} candidates")
+    score = _checked(np.asarray(score, dtype=np.float64), len(rows), method, seed)
     return pd.DataFrame({
         "object_id": str(object_id), "seed": np.int64(seed), "method": method,
         "candidate": np.arange(len(rows), dtype=np.int64),
         "grip_id": rows["grip_id"].astype(str).to_numpy(), "score": score,
     })  # fmt: skip
+
+
+def _checked(score: np.ndarray, count: int, method: str, seed: int) -> np.ndarray:
+    """``score`` when it holds ``count`` finite values, else a ValueError naming the run."""
+    if score.shape != (count,) or not np.isfinite(score).all():
+        raise ValueError(f"{method} seed {seed}: scores of shape {score.shape} (finite: "
+                         f"{bool(np.isfinite(score).all())}) for {count} candidates")
+    return score
 
 
 def learner_scores(table: pd.DataFrame, config: Config) -> pd.DataFrame:
@@ -112,12 +117,34 @@ def learner_scores(table: pd.DataFrame, config: Config) -> pd.DataFrame:
     fitted_seed = {(method, seed): seeds[0] if method in free else seed
                    for method in jobs for seed in seeds}  # fmt: skip
     fits = list(dict.fromkeys((method, fitted) for (method, _), fitted in fitted_seed.items()))
-    found = run_all(_fitted_scores, [(train, candidates, method, *jobs[method], seed)
+    stacked = pd.concat(candidates.values(), ignore_index=True)
+    found = run_all(_fitted_scores, [(train, stacked, method, *jobs[method], seed)
                                      for method, seed in fits], len(train), learning.workers)
     scores = dict(zip(fits, found, strict=True))
-    frames = [score_frame(oid, seed, method, rows, scores[method, fitted_seed[method, seed]][oid])
-              for seed in seeds for method in jobs for oid, rows in candidates.items()]
-    return pd.concat(frames, ignore_index=True)
+    runs = [(seed, method) for seed in seeds for method in jobs]
+    return _score_table(candidates, stacked, runs,
+                        [scores[method, fitted_seed[method, seed]] for seed, method in runs])
+
+
+def _score_table(candidates: dict[str, pd.DataFrame], stacked: pd.DataFrame,
+                 runs: list[tuple[int, str]], scores: list[np.ndarray]) -> pd.DataFrame:
+    """:data:`SCORE_COLUMNS` of every (seed, method) run's ``scores`` of the ``stacked``
+    candidates (each object's in slot order, objects in ``candidates``' order), built column by
+    column; a NaN score or one of the wrong length is a ValueError naming the run."""
+    for (seed, method), score in zip(runs, scores, strict=True):
+        _checked(score, len(stacked), method, seed)
+    sizes = [len(rows) for rows in candidates.values()]
+    object_ids = np.repeat(np.array(list(candidates), dtype=object), sizes)
+    slots = np.concatenate([np.arange(size, dtype=np.int64) for size in sizes])
+    count = len(runs)
+    return pd.DataFrame({
+        "object_id": np.tile(object_ids, count),
+        "seed": np.repeat(np.array([seed for seed, _ in runs], dtype=np.int64), len(stacked)),
+        "method": np.repeat(np.array([method for _, method in runs], dtype=object), len(stacked)),
+        "candidate": np.tile(slots, count),
+        "grip_id": np.tile(stacked["grip_id"].astype(str).to_numpy(dtype=object), count),
+        "score": np.concatenate(scores).astype(np.float64),
+    })  # fmt: skip
 
 
 Maker = Callable[[int], BaseEstimator]
@@ -150,11 +177,13 @@ def _plain_params(estimator: BaseEstimator) -> dict[str, object]:
             if not isinstance(value, BaseEstimator | list)}  # fmt: skip
 
 
-def _fitted_scores(train: pd.DataFrame, candidates: dict[str, pd.DataFrame], method: str,
-                   make: Maker, target: np.ndarray, seed: int) -> dict[str, np.ndarray]:
-    """Each held-out object's candidate scores by ``make(seed)`` fitted on ``train``."""
+def _fitted_scores(train: pd.DataFrame, stacked: pd.DataFrame, method: str, make: Maker,
+                   target: np.ndarray, seed: int) -> np.ndarray:
+    """The scores of every held-out candidate by ``make(seed)`` fitted on ``train``, in one
+    call (row by row: a score never depends on the other rows of the call, except the chance
+    baselines', which draw one seeded number a row)."""
     model = make(seed).fit(train, target)
-    return {oid: _score(method, model, rows) for oid, rows in candidates.items()}
+    return _score(method, model, stacked)
 
 
 def _maker(factory: Callable[..., BaseEstimator], name: str) -> Maker:

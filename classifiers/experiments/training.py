@@ -37,19 +37,17 @@ from sklearn.pipeline import Pipeline
 
 from classifiers.evaluation.cross_validation import (
     LABEL_COLUMN,
-    evaluate_models,
+    evaluate_models_out_of_fold,
     family_holdout_metrics,
-    grouped_folds,
     held_out_metrics,
     object_families,
-    positive_probability,
 )
 from classifiers.evaluation.ranking import evaluate_rankers
 from classifiers.evaluation.regression import TARGET_COLUMN, evaluate_regressors, has_target
 from classifiers.experiments.candidate_scores import SCORES_FILE, learner_scores, write_scores
 from classifiers.experiments.plots import plot_calibration, plot_roc
 from classifiers.learners.models import make_model, make_regressor
-from classifiers.learners.parallel import fit_all, run_all
+from classifiers.learners.parallel import fit_all
 from classifiers.learners.persistence import dataset_checksum, save_model
 from classifiers.learners.ranking import GroupedRanker, make_ranker, relevance
 from classifiers.learners.threads import single_threaded
@@ -70,7 +68,7 @@ def _train_and_save(table: pd.DataFrame, out_dir: str | Path, config: Config) ->
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     checksum = dataset_checksum(table)
-    metrics = evaluate_models(table, learning.models, FEATURES, learning)
+    metrics, out_of_fold = evaluate_models_out_of_fold(table, learning.models, FEATURES, learning)
     metrics["held_out"] = held_out_scores(table, config)
     metrics["family_holdout"] = family_holdout_scores(table, config)
     metrics["dataset"] = {"sha256": checksum, "rows": len(table)}
@@ -84,7 +82,7 @@ def _train_and_save(table: pd.DataFrame, out_dir: str | Path, config: Config) ->
         sampled |= sampled_fit(name, model, len(table))
     metrics["sampled"] = sampled  # the kernel learners' stated subsamples (all grips: absent)
     (out_dir / "metrics.json").write_text(json.dumps(metrics, indent=2))
-    _held_out_plots(table, config, out_dir)
+    _out_of_fold_plots(table, out_of_fold, learning.folds, out_dir)
     if has_target(table):
         train_regressors(table, out_dir, config, checksum)
     train_rankers(table, out_dir, config, checksum)
@@ -159,30 +157,14 @@ def train_rankers(
     return result
 
 
-def _held_out_plots(table: pd.DataFrame, config: Config, out_dir: Path) -> None:
-    """ROC and reliability from pooled out-of-fold predictions (the CV's first repeat)."""
-    learning = config.learning
-    table = table.reset_index(drop=True)
+def _out_of_fold_plots(table: pd.DataFrame, probabilities: dict[str, np.ndarray], folds: int,
+                       out_dir: Path) -> None:
+    """ROC and reliability from the CV's pooled out-of-fold predictions (its first repeat)."""
     labels = table[LABEL_COLUMN].to_numpy().astype(bool)
-    if np.unique(labels).size < 2:
+    if np.unique(labels).size < 2 or not probabilities:
         return  # curves are undefined with one class
-    folds = [(train, test) for train, test in grouped_folds(table, learning.folds, learning.seed)
-             if np.unique(labels[train]).size == 2]  # fmt: skip
-    fits = [(name, train, test) for train, test in folds for name in learning.models]
-    jobs = [(make_model(name, learning.seed, FEATURES), table.iloc[train], labels[train],
-             table.iloc[test]) for name, train, test in fits]  # fmt: skip
-    found = run_all(_fitted_probability, jobs, len(table), learning.workers)
-    probabilities = {name: np.full(len(table), np.nan) for name in learning.models}
-    for (name, _, test), probability in zip(fits, found, strict=True):
-        probabilities[name][test] = probability
     scored = np.all([np.isfinite(p) for p in probabilities.values()], axis=0)
     pooled = {name: p[scored] for name, p in probabilities.items()}
-    title = f"{learning.folds}-fold grouped CV, out-of-fold predictions pooled"
+    title = f"{folds}-fold grouped CV, out-of-fold predictions pooled"
     plot_roc(labels[scored], pooled, out_dir / "roc.png", title)
     plot_calibration(labels[scored], pooled, out_dir / "calibration.png", title=title)
-
-
-def _fitted_probability(model: Pipeline, train: pd.DataFrame, labels: np.ndarray,
-                        test: pd.DataFrame) -> np.ndarray:
-    """``model`` fitted on ``train``; its positive-class probability on ``test``."""
-    return positive_probability(model.fit(train, labels), test)

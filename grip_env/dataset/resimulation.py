@@ -195,22 +195,37 @@ def retest(path: str | Path, objects: int, seed: int = 0, workers: int = 1) -> R
     Raises:
         ValueError: ``objects`` is not a positive integer, or the dataset is unreadable.
     """
-    if isinstance(objects, bool) or not isinstance(objects, int | np.integer) or objects < 1:
-        raise ValueError(f"--retest takes a positive number of objects, got {objects!r}")
-    directory = Path(path)
-    manifest = read_manifest(directory)
-    table = load(directory, allow_partial=True)
-    sizes = table.groupby("object_id", sort=False).size()
-    eligible = sizes.index[sizes >= MIN_RETEST_GRIPS].tolist()
-    rng = np.random.default_rng(seed)
-    chosen = [eligible[i] for i in rng.permutation(len(eligible))[: int(objects)]]
-    checks = _checks(directory, manifest, table, chosen)
+    checks = _retest_sample(Path(path), objects, seed)
     if workers > 1 and len(checks) > 1:
         with ProcessPoolExecutor(min(workers, len(checks))) as pool:
             means = list(pool.map(_retest_means, checks))
     else:
         means = [_retest_means(check) for check in checks]
     return _retest_figures(checks, means, seed)
+
+
+def retest_sample(path: str | Path, objects: int,
+                  seed: int = 0) -> list[tuple[ObjectTask, pd.DataFrame]]:
+    """The objects :func:`retest` simulates again: a seeded sample of ``objects`` objects with
+    at least :data:`MIN_RETEST_GRIPS` grips, each as (the task that planned it, its recorded
+    rows).
+
+    Raises:
+        ValueError: as :func:`retest`.
+    """
+    return [(check.task, check.recorded) for check in _retest_sample(Path(path), objects, seed)]
+
+
+def _retest_sample(directory: Path, objects: int, seed: int) -> list[_ObjectCheck]:
+    if isinstance(objects, bool) or not isinstance(objects, int | np.integer) or objects < 1:
+        raise ValueError(f"--retest takes a positive number of objects, got {objects!r}")
+    manifest = read_manifest(directory)
+    table = load(directory, allow_partial=True)
+    sizes = table.groupby("object_id", sort=False).size()
+    eligible = sizes.index[sizes >= MIN_RETEST_GRIPS].tolist()
+    rng = np.random.default_rng(seed)
+    chosen = [eligible[i] for i in rng.permutation(len(eligible))[: int(objects)]]
+    return _checks(directory, manifest, table, chosen)
 
 
 def _checks(directory: Path, manifest: dict, table: pd.DataFrame,

@@ -11,6 +11,13 @@ trials 0..t-1, set B trials T..T+t-1, for t = 1..T (independent draws are indepe
 stratified scheme stratifies blocks of ``dataset.trials`` = T). Per object: Spearman of the A
 and B grip means; the figure is their mean over objects with a bootstrap interval over objects,
 and the pooled Spearman over all grips. The cost: core-seconds per grip per trial.
+
+    python -m tests.benchmarks.label_reliability --data standard --objects 40 --trials 5
+
+With ``--data``, the objects are those ``grip-env validate DATA --retest N`` draws (all their
+recorded grips) and the scheme is the dataset's own: its recorded ``R`` trials stand as trials
+0..R-1 (their mean), trials R..2T-1 are simulated with the dataset's config and seed, and the
+figure is given for t = R..T.
 """
 
 from __future__ import annotations
@@ -26,7 +33,9 @@ import pandas as pd
 from scipy import stats
 
 from grip_env.config import Config
+from grip_env.dataset.resimulation import retest_sample
 from grip_env.dataset.sampling import keep_grips
+from grip_env.datasets import standard_path
 from grip_env.objects import PlanarObject, load_object_set, procedural_objects
 from grip_env.planning.pipeline import candidates
 from grip_env.sim import run_trial_outcomes
@@ -79,6 +88,33 @@ def outcomes(count: int, trials: int, workers: int, cache: str | None,
     return table
 
 
+def dataset_outcomes(path: str, count: int, trials: int, workers: int) -> pd.DataFrame:
+    """The ``--data`` rows: each recorded grip's mean as trials 0..R-1, then trials R..2T-1."""
+    sample = retest_sample(standard_path() if path == "standard" else path, count)
+    recorded = sample[0][0].config.dataset.trials
+    if trials < recorded:
+        raise ValueError(f"--trials must be at least the dataset's {recorded}, got {trials}")
+    with ProcessPoolExecutor(workers) as pool:
+        found = list(pool.map(_extend, [(task, rows, 2 * trials) for task, rows in sample]))
+    return pd.concat(found, ignore_index=True)
+
+
+def _extend(job: tuple) -> pd.DataFrame:
+    task, rows, total = job
+    config = task.config
+    recorded = config.dataset.trials
+    grips = rows.assign(object_id=task.object_id).reset_index(drop=True)
+    started = time.process_time()
+    new = run_trial_outcomes(task.obj, grips, config, total - recorded, config.dataset.seed,
+                             trial_offset=recorded)
+    seconds = time.process_time() - started
+    old = pd.DataFrame({"grip": np.repeat(grips.index.to_numpy(), recorded),
+                        "trial": np.tile(np.arange(recorded), len(grips)),
+                        "robustness": np.repeat(grips["robustness_mean"].to_numpy(), recorded)})
+    return pd.concat([old, new[["grip", "trial", "robustness"]]], ignore_index=True).assign(
+        object=task.object_id, scheme="dataset", core_s=seconds / len(new), recorded=recorded)
+
+
 def retest(table: pd.DataFrame, trials: int, t: int, resamples: int = 2000) -> dict:
     """Within-object and pooled Spearman of set A (trials 0..t-1) against B (T..T+t-1)."""
     a = table[table["trial"] < t].groupby(["object", "grip"])["robustness"].mean()
@@ -106,10 +142,17 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--cache", default=None)
     parser.add_argument("--schemes", nargs="*", choices=tuple(SCHEMES), default=list(SCHEMES))
+    parser.add_argument("--data", default=None, help="a dataset folder or 'standard'")
     args = parser.parse_args()
     started = time.perf_counter()
-    table = outcomes(args.objects, args.trials, args.workers, args.cache, tuple(args.schemes))
-    result = {name: {"retest": [retest(part, args.trials, t) for t in range(1, args.trials + 1)],
+    if args.data:
+        table = dataset_outcomes(args.data, args.objects, args.trials, args.workers)
+        first = int(table["recorded"].iloc[0])
+    else:
+        table = outcomes(args.objects, args.trials, args.workers, args.cache, tuple(args.schemes))
+        first = 1
+    result = {name: {"retest": [retest(part, args.trials, t)
+                                for t in range(first, args.trials + 1)],
                      "core_s_per_trial": round(float(part["core_s"].mean()), 3)}
               for name, part in table.groupby("scheme", sort=False)}
     print(json.dumps({"objects": args.objects, "trials": args.trials, "result": result,
