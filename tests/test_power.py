@@ -153,7 +153,7 @@ def test_power_curve_measures_both_axes_on_real_subsamples(grips):
 
 def test_report_section_renders_the_curve_and_the_projection(tmp_path):
     summary = power.summarise_curve(_curve())
-    assert summary["projection"]["rl_minus_best_qc"]["inf"] == math.ceil(0.3 / 0.08**2)
+    assert summary["projection"]["rl_minus_best_qc"]["inf"] == math.ceil(0.3 / 0.06**2)
     (tmp_path / "power").mkdir()
     (tmp_path / "power" / "power.json").write_text(json.dumps(summary))
     plot_power(summary, tmp_path / "power" / "power.png")
@@ -165,9 +165,9 @@ def test_report_section_renders_the_curve_and_the_projection(tmp_path):
     assert "Statistical power" in text and "![" in text and "power/power.png" in text
     assert "best model's ROC-AUC" in text and "objects needed" in text
     mean, half = power.paired_bootstrap(np.array(RL), np.array(BEST_QC), seed=0)
-    needed = math.ceil(40 * (half / 0.08) ** 2)
-    verdict = "yes" if half <= 0.08 else "no"
-    row = f"| {mean:.3f} | {half:.3f} | 40 | 0.080 | {verdict} | {needed} |"
+    needed = math.ceil(40 * (half / 0.06) ** 2)
+    verdict = "yes" if half <= 0.06 else "no"
+    row = f"| {mean:.3f} | {half:.3f} | 40 | 0.060 | {verdict} | {needed} |"
     assert f"| RL − best Q_C (held out) {row}" in text
 
 
@@ -177,7 +177,7 @@ def test_report_section_without_a_curve_says_how_to_get_one(tmp_path):
     power_section(report, tmp_path)
     text = report.to_markdown()
     assert "grip-env power --data" in text and "power/power.png" not in text
-    assert "| best model's ROC-AUC | 0.700 | 0.060 | 40 | 0.050 | no | 58 |" in text
+    assert "| best model's ROC-AUC | 0.700 | 0.060 | 40 | 0.030 | no | 160 |" in text
 
 
 RL = [0.0, 1.0, 0.5, 1.0, 0.2, 0.9, 1.0, 0.0, 0.7, 1.0]
@@ -234,3 +234,23 @@ def test_a_quantity_no_subsample_can_measure_is_named_not_fitted(tmp_path):
     curve["half_width"] = float("nan")
     with pytest.raises(ValueError, match=r"no subsample of this dataset \(40 objects at most\)"):
         power.summarise_curve(curve)
+
+
+def test_report_section_takes_the_leaderboards_paired_rl_difference_and_the_datasets_trials(
+        tmp_path):
+    """A study on the standard dataset has no dataset/ folder: the trials come from the dataset
+    data.json names; the RL row is the leaderboard's paired difference over every seed."""
+    _study_results(tmp_path)
+    data = tmp_path / "elsewhere"
+    data.mkdir()
+    (data / "manifest.json").write_text(json.dumps({"trials": 3}))
+    (tmp_path / "data.json").write_text(json.dumps({"dataset": str(data)}))
+    (tmp_path / "benchmark").mkdir()
+    board = {"reference": "best_qc", "methods": {"rl": {"success_difference_vs_reference": {
+        "estimate": 0.033, "ci": [0.002, 0.066]}}}}
+    (tmp_path / "benchmark" / "leaderboard.json").write_text(json.dumps(board))
+    report = Report("t")
+    power_section(report, tmp_path)
+    text = report.to_markdown()
+    assert "at 3 trials per grip" in text
+    assert "| RL − best Q_C (held out) | 0.033 | 0.032 | 40 | 0.060 | yes | 12 |" in text

@@ -51,8 +51,8 @@ def test_a_zero_width_half_width_is_not_called_met(tmp_path):
     report = Report("t")
     power_section(report, tmp_path)
     text = report.to_markdown()
-    assert "| hand features (paired ΔAUC) | 0.000 | 0.000 | 40 | 0.020 | not judged | – |" in text
-    assert "| RL − best Q_C (held out) | 0.000 | 0.000 | 40 | 0.080 | not judged | – |" in text
+    assert "| hand features (paired ΔAUC) | 0.000 | 0.000 | 40 | 0.030 | not judged | – |" in text
+    assert "| RL − best Q_C (held out) | 0.000 | 0.000 | 40 | 0.060 | not judged | – |" in text
     assert "| yes |" not in text and "zero width" in text
     assert target_met(0.01, 0.02, 40) == ("yes", None)
     assert target_met(0.01, 0.02, 7)[0] == "not judged"  # within target, but on 7 objects

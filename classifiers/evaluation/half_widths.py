@@ -11,8 +11,9 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from scipy.optimize import nnls
 
-#: The three questions' half-width targets (issue 13).
-TARGETS: dict[str, float] = {"roc_auc": 0.05, "hand_difference": 0.02, "rl_minus_best_qc": 0.08}
+#: The three questions' half-width targets (issue 31: the standard dataset's study answers them;
+#: issue 13's were 0.05, 0.02 and 0.08).
+TARGETS: dict[str, float] = {"roc_auc": 0.03, "hand_difference": 0.03, "rl_minus_best_qc": 0.06}
 #: The power experiment's result file and its figure (in its output folder).
 POWER_FILE = "power.json"
 FIGURE_FILE = "power.png"

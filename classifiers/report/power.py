@@ -51,7 +51,12 @@ def study_half_widths(out: Path) -> dict[str, dict[str, float]]:
         value = block.get(ablation["model"], {}).get("roc_auc")
         if value and value["mean"] is not None:
             found["hand_difference"] = _from_interval(value, ablation["cv"]["n_objects"])
-    if selector and {"rl", "best_qc"} <= set(selector["policies"]):
+    board = _json(out / "benchmark" / "leaderboard.json")
+    paired = _rl_difference(board) if board else None
+    if selector and paired:
+        n = len(selector["split"]["train"]) + len(selector["split"]["test"])
+        found["rl_minus_best_qc"] = {"objects": n, **paired}
+    elif selector and {"rl", "best_qc"} <= set(selector["policies"]):
         policies = selector["policies"]
         mean, half = paired_bootstrap(np.asarray(policies["rl"]["per_object"]),
                                       np.asarray(policies["best_qc"]["per_object"]),
@@ -59,6 +64,17 @@ def study_half_widths(out: Path) -> dict[str, dict[str, float]]:
         n = len(selector["split"]["train"]) + len(selector["split"]["test"])
         found["rl_minus_best_qc"] = {"objects": n, "estimate": mean, "half_width": half}
     return found
+
+
+def _rl_difference(board: dict[str, Any]) -> dict[str, float] | None:
+    """The leaderboard's paired RL − best-Q_C difference in top-1 success over every held-out
+    object and every selector seed (``success_difference_vs_reference``), if it has one."""
+    rl = board.get("methods", {}).get("rl", {})
+    paired = rl.get("success_difference_vs_reference")
+    if board.get("reference") != "best_qc" or not paired or paired.get("ci") is None:
+        return None
+    low, high = paired["ci"]
+    return {"estimate": paired["estimate"], "half_width": (high - low) / 2.0}
 
 
 def _from_interval(value: dict[str, Any], objects: int) -> dict[str, float]:
@@ -223,7 +239,12 @@ def _held(rows: pd.DataFrame, axis: str) -> str:
 
 
 def _study_trials(out: Path) -> str:
-    manifest = _json(out / "dataset" / "manifest.json") or {}
+    """Trials per grip of the dataset the study learnt on: its own ``dataset/`` or the one
+    ``data.json`` names (the standard dataset)."""
+    manifest = _json(out / "dataset" / "manifest.json")
+    if manifest is None:
+        data = _json(out / "data.json") or {}
+        manifest = _json(Path(data.get("dataset", out / "dataset")) / "manifest.json") or {}
     return str(manifest.get("trials", "?"))
 
 
