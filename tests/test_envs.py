@@ -492,8 +492,8 @@ def test_docs_sb3_snippet_runs_on_a_generated_dataset(generated_dataset_dir, cap
     page = Path(__file__).resolve().parents[1] / "docs" / "environments" / "sb3.md"
     section = page.read_text()
     code = section[section.index("```python") + len("```python"):section.index("```\n\n")]
-    assert 'data = "data"' in code and "learn(5_000)" in code and "range(500)" in code
-    code = code.replace('data = "data"', f"data = {str(generated_dataset_dir)!r}")
+    assert 'data = "standard"' in code and "learn(5_000)" in code and "range(500)" in code
+    code = code.replace('data = "standard"', f"data = {str(generated_dataset_dir)!r}")
     code = code.replace("learn(5_000)", "learn(64)").replace("range(500)", "range(10)")
     exec(compile(code, str(page), "exec"), {})
     line = capsys.readouterr().out.strip().splitlines()[-1]

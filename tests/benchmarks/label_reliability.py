@@ -12,7 +12,8 @@ stratified scheme stratifies blocks of ``dataset.trials`` = T). Per object: Spea
 and B grip means; the figure is their mean over objects with a bootstrap interval over objects,
 and the pooled Spearman over all grips. The cost: core-seconds per grip per trial.
 
-    python -m tests.benchmarks.label_reliability --data standard --objects 40 --trials 5
+    python -m tests.benchmarks.label_reliability --data standard --objects 40 --trials 5 \
+        --cache runs/reliability
 
 With ``--data``, the objects are those ``grip-env validate DATA --retest N`` draws (all their
 recorded grips) and the scheme is the dataset's own: its recorded ``R`` trials stand as trials
@@ -88,15 +89,24 @@ def outcomes(count: int, trials: int, workers: int, cache: str | None,
     return table
 
 
-def dataset_outcomes(path: str, count: int, trials: int, workers: int) -> pd.DataFrame:
-    """The ``--data`` rows: each recorded grip's mean as trials 0..R-1, then trials R..2T-1."""
+def dataset_outcomes(path: str, count: int, trials: int, workers: int,
+                     cache: str | None = None) -> pd.DataFrame:
+    """The ``--data`` rows: each recorded grip's mean as trials 0..R-1, then trials R..2T-1
+    (cached in ``cache``/reliability_data_<objects>_<T>.parquet)."""
+    stored = Path(cache) / f"reliability_data_{count}_{trials}.parquet" if cache else None
+    if stored is not None and stored.exists():
+        return pd.read_parquet(stored)
     sample = retest_sample(standard_path() if path == "standard" else path, count)
     recorded = sample[0][0].config.dataset.trials
     if trials < recorded:
         raise ValueError(f"--trials must be at least the dataset's {recorded}, got {trials}")
     with ProcessPoolExecutor(workers) as pool:
         found = list(pool.map(_extend, [(task, rows, 2 * trials) for task, rows in sample]))
-    return pd.concat(found, ignore_index=True)
+    table = pd.concat(found, ignore_index=True)
+    if stored is not None:
+        stored.parent.mkdir(parents=True, exist_ok=True)
+        table.to_parquet(stored)
+    return table
 
 
 def _extend(job: tuple) -> pd.DataFrame:
@@ -146,7 +156,7 @@ def main() -> None:
     args = parser.parse_args()
     started = time.perf_counter()
     if args.data:
-        table = dataset_outcomes(args.data, args.objects, args.trials, args.workers)
+        table = dataset_outcomes(args.data, args.objects, args.trials, args.workers, args.cache)
         first = int(table["recorded"].iloc[0])
     else:
         table = outcomes(args.objects, args.trials, args.workers, args.cache, tuple(args.schemes))
