@@ -138,6 +138,30 @@ def test_observation_keeps_the_k_lowest_q_c_in_order_and_pads(data):
     assert obs["features"].dtype == np.float32 and obs["features"].shape == (8, 1)
 
 
+def test_candidate_sets_of_many_objects_match_each_objects_own_sort(data):
+    """One vectorised pass equals sorting each object's rows on their own (ties keep table
+    order, a NaN Q_C comes last), in an interleaved table with an object of no rows."""
+    from grip_env.envs.observation import FeatureScaler, best_candidates, candidate_sets
+
+    table = data.sample(frac=1.0, random_state=3).reset_index(drop=True)
+    table.loc[table.index[::4], "Q_C"] = 1.5  # ties
+    table.loc[table.index[5], "Q_C"] = np.nan
+    ids = [*NAMES, "nothing"]
+    frames = [table[table["object_id"] == name] for name in ids]
+    scaler = FeatureScaler.fit("log", FEATURES, 100.0, None)
+    for name, frame, found in zip(ids, frames, candidate_sets(ids, frames, scaler, 8), strict=True):
+        expected = best_candidates(frame, 8)
+        assert found.object_id == name and found.count == len(expected) == min(len(frame), 8)
+        pd.testing.assert_frame_equal(found.rows, expected)
+        assert found.grip_ids == tuple(expected["grip_id"])
+        np.testing.assert_array_equal(found.features[: found.count],
+                                      scaler.transform(expected[list(FEATURES)].to_numpy()))
+        np.testing.assert_array_equal(found.q_c[: found.count], expected["Q_C"].to_numpy())
+        np.testing.assert_array_equal(found.mask, np.arange(8) < found.count)
+        assert np.isnan(found.q_c[found.count:]).all() and not found.features[found.count:].any()
+        assert not found.features.flags.writeable
+
+
 def test_normalisations(data):
     raw = select_env(data, normalize="none", objects=["rectangle"]).reset(seed=0)[0]["features"]
     logged = select_env(data, normalize="log", objects=["rectangle"]).reset(seed=0)[0]["features"]

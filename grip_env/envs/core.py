@@ -24,6 +24,7 @@ from grip_env.envs.observation import (
     CandidateSet,
     FeatureScaler,
     candidate_set,
+    candidate_sets,
     feature_subset,
     raw_features,
 )
@@ -94,8 +95,9 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         self._sets: list[CandidateSet | None] = [None] * len(self.object_ids)
         self.scaler = self._fit_scaler(normalize)
         if isinstance(self.backend, ReplayBackend):
-            for index in range(len(self.object_ids)):
-                self._candidate_set(index)
+            frames = [self.backend.candidates(object_id) for object_id in self.object_ids]
+            self._sets = list(candidate_sets(self.object_ids, frames, self.scaler,
+                                             self.max_candidates))  # fmt: skip
         self._window: HumanWindow | None = None
         self._identity = np.arange(self.max_candidates)
         self._identity.flags.writeable = False

@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 from classifiers.experiments.selector.data import check_grip_table
 from grip_env.config import Config
 from grip_env.dataset.split import held_out_objects
-from grip_env.envs.observation import CandidateSet, candidate_set
+from grip_env.envs.observation import CandidateSet, candidate_sets
 from grip_env.envs.select import GripSelectEnv
 
 CLASSIFIER_CHOICES: tuple[str, ...] = ("logreg", "svm")
@@ -69,21 +69,44 @@ def random_metrics(p: NDArray[np.float64], max_attempts: int) -> tuple[float, fl
     return float(1.0 - all_fail[1]), float(1.0 - all_fail[m]), float(all_fail[:m].sum())
 
 
-def policy_order(model: Any, found: CandidateSet, max_attempts: int) -> NDArray[np.intp]:
-    """Slots the policy tries in turn, each failure masked as the environment does."""
-    mask = found.mask.copy()
-    order: list[int] = []
-    for _ in range(min(max_attempts, found.count)):
-        observation = {"features": found.features, "mask": mask.copy()}
-        action, _ = model.predict(observation, action_masks=mask.astype(bool), deterministic=True)
-        slot = int(action)
-        order.append(slot)
-        mask[slot] = 0
-    return np.asarray(order, dtype=np.intp)
+def action_probabilities(model: Any, sets: Sequence[CandidateSet],
+                         masks: NDArray[np.int8] | None = None) -> NDArray[np.float64]:
+    """(sets, K) probability of the policy picking each slot of each set (masked softmax), in
+    one batched forward pass; ``masks`` replaces the sets' own masks (slots already tried)."""
+    import torch as th
+
+    if masks is None:
+        masks = np.stack([found.mask for found in sets])
+    observation = {"features": np.stack([found.features for found in sets]), "mask": masks}
+    tensor, _ = model.policy.obs_to_tensor(observation)
+    with th.no_grad():
+        distribution = model.policy.get_distribution(tensor, action_masks=masks > 0)
+        return distribution.distribution.probs.cpu().numpy().astype(np.float64)
+
+
+def policy_orders(model: Any, sets: Sequence[CandidateSet],
+                  max_attempts: int) -> list[NDArray[np.intp]]:
+    """The slots the deterministic policy tries in turn on each set, each failure masked as the
+    environment does: one batched forward pass an attempt, not one a set."""
+    counts = np.array([found.count for found in sets])
+    tries = np.minimum(counts, max_attempts)
+    masks = np.stack([found.mask for found in sets]) if sets else np.zeros((0, 0), np.int8)
+    orders = np.zeros((len(sets), int(tries.max(initial=0))), dtype=np.intp)
+    for attempt in range(orders.shape[1]):
+        trying = np.flatnonzero(tries > attempt)
+        picks = action_probabilities(model, [sets[i] for i in trying], masks[trying]).argmax(axis=1)
+        orders[trying, attempt] = picks
+        masks[trying, picks] = 0
+    return [order[:n] for order, n in zip(orders, tries, strict=True)]
 
 
 def _ascending(column: str) -> Ranker:
     return lambda found: np.argsort(found.rows[column].to_numpy(float), kind="stable")
+
+
+def _precomputed(sets: Sequence[CandidateSet], orders: Sequence[NDArray[np.intp]]) -> Ranker:
+    by_object = {found.object_id: order for found, order in zip(sets, orders, strict=True)}
+    return lambda found: by_object[found.object_id]
 
 
 def _oracle(found: CandidateSet) -> NDArray[np.intp]:
@@ -181,7 +204,7 @@ def evaluate_selectors(
     if not sets:
         raise ValueError("no test object has a candidate grip")
     rankers: dict[str, Ranker] = {
-        "rl": lambda found: policy_order(model, found, selector.max_attempts),
+        "rl": _precomputed(sets, policy_orders(model, sets, selector.max_attempts)),
         "best_qc": _ascending("Q_C"),
         "best_qg": _ascending("Q_G"),
     }
@@ -226,7 +249,8 @@ def _test_candidate_sets(
     scaler, k = train_env.scaler, train_env.max_candidates
     train_env.close()
     frames = dict(iter(table.groupby(table["object_id"].astype(str), sort=True)))
-    sets = [candidate_set(oid, frames[oid], scaler, k) for oid in test_ids if oid in frames]
+    found = [oid for oid in test_ids if oid in frames]
+    sets = candidate_sets(found, [frames[oid] for oid in found], scaler, k)
     return [found for found in sets if found.count]
 
 

@@ -19,11 +19,9 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-import torch as th
 
 from classifiers.experiments.selector.data import check_grip_table
 from grip_env.config import Config
-from grip_env.envs.observation import CandidateSet
 
 METHOD = "rl"
 _COPIED = ("model.zip", "learning_curve.png")
@@ -34,24 +32,19 @@ def seed_dir(out: str | Path, seed: int) -> Path:
     return Path(out) / f"seed_{seed}"
 
 
-def action_probabilities(model: Any, found: CandidateSet) -> np.ndarray:
-    """The policy's probability of picking each real candidate of ``found`` (masked softmax)."""
-    observation = {"features": found.features[None], "mask": found.mask[None]}
-    tensor, _ = model.policy.obs_to_tensor(observation)
-    with th.no_grad():
-        distribution = model.policy.get_distribution(tensor, action_masks=found.mask[None] > 0)
-        probs = distribution.distribution.probs[0].cpu().numpy().astype(np.float64)
-    return probs[: found.count]
-
-
 def policy_scores(model: Any, table: pd.DataFrame, config: Config, seed: int) -> pd.DataFrame:
-    """``model``'s score rows (:data:`classifiers.experiments.candidate_scores.SCORE_COLUMNS`)."""
+    """``model``'s score rows (:data:`classifiers.experiments.candidate_scores.SCORE_COLUMNS`):
+    its probability of picking each held-out candidate."""
     from classifiers.experiments.candidate_scores import score_frame
-    from classifiers.experiments.selector.evaluation import held_out_candidate_sets
+    from classifiers.experiments.selector.evaluation import (
+        action_probabilities,
+        held_out_candidate_sets,
+    )
 
-    return pd.concat([score_frame(found.object_id, seed, METHOD, found.rows,
-                                  action_probabilities(model, found))
-                      for found in held_out_candidate_sets(table, config)],
+    sets = held_out_candidate_sets(table, config)
+    probabilities = action_probabilities(model, sets) if sets else np.zeros((0, 0))
+    return pd.concat([score_frame(found.object_id, seed, METHOD, found.rows, p[: found.count])
+                      for found, p in zip(sets, probabilities, strict=True)],
                      ignore_index=True)  # fmt: skip
 
 

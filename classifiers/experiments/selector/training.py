@@ -186,10 +186,11 @@ class HeldOutEvaluation(BaseCallback):
     def _on_rollout_end(self) -> None:
         if not self.sets:
             return
-        from classifiers.experiments.selector.evaluation import policy_order
+        from classifiers.experiments.selector.evaluation import policy_orders
 
-        first = [s.success_rate[policy_order(self.model, s, 1)[0]] for s in self.sets]
-        value = float(np.mean(first))
+        picks = policy_orders(self.model, self.sets, 1)
+        value = float(np.mean([s.success_rate[order[0]] for s, order in zip(self.sets, picks,
+                                                                             strict=True)]))
         self.curve.append((self.num_timesteps, value))
         self.logger.record("eval/held_out_first_pick_success", value)
         for key, reference in self.reference.items():
