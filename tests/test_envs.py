@@ -160,6 +160,8 @@ def test_candidate_sets_of_many_objects_match_each_objects_own_sort(data):
         np.testing.assert_array_equal(found.mask, np.arange(8) < found.count)
         assert np.isnan(found.q_c[found.count:]).all() and not found.features[found.count:].any()
         assert not found.features.flags.writeable
+    with pytest.raises(ValueError, match="2 object ids for 1 candidate tables"):
+        candidate_sets(ids[:2], frames[:1], scaler, 8)
 
 
 def test_normalisations(data):

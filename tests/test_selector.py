@@ -191,6 +191,34 @@ def test_run_selector_writes_report_model_and_curve(grips, small_config, tmp_pat
     _assert_held_out_scalars(tmp_path / "tb", report)
 
 
+def test_batched_policy_orders_are_the_environments_one_at_a_time_picks(grips, small_config):
+    """policy_orders and action_probabilities, one forward pass for every set, give what
+    asking the policy set by set gives, a tried slot masked before the next attempt."""
+    from classifiers.experiments.selector.evaluation import (
+        action_probabilities,
+        held_out_candidate_sets,
+        policy_orders,
+    )
+
+    env = make_selector_env(grips, small_config, "train", 1, 0)
+    model = make_selector_model(env, "set", 0, None, timesteps=64, settings=small_config.selector)
+    sets = held_out_candidate_sets(grips, small_config)
+    assert len(sets) > 1
+    probabilities = action_probabilities(model, sets)
+    for found, orders, p in zip(sets, policy_orders(model, sets, 3), probabilities, strict=True):
+        mask, expected = found.mask.copy(), []
+        for _ in range(min(3, found.count)):
+            action, _ = model.predict({"features": found.features, "mask": mask.copy()},
+                                      action_masks=mask.astype(bool), deterministic=True)
+            expected.append(int(action))
+            mask[int(action)] = 0
+        np.testing.assert_array_equal(orders, expected)
+        assert len(set(orders)) == len(orders) and np.all(orders < found.count)
+        np.testing.assert_allclose(p[: found.count].sum(), 1.0, rtol=1e-5)
+        assert not p[found.count:].any()
+    env.close()
+
+
 def _assert_held_out_scalars(tb: Path, report: dict) -> None:
     """TensorBoard has the held-out first-pick success of each rollout, with its references."""
     from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
