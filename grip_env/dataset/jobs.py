@@ -64,19 +64,27 @@ def simulate_object(task: ObjectTask) -> pd.DataFrame:
 
     The trials' draws are keyed by the run seed and the object's id (common to its grips), never
     by the object's position in the run."""
+    from grip_env.sim import run_trials
+
+    config = task.config
+    kept = kept_grips(task)
+    outcome = run_trials(task.obj, kept.assign(object_id=task.object_id), config,
+                         config.dataset.trials, config.dataset.seed)
+    return with_outcomes(kept, outcome, task.object_id)
+
+
+def kept_grips(task: ObjectTask) -> pd.DataFrame:
+    """The candidates planned on the task's (perceived) contour, at the true body's height, that
+    ``dataset.sampling`` keeps (seeded by the task's sampling seed)."""
     from grip_env.dataset.sampling import keep_grips
     from grip_env.objects.meshes import execution_height_mm
     from grip_env.planning.pipeline import candidates
-    from grip_env.sim import run_trials
 
     config = task.config
     planned_on = task.planned_on or planning_contour(task)
     height = execution_height_mm(task.obj, config.objects)  # of the true body
     table = candidates(planned_on, config.grasp, config, height_mm=height)
-    kept = keep_grips(table, config.dataset, task.sampling_seed())
-    outcome = run_trials(task.obj, kept.assign(object_id=task.object_id), config,
-                         config.dataset.trials, config.dataset.seed)
-    return with_outcomes(kept, outcome, task.object_id)
+    return keep_grips(table, config.dataset, task.sampling_seed())
 
 
 def plans_on_render(config: Config) -> bool:

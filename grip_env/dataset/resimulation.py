@@ -21,10 +21,9 @@ import pandas as pd
 from grip_env.columns import DESCRIPTORS, FEATURES, INDEXES, ROBUSTNESS
 from grip_env.config import Config
 from grip_env.dataset.catalog import load_objects
-from grip_env.dataset.jobs import ObjectTask, planning_contour
+from grip_env.dataset.jobs import ObjectTask, kept_grips
 from grip_env.dataset.loading import load
 from grip_env.dataset.manifest import read_manifest
-from grip_env.objects import PlanarObject
 
 #: Grips re-simulated per sampled object (the sample spreads over N / this many objects).
 GRIPS_PER_OBJECT = 5
@@ -119,19 +118,13 @@ def _index(manifest: dict, object_id: str) -> int:
 
 def _check_object(check: _ObjectCheck) -> tuple[bool, int, list[str]]:
     """(candidates identical, grips whose outcomes are identical, what differed)."""
-    from grip_env.dataset.sampling import keep_grips
-    from grip_env.objects.meshes import execution_height_mm
-    from grip_env.planning.pipeline import candidates
     from grip_env.sim import run_trials
 
     task, recorded, config = check.task, check.recorded, check.task.config
     notes = []
-    planned_on: PlanarObject = planning_contour(task)
-    height = execution_height_mm(task.obj, config.objects)
-    kept = keep_grips(candidates(planned_on, config.grasp, config, height_mm=height),
-                      config.dataset, task.sampling_seed())
-    same_candidates = _same_candidates(kept, recorded)
-    if not same_candidates:
+    kept = kept_grips(task)
+    planned_alike = same_candidates(kept, recorded)
+    if not planned_alike:
         notes.append(f"{task.object_id}: the candidates planned again differ from the recorded")
     grips = recorded.iloc[list(check.picked)]
     outcome = run_trials(task.obj, _as_planned(grips, kept, task.object_id), config,
@@ -141,7 +134,7 @@ def _check_object(check: _ObjectCheck) -> tuple[bool, int, list[str]]:
         same &= np.asarray(outcome[name]) == grips[name].to_numpy()
     notes += [f"{grip}: the outcome simulated again differs from the recorded"
               for grip in grips["grip_id"][~same]]
-    return same_candidates, int(same.sum()), notes
+    return planned_alike, int(same.sum()), notes
 
 
 def _as_planned(grips: pd.DataFrame, kept: pd.DataFrame, object_id: str) -> pd.DataFrame:
@@ -153,7 +146,7 @@ def _as_planned(grips: pd.DataFrame, kept: pd.DataFrame, object_id: str) -> pd.D
     return grips.assign(grip_id=[f"{owner}/{g}" for g in local], object_id=object_id)
 
 
-def _same_candidates(kept: pd.DataFrame, recorded: pd.DataFrame) -> bool:
+def same_candidates(kept: pd.DataFrame, recorded: pd.DataFrame) -> bool:
     """Whether the re-planned kept grips equal the recorded ones, bit for bit, in order."""
     numeric = list(DESCRIPTORS + FEATURES + INDEXES)
     if len(kept) != len(recorded):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+from numpy.typing import NDArray
 
 from grip_env.config import Config
 from grip_env.objects import PlanarObject
@@ -110,14 +111,33 @@ def run_trials(
     config = config if config is not None else Config()
     trials = config.dataset.trials if trials is None else trials
     outcomes = run_trial_outcomes(obj, grips, config, trials, seed)
-    n = len(grips)
-    trials = int(trials)
-    robust = outcomes["robustness"].to_numpy(float).reshape(n, trials) if n else np.zeros((0, 1))
-    success = outcomes["success"].to_numpy(bool).reshape(n, trials) if n else np.zeros((0, 1))
-    return pd.DataFrame(
-        {"trials": np.full(n, trials, dtype=np.int64),
-         "successes": success.sum(axis=1).astype(np.int64),
-         "robustness_mean": robust.mean(axis=1) if n else np.zeros(0),
-         "robustness_std": robust.std(axis=1) if n else np.zeros(0)},
-        index=grips.index,
-    )
+    n, trials = len(grips), int(trials)
+    robust = outcomes["robustness"].to_numpy(float).reshape(n, trials)
+    success = outcomes["success"].to_numpy(bool).reshape(n, trials)
+    return pd.DataFrame(trial_summary(robust, success), index=grips.index)
+
+
+def trial_summary(
+    robustness: NDArray[np.float64], success: NDArray[np.bool_]
+) -> dict[str, NDArray]:
+    """Per-grip ``trials``, ``successes``, ``robustness_mean`` and ``robustness_std`` (population)
+    from per-trial arrays of shape (grips, trials).
+
+    The sums run over each grip's levels in ascending order, one column at a time, so the bits
+    depend on the set of trial outcomes only: not on the trials' order, nor on how many grips
+    share the array (a numpy reduction along a row may pair its terms differently). That is what
+    lets trials be added to a dataset (:mod:`grip_env.dataset.trial_extension`) with the bits a
+    fresh run would give."""
+    n, trials = robustness.shape
+    levels = np.sort(robustness, axis=1)
+    total = np.zeros(n)
+    for column in levels.T:
+        total = total + column
+    mean = total / trials
+    squares = np.zeros(n)
+    for column in levels.T:
+        squares = squares + (column - mean) ** 2
+    return {"trials": np.full(n, trials, dtype=np.int64),
+            "successes": success.sum(axis=1).astype(np.int64),
+            "robustness_mean": mean,
+            "robustness_std": np.sqrt(squares / trials)}
