@@ -32,7 +32,12 @@ from grip_env.dataset.catalog import ObjectsSpec
 from grip_env.dataset.generation import generate
 from grip_env.dataset.jobs import ObjectTask, kept_grips, with_outcomes
 from grip_env.dataset.loading import load
-from grip_env.dataset.manifest import read_manifest, write_manifest
+from grip_env.dataset.manifest import (
+    read_manifest,
+    run_identity,
+    without_learning,
+    write_manifest,
+)
 from grip_env.dataset.resimulation import same_candidates
 from grip_env.sim import LABEL_MODEL, run_trial_outcomes
 from grip_env.sim.disturbance import ramp_levels, reaches
@@ -72,14 +77,18 @@ def _check_same_run(recorded: dict, config: Config, earlier: int) -> None:
                          f"code's {LABEL_MODEL!r}: its trials are not this simulator's")
     if config.dataset.trials <= earlier:
         raise ValueError(f"trials must exceed the source's {earlier}, got {config.dataset.trials}")
-    wanted = config.model_dump(mode="json")
-    source = dict(recorded["config"])
-    for name in ("trials", "workers", "backend"):
-        wanted["dataset"].pop(name, None)
-        source["dataset"] = {k: v for k, v in source["dataset"].items() if k != name}
+    wanted = _settings(run_identity(config, []))
+    source = _settings(recorded["identity"])
     changed = sorted(k for k in wanted.keys() | source.keys() if wanted.get(k) != source.get(k))
     if changed:
         raise ValueError(f"the source was made with another config (sections {changed} differ)")
+
+
+def _settings(identity: dict) -> dict:
+    """A run identity's config sections, the trial count aside."""
+    settings = without_learning(identity)["config"]
+    dataset = {k: v for k, v in settings["dataset"].items() if k != "trials"}
+    return {**settings, "dataset": dataset}
 
 
 def extended_object(task: ObjectTask, source: str, earlier: int) -> pd.DataFrame:
