@@ -3,11 +3,15 @@
 Importing the package registers the Gymnasium environments ``GripSelect-v0`` and ``GripAccept-v0``.
 """
 
-from grip_env.params import GraspParams
+from grip_env.portable_math import hold_numpy_at_v3
+
+hold_numpy_at_v3()  # before numpy is imported: the same labels on every x86-64 machine
+
+from grip_env.params import GraspParams  # noqa: E402
 
 __version__ = "0.1.0"
 __all__ = ["GraspParams", "__version__"]
 
-from grip_env.envs.registration import register_envs
+from grip_env.envs.registration import register_envs  # noqa: E402
 
 register_envs()

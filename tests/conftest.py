@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import grip_env  # noqa: F401  first, before numpy: it holds numpy at x86-64-v3 (portable_math)
+
+# isort: split
 import os
 from pathlib import Path
 
