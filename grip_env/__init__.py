@@ -3,9 +3,9 @@
 Importing the package registers the Gymnasium environments ``GripSelect-v0`` and ``GripAccept-v0``.
 """
 
-from grip_env.portable_math import hold_numpy_at_v3
+from grip_env.portable_math import hold_at_v3
 
-hold_numpy_at_v3()  # before numpy is imported: the same labels on every x86-64 machine
+hold_at_v3()  # before numpy loads: the same labels on every x86-64 machine
 
 from grip_env.params import GraspParams  # noqa: E402
 

@@ -9,7 +9,12 @@ import sys
 
 import pytest
 
-from grip_env.portable_math import BEYOND_V3, ENVIRONMENT, live_beyond_v3
+from grip_env.portable_math import (
+    BEYOND_V3,
+    NUMPY_ENVIRONMENT,
+    OPENBLAS_ENVIRONMENT,
+    live_beyond_v3,
+)
 
 PROBE = """
 import json, sys
@@ -30,8 +35,9 @@ print(json.dumps([live_beyond_v3(), os.environ.get("{env}"), refused]))
 
 
 def _probe(first: str) -> tuple[list[str], str | None, str]:
-    env = {k: v for k, v in os.environ.items() if k != ENVIRONMENT}
-    done = subprocess.run([sys.executable, "-c", PROBE.format(first=first, env=ENVIRONMENT)],
+    env = {k: v for k, v in os.environ.items()
+           if k not in (NUMPY_ENVIRONMENT, OPENBLAS_ENVIRONMENT)}
+    done = subprocess.run([sys.executable, "-c", PROBE.format(first=first, env=NUMPY_ENVIRONMENT)],
                           capture_output=True, text=True, env=env, timeout=300, check=True)
     live, value, refused = json.loads(done.stdout.strip().splitlines()[-1])
     return live, value, refused
@@ -41,7 +47,7 @@ def _machine_has_avx512_kernels() -> bool:
     done = subprocess.run([sys.executable, "-c", "import json, numpy; from grip_env.portable_math "
                            "import live_beyond_v3; print(json.dumps(live_beyond_v3()))"],
                           capture_output=True, text=True, timeout=120, check=True,
-                          env={**os.environ, ENVIRONMENT: ""})
+                          env={**os.environ, NUMPY_ENVIRONMENT: "", OPENBLAS_ENVIRONMENT: ""})
     return bool(json.loads(done.stdout.strip().splitlines()[-1]))
 
 
@@ -61,4 +67,4 @@ def test_labels_are_refused_when_numpy_s_avx512_kernels_are_live():
         pytest.skip("this CPU has no AVX-512 kernels for numpy to use")
     live, _, refused = _probe("import numpy")
     assert live  # numpy came first: its AVX-512 kernels are in use
-    assert refused.startswith(f"numpy's {live[0]}") and ENVIRONMENT in refused
+    assert refused.startswith(live[0]) and NUMPY_ENVIRONMENT in refused
