@@ -193,11 +193,12 @@ def test_a_retest_of_no_objects_is_refused(small, count):
 def test_the_card_reports_the_dataset_s_own_figures(small):
     grips = load(small)
     report = {"resimulation": {"grips": 3, "seed": 0, "summary": "RESIM"},
-              "retest": {"objects": 2, "seed": 0, "summary": "RETEST"}}
+              "retest": {"objects": 2, "seed": 0, "summary": "RETEST", "within": 0.8125}}
     card = dataset_card(small, report)
     assert card.startswith(f"# Dataset card: 8 grips on 2 objects (label model `{LABEL_MODEL}`)")
     assert f"| named | 2 | 2 | 8 | {grips['success'].mean():.1%} |" in card
     assert "RESIM" in card and "RETEST" in card and "Unfinished" not in card
+    assert "one object's grips repeats at 0.81 (within-object retest above)" in card
     assert "Not recorded with this dataset: `grip-env calibrate" in card
     assert ("core-hours" in card and "AMD" in card) or "x " in card
 

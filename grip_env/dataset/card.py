@@ -32,7 +32,7 @@ def dataset_card(directory: str | Path, report: dict[str, Any] | None = None) ->
     families = pd.Series({e["object_id"]: e["family"] for e in manifest["objects"]})
     sections = [_heading(manifest, grips), _making(manifest, grips),
                 _composition(grips, families, manifest), _outcomes(grips, manifest),
-                _reliability(report), _calibration(Path(directory)), _limits(manifest),
+                _reliability(report), _calibration(Path(directory)), _limits(manifest, report),
                 _licence()]
     return "\n\n".join(sections) + "\n"
 
@@ -177,13 +177,16 @@ def _verdict(passed: bool | None) -> str:
     return "not judged" if passed is None else "pass" if passed else "fail"
 
 
-def _limits(manifest: dict[str, Any]) -> str:
+def _limits(manifest: dict[str, Any], report: dict[str, Any] | None) -> str:
+    found = (report or {}).get("retest")
+    repeats = (f"repeats at {found['within']:.2f} (within-object retest above), not 1" if found
+               else "repeats imperfectly (`grip-env validate --retest K` measures how well)")
     return "\n".join([
         "## Known limits", "",
         "- Planar objects: each is extruded from its outline (meshes from their resting "
         "silhouette) and grasped in one plane; no 3-D grasps.",
         f"- {manifest['trials']} trials a grip: `success_rate` is a binomial estimate of few "
-        "draws, and the ranking of one object's grips repeats at about 0.75, not 1.",
+        f"draws, and the ranking of one object's grips {repeats}.",
         "- One simulated hand (the Barrett BH8-280 URDF with compliant pads and worm-gear "
         "stops, BENCHMARKS.md), one friction and mass range: labels are the simulator's, "
         "not a real hand's.",
