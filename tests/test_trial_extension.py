@@ -49,6 +49,7 @@ def test_adding_a_trial_gives_the_fresh_runs_dataset_bit_for_bit(at_one, tmp_pat
     pd.testing.assert_frame_equal(added, fresh, check_exact=True)
     manifest = read_manifest(added_dir)
     assert manifest["trials"] == 2 and manifest["trials_added_to"]["trials"] == 1
+    assert manifest["trials_added_to"]["sessions"] == read_manifest(at_one)["sessions"]
 
 
 @given(st.lists(st.lists(st.sampled_from(LEVELS.tolist()), min_size=3, max_size=3),

@@ -48,10 +48,15 @@ def _heading(manifest: dict[str, Any], grips: pd.DataFrame) -> str:
 
 
 def _making(manifest: dict[str, Any], grips: pd.DataFrame) -> str:
-    sessions = manifest.get("sessions", [])
+    earlier = manifest.get("trials_added_to") or {}  # trials added to a smaller run of it
+    sessions = [*earlier.get("sessions", []), *manifest.get("sessions", [])]
     wall_h = sum(s["seconds"] for s in sessions) / 3600
     core_h = sum(s["seconds"] * s["workers"] for s in sessions) / 3600
-    commits = [str(manifest.get("git_commit"))[:7]]  # the code's commit when the run began
+    commits = [str(c)[:7] for c in (earlier.get("git_commit"), manifest.get("git_commit")) if c]
+    added = ([f"- Trials 1–{earlier['trials']} made at {commits[0]}, the rest added at "
+              f"{commits[-1]} by `python -m grip_env.dataset.trial_extension` (the same run: "
+              "every object's grips re-planned bit for bit, only the new trials simulated)."]
+             if earlier else [])
     machines = sorted({s["machine"] for s in sessions}) or ["unrecorded"]
     rate = len(grips) / (core_h * 3600) if core_h else float("nan")
     config = manifest["config"]
@@ -70,6 +75,7 @@ def _making(manifest: dict[str, Any], grips: pd.DataFrame) -> str:
         f"**{core_h:.2f} core-hours**, {rate:.2f} grips a core-second "
         f"(workers × wall time, with perception, including any time the run was paused or "
         f"shared its cores); on {'; '.join(machines)}.",
+        *added,
     ])
 
 

@@ -66,7 +66,8 @@ def add_trials(
     job = partial(extended_object, source=str(source), earlier=earlier)
     directory = generate(config, out_dir, objects, workers=workers, progress=progress, job=job)
     manifest = read_manifest(directory)
-    manifest["trials_added_to"] = {"git_commit": recorded.get("git_commit"), "trials": earlier}
+    manifest["trials_added_to"] = {"git_commit": recorded.get("git_commit"), "trials": earlier,
+                                   "sessions": recorded.get("sessions", [])}  # its cost
     write_manifest(directory, manifest)
     return directory
 
