@@ -10,13 +10,18 @@ both give the recorded bits.
 
 Importing :mod:`grip_env` sets ``NPY_DISABLE_CPU_FEATURES`` and, on a CPU with AVX-512,
 ``OPENBLAS_CORETYPE=Haswell`` (each unless set already) before numpy loads; child processes
-inherit them. When numpy was imported first, AVX-512 kernels may be live: then
-:func:`check_portable_math` refuses to make labels, rather than make other ones.
+inherit them. When numpy was imported first (``import gymnasium, grip_env``), its AVX-512 kernels
+are live in this process: importing grip_env then warns once (:class:`NonPortableMathWarning`),
+and the commands that record labels (generate, calibrate, validate, the study's replication)
+make them in a worker process held at x86-64-v3 instead of in this one, so a dataset is the same
+on every machine whatever the order of imports.
 """
 
 from __future__ import annotations
 
 import os
+import sys
+import warnings
 from pathlib import Path
 
 #: numpy's dispatch targets above x86-64-v3 (the names of numpy 2.4, then of 1.26 to 2.3).
@@ -60,14 +65,30 @@ def live_beyond_v3() -> list[str]:
     return live + [f"OpenBLAS {k}" for k in sorted(kernels & set(OPENBLAS_BEYOND_V3))]
 
 
-def check_portable_math() -> None:
-    """Raise ``RuntimeError`` when AVX-512 kernels are active in this process: labels made here
-    would differ from every other machine's."""
+class NonPortableMathWarning(RuntimeWarning):
+    """numpy's or OpenBLAS's AVX-512 kernels are live in this process: candidates and trial
+    outcomes computed here may differ in their last bits, and so in their labels, from other
+    machines'."""
+
+
+def math_is_portable() -> bool:
+    """Whether this process computes with x86-64-v3 kernels only (the recorded labels' bits)."""
+    return not live_beyond_v3()
+
+
+def warn_if_not_portable() -> None:
+    """Warn once (:class:`NonPortableMathWarning`) when AVX-512 kernels are live here; for
+    ``grip_env/__init__``, called only when numpy was imported before grip_env."""
     live = live_beyond_v3()
     if live:
-        raise RuntimeError(
-            f"{', '.join(live)} kernels are active here (numpy was imported before grip_env, or "
-            f"{NUMPY_ENVIRONMENT} or {OPENBLAS_ENVIRONMENT} were set otherwise): they round sin, "
-            "exp and matrix products otherwise than other machines, so the labels would differ. "
-            f"Import grip_env before numpy, or set {NUMPY_ENVIRONMENT}=\"{' '.join(BEYOND_V3)}\" "
-            f"and {OPENBLAS_ENVIRONMENT}={OPENBLAS_V3}")
+        warnings.warn(
+            f"{', '.join(live)} kernels are live (numpy was imported before grip_env): candidates "
+            "and trial outcomes computed in this process may differ from other machines'. Datasets "
+            "are still made in worker processes held at x86-64-v3. For this process too, import "
+            f"grip_env before numpy, or set {NUMPY_ENVIRONMENT}=\"{' '.join(BEYOND_V3)}\" and "
+            f"{OPENBLAS_ENVIRONMENT}={OPENBLAS_V3}", NonPortableMathWarning, stacklevel=2)
+
+
+def numpy_is_loaded() -> bool:
+    """Whether numpy was imported already (then holding its kernels comes too late here)."""
+    return "numpy" in sys.modules

@@ -17,6 +17,7 @@ import pandas as pd
 
 from grip_env.dataset.jobs import ObjectJob, ObjectTask
 from grip_env.dataset.pool import WorkerLost, WorkerPool, call_single_threaded
+from grip_env.portable_math import math_is_portable
 
 BACKENDS = ("process", "ray")
 _IN_FLIGHT_PER_WORKER = 2
@@ -32,7 +33,8 @@ RAY_ADDRESS_VARIABLE = "RAY_ADDRESS"
 
 Results = Iterator[tuple[ObjectTask, pd.DataFrame]]
 
-__all__ = ["BACKENDS", "WorkerLost", "check_backend", "ray_address", "run_jobs"]
+__all__ = ["BACKENDS", "WorkerLost", "check_backend", "in_this_process", "ray_address", "run_jobs",
+           "worker_context"]
 
 
 def check_backend(backend: str, workers: int) -> None:
@@ -49,7 +51,8 @@ def run_jobs(
 ) -> Results:
     """Run ``job`` on every task; yields ``(task, rows)`` in completion order.
 
-    ``backend="process"`` with one worker runs in this process; with more it uses a
+    ``backend="process"`` with one worker runs in this process (unless its math is not
+    portable: :func:`in_this_process`); with more it uses a
     :class:`~grip_env.dataset.pool.WorkerPool` of 'forkserver' (or 'spawn') processes, each
     with its own PyBullet client. ``backend="ray"`` submits Ray tasks to the cluster at
     ``address`` (else ``$RAY_ADDRESS``; a local Ray instance with ``workers`` CPUs when neither
@@ -62,14 +65,22 @@ def run_jobs(
     check_backend(backend, workers)
     if backend == "ray":
         return _ray_results(job, tasks, workers, address)
-    if workers == 1:
+    if in_this_process(workers):
         return ((task, call_single_threaded(job, task)) for task in tasks)
     return _pool_results(job, tasks, workers)
 
 
-def _pool_context() -> multiprocessing.context.BaseContext:
+def in_this_process(workers: int) -> bool:
+    """Whether labels for ``workers`` workers are made in this process: for one worker, when
+    this process computes with x86-64-v3 kernels (:mod:`grip_env.portable_math`); else one
+    worker process, held at x86-64-v3, makes them, so that they are every machine's labels."""
+    return workers == 1 and math_is_portable()
+
+
+def worker_context() -> multiprocessing.context.BaseContext:
     """'forkserver' (workers fork from a clean server with the heavy imports done) where it
-    exists, else 'spawn'. Neither copies a live PyBullet client into a worker."""
+    exists, else 'spawn'. Neither copies a live PyBullet client, nor numpy's kernels, into a
+    worker: each starts a fresh interpreter that imports grip_env first."""
     if "forkserver" not in multiprocessing.get_all_start_methods():
         return multiprocessing.get_context("spawn")
     context = multiprocessing.get_context("forkserver")
@@ -78,7 +89,7 @@ def _pool_context() -> multiprocessing.context.BaseContext:
 
 
 def _pool_results(job: ObjectJob, tasks: Iterable[ObjectTask], workers: int) -> Results:
-    with WorkerPool(workers, _pool_context()) as pool:
+    with WorkerPool(workers, worker_context()) as pool:
         yield from pool.results(job, tasks)
 
 

@@ -11,15 +11,18 @@ ones.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 import pandas as pd
 
 from grip_env.columns import DESCRIPTORS, FEATURES, INDEXES, ROBUSTNESS
 from grip_env.config import Config
+from grip_env.dataset.backends import in_this_process, worker_context
 from grip_env.dataset.catalog import load_objects
 from grip_env.dataset.jobs import ObjectTask, kept_grips
 from grip_env.dataset.loading import load
@@ -51,6 +54,22 @@ class Resimulation:
                 f"identical on {self.outcomes_identical}")
 
 
+_Item = TypeVar("_Item")
+_Result = TypeVar("_Result")
+
+
+def _map(
+    function: Callable[[_Item], _Result], items: Sequence[_Item], workers: int
+) -> list[_Result]:
+    """``function`` over ``items`` in order: in this process, or on up to ``workers`` fresh
+    worker processes (:func:`~grip_env.dataset.backends.in_this_process`)."""
+    if in_this_process(1 if len(items) < 2 else workers):
+        return [function(item) for item in items]
+    size = max(1, min(workers, len(items)))
+    with ProcessPoolExecutor(size, mp_context=worker_context()) as pool:
+        return list(pool.map(function, items))
+
+
 @dataclass(frozen=True)
 class _ObjectCheck:
     task: ObjectTask
@@ -71,11 +90,7 @@ def resimulate(path: str | Path, grips: int, seed: int = 0, workers: int = 1) ->
     directory = Path(path)
     checks = _sample(directory, int(grips), seed)
     result = Resimulation()
-    if workers > 1 and len(checks) > 1:
-        with ProcessPoolExecutor(min(workers, len(checks))) as pool:
-            found = list(pool.map(_check_object, checks))
-    else:
-        found = [_check_object(check) for check in checks]
+    found = _map(_check_object, checks, workers)
     for check, (same_candidates, same_outcomes, notes) in zip(checks, found, strict=True):
         result.objects += 1
         result.candidates_identical += same_candidates
@@ -189,11 +204,7 @@ def retest(path: str | Path, objects: int, seed: int = 0, workers: int = 1) -> R
         ValueError: ``objects`` is not a positive integer, or the dataset is unreadable.
     """
     checks = _retest_sample(Path(path), objects, seed)
-    if workers > 1 and len(checks) > 1:
-        with ProcessPoolExecutor(min(workers, len(checks))) as pool:
-            means = list(pool.map(_retest_means, checks))
-    else:
-        means = [_retest_means(check) for check in checks]
+    means = _map(_retest_means, checks, workers)
     return _retest_figures(checks, means, seed)
 
 

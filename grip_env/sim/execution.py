@@ -8,7 +8,6 @@ from numpy.typing import NDArray
 
 from grip_env.config import Config
 from grip_env.objects import PlanarObject
-from grip_env.portable_math import check_portable_math
 from grip_env.sim.trial import TrialScene, grip_plans
 from grip_env.sim.uncertainty import stable_key, trial_noises
 
@@ -68,13 +67,11 @@ def run_trial_outcomes(
 
     Raises:
         ValueError: bad arguments, or a grip the hand cannot reach (never clipped).
-        RuntimeError: numpy's AVX-512 kernels are live here (:mod:`grip_env.portable_math`).
     """
     if not isinstance(obj, PlanarObject):
         raise ValueError(f"obj must be a PlanarObject, got {type(obj).__name__}")
     if not isinstance(grips, pd.DataFrame):
         raise ValueError(f"grips must be a pandas DataFrame, got {type(grips).__name__}")
-    check_portable_math()
     config = config if config is not None else Config()
     trials = _count("trials", config.dataset.trials if trials is None else trials, 1)
     seed = _count("seed", seed, 0)

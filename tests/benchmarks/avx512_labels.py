@@ -1,5 +1,6 @@
 """Do numpy's AVX-512 kernels move the labels? (BENCHMARKS.md, "The same labels on every machine").
-Run by hand, on a CPU with AVX-512; the guard of :mod:`grip_env.portable_math` is bypassed.
+Run by hand, on a CPU with AVX-512; an explicit ``NPY_DISABLE_CPU_FEATURES`` is kept by
+:mod:`grip_env.portable_math`, here and in its workers.
 
     python -m tests.benchmarks.avx512_labels --grips 48                             # held at v3
     NPY_DISABLE_CPU_FEATURES="" python -m tests.benchmarks.avx512_labels --grips 48  # AVX-512 live
@@ -12,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 
-import grip_env.sim.execution as execution
 from grip_env import datasets
 from grip_env.dataset.resimulation import resimulate
 from grip_env.portable_math import live_beyond_v3
@@ -24,7 +24,6 @@ def main() -> None:
     parser.add_argument("--grips", type=int, default=48, help="standard grips to re-simulate")
     parser.add_argument("--workers", type=int, default=1)
     args = parser.parse_args()
-    execution.check_portable_math = lambda: None  # measure what the guard prevents
     live = live_beyond_v3()
     stored = recording()
     moved = {line.split(" trial ")[0] + " " + line.split(" trial ")[1].split(":")[0]
