@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from grip_env.config import Config
 from grip_env.dataset import generate, load
-from grip_env.dataset.manifest import read_manifest
+from grip_env.dataset.manifest import earlier_runs, read_manifest
 from grip_env.dataset.trial_extension import (
     add_trials,
     main,
@@ -48,8 +48,8 @@ def test_adding_a_trial_gives_the_fresh_runs_dataset_bit_for_bit(at_one, tmp_pat
     added = load(added_dir)
     pd.testing.assert_frame_equal(added, fresh, check_exact=True)
     manifest = read_manifest(added_dir)
-    assert manifest["trials"] == 2 and manifest["trials_added_to"]["trials"] == 1
-    assert manifest["trials_added_to"]["sessions"] == read_manifest(at_one)["sessions"]
+    assert manifest["trials"] == 2 and [r["trials"] for r in earlier_runs(manifest)] == [1]
+    assert earlier_runs(manifest)[0]["sessions"] == read_manifest(at_one)["sessions"]
 
 
 @given(st.lists(st.lists(st.sampled_from(LEVELS.tolist()), min_size=3, max_size=3),

@@ -19,6 +19,7 @@ import numpy as np
 import pandas as pd
 
 from grip_env.dataset.loading import load
+from grip_env.dataset.manifest import earlier_runs
 from grip_env.label_model import label_model_of
 
 #: The quantiles of mean robustness the card tabulates.
@@ -48,15 +49,14 @@ def _heading(manifest: dict[str, Any], grips: pd.DataFrame) -> str:
 
 
 def _making(manifest: dict[str, Any], grips: pd.DataFrame) -> str:
-    earlier = manifest.get("trials_added_to") or {}  # trials added to a smaller run of it
-    sessions = [*earlier.get("sessions", []), *manifest.get("sessions", [])]
+    earlier = earlier_runs(manifest)  # trials added to smaller runs of it
+    sessions = [s for run in [*earlier, manifest] for s in run.get("sessions", [])]
     wall_h = sum(s["seconds"] for s in sessions) / 3600
     core_h = sum(s["seconds"] * s["workers"] for s in sessions) / 3600
-    commits = [str(c)[:7] for c in (earlier.get("git_commit"), manifest.get("git_commit")) if c]
-    added = ([f"- Trials 1–{earlier['trials']} made at {commits[0]}, the rest added at "
-              f"{commits[-1]} by `python -m grip_env.dataset.trial_extension` (the same run: "
-              "every object's grips re-planned bit for bit, only the new trials simulated)."]
-             if earlier else [])
+    commits = [str(run["git_commit"])[:7] for run in [*earlier, manifest] if run.get("git_commit")]
+    added = [f"- {_trial_steps(earlier, manifest)} by `python -m grip_env.dataset.trial_extension` "
+             "(the same run: every object's grips re-planned bit for bit, only the new trials "
+             "simulated)."] if earlier else []
     machines = sorted({s["machine"] for s in sessions}) or ["unrecorded"]
     rate = len(grips) / (core_h * 3600) if core_h else float("nan")
     config = manifest["config"]
@@ -77,6 +77,18 @@ def _making(manifest: dict[str, Any], grips: pd.DataFrame) -> str:
         f"shared its cores); on {'; '.join(machines)}.",
         *added,
     ])
+
+
+def _trial_steps(earlier: list[dict[str, Any]], manifest: dict[str, Any]) -> str:
+    """How the trials were made, step by step: 'Trials 1–3 made at e868eef, trial 4 added at
+    bf0369d, ...'."""
+    ends = [int(run["trials"]) for run in earlier] + [int(manifest["trials"])]
+    commits = [str(run.get("git_commit"))[:7] for run in [*earlier, manifest]]
+    steps = [f"{'Trial 1' if ends[0] == 1 else f'Trials 1–{ends[0]}'} made at {commits[0]}"]
+    for start, end, commit in zip(ends[:-1], ends[1:], commits[1:], strict=True):
+        span = f"trial {end}" if end == start + 1 else f"trials {start + 1}–{end}"
+        steps.append(f"{span} added at {commit}")
+    return ", ".join(steps)
 
 
 def _composition(grips: pd.DataFrame, families: pd.Series, manifest: dict[str, Any]) -> str:

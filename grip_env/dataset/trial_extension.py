@@ -33,6 +33,7 @@ from grip_env.dataset.generation import generate
 from grip_env.dataset.jobs import ObjectTask, kept_grips, with_outcomes
 from grip_env.dataset.loading import load
 from grip_env.dataset.manifest import (
+    earlier_runs,
     read_manifest,
     run_identity,
     without_learning,
@@ -40,7 +41,7 @@ from grip_env.dataset.manifest import (
 )
 from grip_env.dataset.resimulation import same_candidates
 from grip_env.sim import LABEL_MODEL, run_trial_outcomes
-from grip_env.sim.disturbance import ramp_levels, reaches
+from grip_env.sim.disturbance import ramp_levels, reached
 from grip_env.sim.execution import trial_summary
 
 #: Recorded and recovered mean and spread agree within this (g): the recorded ones were summed
@@ -66,8 +67,9 @@ def add_trials(
     job = partial(extended_object, source=str(source), earlier=earlier)
     directory = generate(config, out_dir, objects, workers=workers, progress=progress, job=job)
     manifest = read_manifest(directory)
-    manifest["trials_added_to"] = {"git_commit": recorded.get("git_commit"), "trials": earlier,
-                                   "sessions": recorded.get("sessions", [])}  # its cost
+    manifest["trials_added_to"] = [*earlier_runs(recorded), {
+        "git_commit": recorded.get("git_commit"), "trials": earlier,
+        "sessions": recorded.get("sessions", [])}]  # what each step cost
     write_manifest(directory, manifest)
     return directory
 
@@ -118,8 +120,7 @@ def _levels(task: ObjectTask, grips: pd.DataFrame, first: int, count: int) -> ND
 
 def reaches_reference(robust: NDArray, config: Config) -> NDArray[np.bool_]:
     """Per-trial success from the levels held (a held level of 0 never reaches the reference)."""
-    reference = config.sim.reference_level_g
-    return np.vectorize(lambda level: reaches(level, reference), otypes=[bool])(robust)
+    return reached(robust, config.sim.reference_level_g)
 
 
 def recorded_levels(rows: pd.DataFrame, trials: int, config: Config) -> NDArray:

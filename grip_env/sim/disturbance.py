@@ -85,7 +85,12 @@ class RampProbe:
 def reaches(level_g: float, reference_g: float) -> bool:
     """Whether a held level reaches the reference. A reference on a ramp level (64 g is
     2 x 2^(20/4)) counts as reached although 2 * ratio**20 computes to 63.99999999999996."""
-    return bool(level_g >= reference_g * (1.0 - 1e-9))
+    return bool(reached(np.float64(level_g), reference_g))
+
+
+def reached(levels_g: NDArray[np.float64], reference_g: float) -> NDArray[np.bool_]:
+    """:func:`reaches`, element by element."""
+    return np.asarray(levels_g, dtype=float) >= reference_g * (1.0 - 1e-9)
 
 
 def robustness(probe: RampProbe, mass_kg: float, gyration_m: float, config: SimConfig) -> float:
