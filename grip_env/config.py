@@ -245,7 +245,7 @@ class UncertaintyConfig(_Section):
 class DatasetConfig(_Section):
     """Dataset generation."""
 
-    trials: int = Field(4, ge=1, le=1000, description="simulated trials per grip")
+    trials: int = Field(5, ge=1, le=1000, description="simulated trials per grip")
     seed: int = Field(0, ge=0, le=MAX_SEED, description="run seed")
     workers: int = Field(2, ge=1, le=1024, description="parallel workers")
     backend: Literal["process", "ray"] = Field("process", description="parallel backend")

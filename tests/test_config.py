@@ -109,8 +109,8 @@ def test_negative_parameters_are_refused(field):
 
 
 def test_override_validates():
-    cfg = Config().override(dataset={"trials": 5})
-    assert cfg.dataset.trials == 5
+    cfg = Config().override(dataset={"trials": 6})
+    assert cfg.dataset.trials == 6
     with pytest.raises(ValueError, match="unknown config section"):
         Config().override(nothing={"a": 1})
     with pytest.raises(ValueError, match=r"grasp\.mu"):

@@ -56,9 +56,9 @@ def test_the_calibration_key_tells_quick_from_full():
 def test_quick_replaces_only_what_the_config_leaves_at_its_default():
     everything = quick_overrides(Config())
     assert everything == QUICK_OVERRIDES
-    mine = Config().override(learning={"models": ("svm",)}, dataset={"trials": 5})
+    mine = Config().override(learning={"models": ("svm",)}, dataset={"trials": 6})
     shrunk = study_config(mine, quick=True)
-    assert shrunk.learning.models == ("svm",) and shrunk.dataset.trials == 5
+    assert shrunk.learning.models == ("svm",) and shrunk.dataset.trials == 6
     assert shrunk.learning.folds == QUICK_OVERRIDES["learning"]["folds"]
     line = describe_quick(mine)
     assert "learning.folds=2" in line and "keeps dataset.trials, learning.models" in line
