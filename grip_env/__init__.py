@@ -3,12 +3,9 @@
 Importing the package registers the Gymnasium environments ``GripSelect-v0`` and ``GripAccept-v0``.
 """
 
-from grip_env.portable_math import hold_at_v3, numpy_is_loaded, warn_if_not_portable
+from grip_env.portable_math import hold_at_v3
 
-_NUMPY_CAME_FIRST = numpy_is_loaded()
 hold_at_v3()  # before numpy loads: the same labels on every x86-64 machine
-if _NUMPY_CAME_FIRST:
-    warn_if_not_portable()
 
 from grip_env.params import GraspParams  # noqa: E402
 

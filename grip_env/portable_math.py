@@ -11,16 +11,17 @@ both give the recorded bits.
 Importing :mod:`grip_env` sets ``NPY_DISABLE_CPU_FEATURES`` and, on a CPU with AVX-512,
 ``OPENBLAS_CORETYPE=Haswell`` (each unless set already) before numpy loads; child processes
 inherit them. When numpy was imported first (``import gymnasium, grip_env``), its AVX-512 kernels
-are live in this process: importing grip_env then warns once (:class:`NonPortableMathWarning`),
-and the commands that record labels (generate, calibrate, validate, the study's replication)
-make them in a worker process held at x86-64-v3 instead of in this one, so a dataset is the same
-on every machine whatever the order of imports.
+are live in this process: the first plan or trial run in it warns once
+(:class:`NonPortableMathWarning`; loading data and learning, which do not depend on it, say
+nothing), and the commands that record labels (generate, calibrate, validate, the study's
+replication) make them in a worker process held at x86-64-v3 instead of in this one, so a
+dataset is the same on every machine whatever the order of imports.
 """
 
 from __future__ import annotations
 
+import functools
 import os
-import sys
 import warnings
 from pathlib import Path
 
@@ -76,9 +77,10 @@ def math_is_portable() -> bool:
     return not live_beyond_v3()
 
 
+@functools.cache
 def warn_if_not_portable() -> None:
-    """Warn once (:class:`NonPortableMathWarning`) when AVX-512 kernels are live here; for
-    ``grip_env/__init__``, called only when numpy was imported before grip_env."""
+    """Warn, once a process, when AVX-512 kernels are live here (:class:`NonPortableMathWarning`);
+    called where candidates are planned and trials run."""
     live = live_beyond_v3()
     if live:
         warnings.warn(
@@ -86,9 +88,4 @@ def warn_if_not_portable() -> None:
             "and trial outcomes computed in this process may differ from other machines'. Datasets "
             "are still made in worker processes held at x86-64-v3. For this process too, import "
             f"grip_env before numpy, or set {NUMPY_ENVIRONMENT}=\"{' '.join(BEYOND_V3)}\" and "
-            f"{OPENBLAS_ENVIRONMENT}={OPENBLAS_V3}", NonPortableMathWarning, stacklevel=2)
-
-
-def numpy_is_loaded() -> bool:
-    """Whether numpy was imported already (then holding its kernels comes too late here)."""
-    return "numpy" in sys.modules
+            f"{OPENBLAS_ENVIRONMENT}={OPENBLAS_V3}", NonPortableMathWarning, stacklevel=3)

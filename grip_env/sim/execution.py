@@ -8,6 +8,7 @@ from numpy.typing import NDArray
 
 from grip_env.config import Config
 from grip_env.objects import PlanarObject
+from grip_env.portable_math import warn_if_not_portable
 from grip_env.sim.trial import TrialScene, grip_plans
 from grip_env.sim.uncertainty import stable_key, trial_noises
 
@@ -72,6 +73,7 @@ def run_trial_outcomes(
         raise ValueError(f"obj must be a PlanarObject, got {type(obj).__name__}")
     if not isinstance(grips, pd.DataFrame):
         raise ValueError(f"grips must be a pandas DataFrame, got {type(grips).__name__}")
+    warn_if_not_portable()
     config = config if config is not None else Config()
     trials = _count("trials", config.dataset.trials if trials is None else trials, 1)
     seed = _count("seed", seed, 0)
