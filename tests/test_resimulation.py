@@ -19,7 +19,7 @@ from grip_env import datasets
 from grip_env.config import Config
 from grip_env.dataset import generate, load
 from grip_env.dataset.card import dataset_card
-from grip_env.dataset.manifest import read_manifest
+from grip_env.dataset.manifest import read_manifest, write_manifest
 from grip_env.dataset.resimulation import (
     _check_object,
     _checks,
@@ -201,6 +201,26 @@ def test_the_card_reports_the_dataset_s_own_figures(small):
     assert "one object's grips repeats at 0.81 (within-object retest above)" in card
     assert "Not recorded with this dataset: `grip-env calibrate" in card
     assert ("core-hours" in card and "AMD" in card) or "x " in card
+
+
+def test_the_card_names_every_step_of_trials_added_and_counts_their_cost(small, tmp_path):
+    """A dataset grown by ``trial_extension`` twice: the card says which commit made which
+    trials, and its core-hours include the earlier runs' sessions."""
+    grown = tmp_path / "grown"
+    shutil.copytree(small, grown)
+    manifest = read_manifest(grown)
+    own_core_h = sum(s["seconds"] * s["workers"] for s in manifest["sessions"]) / 3600
+    session = {"seconds": 3600.0, "workers": 2, "machine": "M"}
+    manifest["trials_added_to"] = [
+        {"git_commit": "aaaaaaa111", "trials": 1, "sessions": [session, session]},
+        {"git_commit": "bbbbbbb222", "trials": 3, "sessions": [session]}]
+    manifest["git_commit"], manifest["trials"] = "ccccccc333", 4
+    write_manifest(grown, manifest)
+    card = dataset_card(grown)
+    assert ("Trial 1 made at aaaaaaa, trials 2–3 added at bbbbbbb, trial 4 added at ccccccc by "
+            "`python -m grip_env.dataset.trial_extension`") in card
+    assert "Code at commit aaaaaaa, bbbbbbb, ccccccc;" in card
+    assert f"**{own_core_h + 6:.2f} core-hours**" in card
 
 
 def test_the_card_shows_the_calibration_recorded_with_the_dataset():

@@ -200,8 +200,7 @@ def identity_differences(old: dict[str, Any], new: dict[str, Any], prefix: str =
 def earlier_runs(manifest: Manifest) -> list[dict[str, Any]]:
     """The runs at fewer trials a grip that ``trial_extension`` grew this dataset from, oldest
     first: each its ``git_commit``, ``trials`` and ``sessions`` (its cost)."""
-    earlier = manifest.get("trials_added_to") or []
-    return [earlier] if isinstance(earlier, dict) else list(earlier)  # a dict: one run, before 5
+    return list(manifest.get("trials_added_to", []))
 
 
 def session_record(started: datetime, seconds: float, workers: int, backend: str, objects: int,
