@@ -276,15 +276,19 @@ def run_calibration_trials(
     tasks = [ObjectTask(position[name], name, shapes[position[name]], config, settings.seed)
              for name in plan]  # fmt: skip
     job = functools.partial(object_job, parts=plan, settings=settings)
-    frames = []
+    frames: dict[int, pd.DataFrame] = {}
     with progress_bar(len(tasks), "calibrate") as bar:
         workers = min(settings.workers, max(len(tasks), 1))
         for task, rows in run_jobs(job, tasks, workers, config.dataset.backend):
             log(f"[calibrate] {task.object_id}: {len(rows)} trials "
                 f"({', '.join(plan[task.object_id])})")
-            frames.append(rows)
+            frames[task.index] = rows
             bar.advance(info=task.object_id)
-    return pd.concat(frames, ignore_index=True) if frames else pd.DataFrame(columns=TRIAL_COLUMNS)
+    if not frames:
+        return pd.DataFrame(columns=TRIAL_COLUMNS)
+    # in the plan's order, not the workers' completion order: the same table whatever the workers
+    return pd.concat([frames[task.index] for task in tasks if task.index in frames],
+                     ignore_index=True)
 
 
 # --------------------------------------------------------------------------------- statistics

@@ -353,6 +353,20 @@ def test_calibration_runs_on_the_configured_backend(monkeypatch):
     assert seen["backend"] == "ray" and seen["workers"] == 2 and seen["tasks"] >= len(BOXES_MM)
 
 
+def test_calibration_trials_come_in_the_plan_s_order_whatever_order_workers_finish(monkeypatch):
+    def last_first(job, tasks, workers, backend="process", address=None):
+        for task in reversed(list(tasks)):  # as workers finishing in another order give them
+            yield task, pd.DataFrame({"object_id": [task.object_id] * 2, "trial": [0, 1]})
+
+    monkeypatch.setattr("grip_env.dataset.backends.run_jobs", last_first)
+    from grip_env.calibration import choose_objects, run_calibration_trials
+
+    settings = CalibrationSettings.quick(workers=2)
+    trials = run_calibration_trials(Config(), settings)
+    assert list(dict.fromkeys(trials["object_id"])) == list(choose_objects(Config(), settings))
+    assert trials["trial"].tolist() == [0, 1] * (len(trials) // 2)
+
+
 def test_the_study_recomputes_its_calibration_when_the_calibration_sizes_change(monkeypatch):
     import functools
 
