@@ -1,5 +1,5 @@
 """The main job: dataset, classifiers, ablation, RL selector, leaderboard, label calibration,
-report.
+the answers to the study's questions, report.
 
 Every stage records what it read in ``<stage>/stage.json``: the config fields it depends on
 (:data:`STAGE_INPUTS`), the dataset's checksum and the grip-env version, hashed into its key
@@ -214,6 +214,9 @@ def run_study(
     for stage in stages:
         timings |= run_stage(stage, run)
     _merge_timings(out / "timings.json", timings)
+    from classifiers.experiments.answers import write_answers
+
+    write_answers(out, run.config.learning.seed)  # seconds: always from the stages' results
     log("[study] report ...")
     from classifiers.report.study_report import write_report
 

@@ -123,29 +123,32 @@ def success_by_bin(bins: pd.DataFrame, path: Path, column: str = "Q_C") -> Path:
 
 
 def grip_gallery(
-    objects: Sequence[PlanarObject], grips: pd.DataFrame, path: Path, columns: int = 4
+    objects: Sequence[PlanarObject], grips: pd.DataFrame, path: Path, columns: int = 4,
+    kinds: Sequence[str] | None = None, title: str | None = None,
 ) -> Path:
     """Each object with its best (solid) and worst (faint) grip by Q_C and their outcomes; axes
-    in mm, one legend for the figure."""
+    in mm, one legend for the figure. ``kinds`` (one per object, e.g. "mesh") head each panel's
+    title; ``title`` goes above the legend."""
     rows = int(np.ceil(len(objects) / columns))
-    fig = Figure(figsize=(3.2 * columns, 3.2 * rows))
+    fig = Figure(figsize=(3.2 * columns, 3.2 * rows + (0.4 if title else 0.0)))
     axes = np.atleast_1d(fig.subplots(rows, columns)).ravel()
     for ax in axes[len(objects):]:
         ax.axis("off")
-    for ax, obj in zip(axes, objects, strict=False):
+    for k, (ax, obj) in enumerate(zip(axes, objects, strict=False)):
         draw_object(ax, obj)
+        name = obj.name if kinds is None else f"{kinds[k]}: {obj.name}"
         mine = grips[grips["object_id"] == obj.name].sort_values("Q_C")
         if not mine.empty:
             draw_grip(ax, mine.iloc[-1], highlight=False)
             draw_grip(ax, mine.iloc[0], highlight=True)
             best, worst = mine.iloc[0], mine.iloc[-1]
             ax.set_title(
-                f"{obj.name}\nbest Q_C {best['Q_C']:.2f}: {_rate(best)}\n"
+                f"{name}\nbest Q_C {best['Q_C']:.2f}: {_rate(best)}\n"
                 f"worst Q_C {worst['Q_C']:.2f}: {_rate(worst)}",
                 fontsize=7,
             )
         else:
-            ax.set_title(f"{obj.name}\n(no feasible grip)", fontsize=8)
+            ax.set_title(f"{name}\n(no feasible grip)", fontsize=8)
         ax.set_xlabel("")
         ax.set_ylabel("")
         ax.tick_params(labelsize=6)
@@ -153,8 +156,24 @@ def grip_gallery(
     fig.supylabel("y (mm)", fontsize=9)
     handles, labels = grip_legend(others="worst grip by Q_C (faint)")
     top = add_grip_legend(fig, handles, labels, ncol=4, fontsize=8)
+    if title:
+        fig.suptitle(title, fontsize=10, y=0.995)
+        top += 0.4 / (3.2 * rows + 0.4)
     fig.tight_layout(rect=(0, 0, 1, 1 - top))
     return save_figure(fig, path, dpi=100)
+
+
+def gallery_choice(objects: pd.DataFrame, grips: pd.DataFrame, per_kind: int = 8) -> pd.DataFrame:
+    """Which objects a gallery shows: up to ``per_kind`` drawn shapes (named first, then
+    procedural) and as many meshes, each in the dataset's run order, among the objects with
+    grips in ``grips``; ``objects`` is a dataset's objects table (``object_id``, ``family``,
+    ``object_index``). Returns those rows, drawn shapes first, with a ``kind`` column."""
+    present = objects[objects["object_id"].isin(set(grips["object_id"]))]
+    present = present.assign(kind=np.where(present["family"] == "mesh", "mesh", "drawn"),
+                             named=present["family"] != "named").sort_values(
+        ["named", "object_index"])  # fmt: skip
+    chosen = [present[present["kind"] == kind].head(per_kind) for kind in ("drawn", "mesh")]
+    return pd.concat(chosen).drop(columns="named")
 
 
 def interval_bars(

@@ -16,6 +16,13 @@ import pandas as pd
 import yaml
 
 from classifiers.report import analysis, figures
+from classifiers.report.answer_figures import ALT_TEXT, draw_answer_figures
+from classifiers.report.answers import (
+    answer_sentences,
+    answers_preamble,
+    read_answers,
+    strong_methods,
+)
 from classifiers.report.document import Report, frame_of_intervals
 from classifiers.report.judge import (
     FEW_OBJECTS,
@@ -51,6 +58,7 @@ def write_report(out: Path, config: Config, table: pd.DataFrame,
         "`grip-env study` from the configuration listed at the end."
     )
     report.text(f"Written {datetime.now(UTC):%Y-%m-%d %H:%M} UTC from commit {source_commit()}.")
+    _answers_section(report, out, fig_dir)
     objects = _study_objects(config)
     _dataset_section(report, table, objects, fig_dir, config)
     _feature_section(report, table, fig_dir)
@@ -93,6 +101,20 @@ def ran_quick(out: Path) -> bool:
     stage records the flag among its inputs, since its sizes depend on it)."""
     record = _json(out / "calibration" / STAGE_RECORD) or {}
     return bool(record.get("inputs", {}).get("quick"))
+
+
+def _answers_section(report: Report, out: Path, fig_dir: Path) -> None:
+    """The study's questions answered in one sentence each, then the figures that show them."""
+    report.heading("Answers")
+    answers = read_answers(out)
+    if answers is None:
+        report.text("Not run.")
+        return
+    for sentence in answer_sentences(answers):
+        report.text(sentence)
+    report.text(answers_preamble(answers))
+    for name, path in draw_answer_figures(out, strong_methods(answers), fig_dir).items():
+        report.figure(_rel(path, out), ALT_TEXT[name] + ".")
 
 
 def _size_banner(report: Report, config: Config, table: pd.DataFrame, quick: bool) -> None:
@@ -142,15 +164,48 @@ def _dataset_section(report: Report, table: pd.DataFrame, objects: list[PlanarOb
             f"[{robustness.quantile(0.25):.2f}, {robustness.quantile(0.75):.2f}]"
         )
     report.table(summary)
-    present = set(table["object_id"])
-    named = [o for o in objects if o.name in present][:16]
-    path = figures.grip_gallery(named, table, fig_dir / "gallery.png")
+    path = _gallery(table, objects, fig_dir / GALLERY_FILE, fig_dir.parent)
     report.figure(_rel(path, report_root=fig_dir.parent),
-                  "Objects with their best grip by Q_C (opaque) and worst (faint); above each, "
-                  "the share of trials holding the reference level and the mean robustness. "
-                  "Axes in mm. Dots: contacts; arrows: real finger forces; dashed: "
-                  "finger lines to their spread axes; square: palm centre; × C_G, * C_C "
+                  "Drawn shapes and meshes with their best grip by Q_C (opaque) and worst "
+                  "(faint); above each, the share of trials holding the reference level and "
+                  "the mean robustness. Axes in mm. Dots: contacts; arrows: real finger forces; "
+                  "dashed: finger lines to their spread axes; square: palm centre; × C_G, * C_C "
                   "(paper's Fig. 15).")
+
+
+#: The gallery's file in the report's figures folder.
+GALLERY_FILE = "gallery.png"
+
+
+def _gallery(table: pd.DataFrame, objects: list[PlanarObject], path: Path, out: Path) -> Path:
+    """The gallery of the study's dataset: drawn shapes beside meshes, from the dataset's own
+    objects (``out/data.json`` names it); the named objects of the config without it."""
+    from grip_env.dataset.catalog import load_objects, read_objects
+
+    found = _json(out / "data.json") or {}
+    folder = Path(found.get("dataset", out / "dataset"))
+    if not (folder / "objects.parquet").is_file():
+        present = set(table["object_id"])
+        return figures.grip_gallery([o for o in objects if o.name in present][:16], table, path)
+    catalog = read_objects(folder)
+    if "family" not in catalog.columns:
+        catalog = catalog.assign(family="named")
+    chosen = figures.gallery_choice(catalog, table)
+    loaded = {o.name: o for o in load_objects(folder) if o.name in set(chosen["object_id"])}
+    return figures.grip_gallery([loaded[name] for name in chosen["object_id"]], table, path,
+                                kinds=list(chosen["kind"]), title=_kind_shares(table, catalog))
+
+
+def _kind_shares(table: pd.DataFrame, catalog: pd.DataFrame) -> str:
+    """One line: how many of the objects with grips are meshes, and how often each kind's grips
+    are labelled success."""
+    mesh_ids = set(catalog.loc[catalog["family"] == "mesh", "object_id"])
+    is_mesh = table["object_id"].isin(mesh_ids)
+    objects, meshes = table["object_id"].nunique(), table.loc[is_mesh, "object_id"].nunique()
+    rates = [f"{kind} {table.loc[mask, 'success'].mean():.0%}"
+             for kind, mask in (("drawn shapes", ~is_mesh), ("meshes", is_mesh)) if mask.any()]
+    return (f"{meshes} of {objects} objects are meshes ({meshes / objects:.0%}); grips labelled "
+            f"success: {', '.join(rates)}")
 
 
 def _feature_section(report: Report, table: pd.DataFrame, fig_dir: Path) -> None:

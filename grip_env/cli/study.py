@@ -35,7 +35,8 @@ def study(
     update_readme: Annotated[
         bool,
         typer.Option("--update-readme",
-                     help="rewrite the results block of README (between its results markers)"),
+                     help="rewrite the results block of README (between its results markers) "
+                          "and publish the study's figures beside it, in docs/_static/results"),
     ] = False,
     readme: Annotated[
         Path, typer.Option(help="the README --update-readme rewrites")
@@ -90,9 +91,11 @@ def study_data(data: Path | None, regenerate: bool, quick: bool) -> Path | None:
 
 
 def _update_readme(out: Path, readme: Path) -> None:
-    """Rewrite the README's results block, and the leaderboard block of the benchmark page
-    beside it (``docs/benchmark.md``, when it has the markers)."""
+    """Publish the study's figures beside the README (with their stamp), rewrite its results
+    block, and the leaderboard block of the benchmark page beside it (``docs/benchmark.md``,
+    when it has the markers)."""
     from classifiers.experiments.study import package_version, study_dataset
+    from classifiers.report.published import GALLERY, RESULTS_FOLDER, publish
     from classifiers.report.readme import (
         LEADERBOARD_BEGIN,
         LEADERBOARD_END,
@@ -104,15 +107,30 @@ def _update_readme(out: Path, readme: Path) -> None:
     from grip_env.dataset import dataset_manifest, load
 
     data_dir = study_dataset(out)
+    table = load(data_dir)
     generated = (dataset_manifest(data_dir).get("git_commit") or "unknown")[:7]
     commit = f"{source_commit()} (its dataset generated at {generated})"
-    block = results_block(out, load(data_dir), commit, package_version())
-    update_readme(readme, block)
-    typer.echo(f"updated the results block of {readme}")
+    folder = readme.parent / RESULTS_FOLDER
+    stamp = publish(out, folder, commit, _dataset_sha256(out, table))
+    figures = [name for name in stamp["figures"] if name != GALLERY]
+    update_readme(readme, results_block(out, table, commit, package_version(), figures))
+    typer.echo(f"updated the results block of {readme} and its {len(stamp['figures'])} "
+               f"figures in {folder}")
     page, board = readme.parent / "docs" / "benchmark.md", leaderboard_block(out)
     if board is not None and page.is_file() and LEADERBOARD_BEGIN in page.read_text():
         update_readme(page, board, LEADERBOARD_BEGIN, LEADERBOARD_END)
         typer.echo(f"updated the leaderboard of {page}")
+
+
+def _dataset_sha256(out: Path, table: object) -> str:
+    """The checksum of the dataset the study learned on, as its ``data.json`` records it."""
+    import json
+
+    from classifiers.learners.persistence import dataset_checksum
+
+    recorded = out / "data.json"
+    found = json.loads(recorded.read_text()).get("sha256") if recorded.is_file() else None
+    return found or dataset_checksum(table)
 
 
 def register(app: typer.Typer) -> None:

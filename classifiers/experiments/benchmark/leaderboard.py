@@ -28,6 +28,7 @@ from classifiers.experiments.benchmark.aggregate import (
     probability_of_improvement,
 )
 from classifiers.experiments.benchmark.selection import MAX_ATTEMPTS
+from classifiers.report.judge import relation
 
 REFERENCE = "best_qc"
 JSON_FILE = "leaderboard.json"
@@ -129,9 +130,7 @@ def _verdict(ci: Sequence[float], name: str, reference: str) -> str:
     of the difference (the reference itself: ``reference``)."""
     if name == reference:
         return "reference"
-    low, high = ci
-    relation = "beats" if low > 0 else "worse than" if high < 0 else "not distinguishable from"
-    return f"{relation} {reference}"
+    return f"{relation(ci).removeprefix('is ')} {reference}"
 
 
 def _round(value: Any) -> Any:

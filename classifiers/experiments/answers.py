@@ -1,0 +1,103 @@
+"""The study's three questions, answered with paired differences from its stages' results.
+
+1. Does a learned pick beat best-Q_C, and best-Q_G? The best supervised method of the
+   leaderboard (its highest IQM among classifiers, regressors and rankers) against each.
+2. Do the hand measures matter? The ablation's ROC-AUC without C1–C6 against all twelve, and, at
+   picking, best-Q_G (whose index leaves the hand measures out) against best-Q_C.
+3. Does the RL selector beat best-Q_C, and does it match the best supervised method?
+
+A pick's comparison is the difference of top-1 success (the pick's recorded success rate),
+paired over every held-out object with the leaderboard's stratified bootstrap: the same resamples
+(reps, seed) as the board's ``success_difference_vs_reference``, so a comparison with best-Q_C
+equals the board's. :func:`write_answers` writes ``answers.json``; the report words it
+(:mod:`classifiers.report.answers`).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from classifiers.experiments.benchmark.aggregate import estimate, mean, paired_bootstraps
+from classifiers.experiments.benchmark.leaderboard import REFERENCE, metric_matrices
+
+ANSWERS_FILE = "answers.json"
+#: Method name prefixes of the supervised learners on the leaderboard.
+SUPERVISED = ("classifier_", "regressor_", "ranker_")
+RL, BEST_QG = "rl", "best_qg"
+#: The leaderboard's bootstrap of top-1 success (:func:`study_benchmark`'s reps; its seed is
+#: ``learning.seed + 1``).
+REPS = 2000
+
+
+def best_supervised(board: dict[str, Any]) -> str | None:
+    """The leaderboard's first supervised method (it is sorted by IQM), or None."""
+    return next((name for name in board.get("methods", {}) if name.startswith(SUPERVISED)), None)
+
+
+def pick_differences(board: dict[str, Any], pairs: list[tuple[str, str]], seed: int,
+                     reps: int = REPS) -> dict[str, dict[str, Any]]:  # fmt: skip
+    """``{"a - b": {"method", "versus", "estimate", "ci", "objects"}}``: top-1 success of ``a``
+    minus ``b``, paired over every held-out object of ``board`` (its ``per_object`` rows)."""
+    metrics = pd.DataFrame(board["per_object"])
+    objects = sorted(set(metrics["object_id"]))
+    success = metric_matrices(metrics, "success", objects)
+    unknown = sorted({name for pair in pairs for name in pair} - set(success))
+    if unknown:
+        raise ValueError(f"the leaderboard has no method {unknown[0]!r}")
+    boot = paired_bootstraps(success, reps, seed + 1, task_bootstrap=True)
+    found = {}
+    for a, b in pairs:
+        difference = estimate(mean(success[a]) - mean(success[b]),
+                              mean(boot[a]) - mean(boot[b]))  # fmt: skip
+        found[f"{a} - {b}"] = {"method": a, "versus": b, **difference, "objects": len(objects)}
+    return found
+
+
+def study_answers(out: Path, seed: int) -> dict[str, Any]:
+    """The answers of the study in ``out`` (``seed``: its ``learning.seed``), from
+    ``benchmark/leaderboard.json`` and ``ablation/ablation.json``; a question whose stage
+    scored nothing has None."""
+    board = _json(out / "benchmark" / "leaderboard.json")
+    best = best_supervised(board)
+    ranked = len(board.get("objects", []))
+    wanted = [(best, REFERENCE), (best, BEST_QG), (BEST_QG, REFERENCE), (RL, REFERENCE),
+              (RL, best)] if best else [(BEST_QG, REFERENCE), (RL, REFERENCE)]  # fmt: skip
+    present = set(board.get("methods", {}))
+    pairs = [pair for pair in wanted if set(pair) <= present]
+    picks = pick_differences(board, pairs, seed) if pairs else {}
+    return {"best_supervised": best, "reference": REFERENCE, "ranked_objects": ranked,
+            "skipped": board.get("skipped"), "picks": picks,
+            "hand_measures": hand_difference(_json(out / "ablation" / "ablation.json")),
+            "leaderboard_dataset_sha256": board.get("split", {}).get("dataset_sha256")}  # fmt: skip
+
+
+def hand_difference(ablation: dict[str, Any]) -> dict[str, Any] | None:
+    """The ablation's paired ROC-AUC difference without the hand measures (C1–C6) against all
+    twelve, with its model and object count, or None without it."""
+    model = ablation.get("model")
+    block = (ablation.get("feature_sets", {}).get("without_hand", {})
+             .get("paired_difference", {}).get(model, {}).get("roc_auc"))  # fmt: skip
+    if block is None:
+        return None
+    return {"model": model, "mean": block["mean"], "ci": block["ci"],
+            "objects": ablation.get("cv", {}).get("n_objects")}
+
+
+def write_answers(out: str | Path, seed: int) -> Path:
+    """Write ``out/answers.json`` (:func:`study_answers`); returns its path."""
+    path = Path(out) / ANSWERS_FILE
+    path.write_text(json.dumps(study_answers(Path(out), seed), indent=2, default=_plain))
+    return path
+
+
+def _json(path: Path) -> dict[str, Any]:
+    return json.loads(path.read_text()) if path.is_file() else {}
+
+
+def _plain(value: Any) -> Any:
+    return value.item() if isinstance(value, np.generic) else str(value)

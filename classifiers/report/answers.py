@@ -1,0 +1,112 @@
+"""The study's questions and their answers, one sentence each, worded from ``answers.json``
+(:mod:`classifiers.experiments.answers`).
+
+The verb of every answer is :func:`classifiers.report.judge.relation` of the interval of the
+paired difference, the rule of the leaderboard's verdicts; a difference that cannot carry a
+verdict (:func:`~classifiers.report.judge.unjudgeable`, or too few ranked objects) is shown with
+the reason instead.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+from classifiers.report.judge import FEW_OBJECTS, relation, unjudgeable
+
+ANSWERS_FILE = "answers.json"
+_QC, _QG, _RL = "best-Q_C", "best-Q_G", "the RL selector"
+#: A difference of two rates (top-1 success, ROC-AUC) lies in [-1, 1].
+_SPAN = (-1.0, 1.0)
+
+
+def read_answers(out: Path) -> dict[str, Any] | None:
+    """The study's ``answers.json``, or None when it has none."""
+    path = Path(out) / ANSWERS_FILE
+    return json.loads(path.read_text()) if path.is_file() else None
+
+
+def signed(value: dict[str, Any], digits: int = 3) -> str:
+    """``+0.035 [+0.001, +0.072]`` of an ``{"estimate" or "mean", "ci"}`` block."""
+    point = value.get("estimate", value.get("mean"))
+    low, high = value["ci"]
+    return f"{point:+.{digits}f} [{low:+.{digits}f}, {high:+.{digits}f}]"
+
+
+def answers_preamble(answers: dict[str, Any]) -> str:
+    """What the answers' differences are: top-1 success, paired over the held-out objects."""
+    objects = next((row["objects"] for row in answers.get("picks", {}).values()), None)
+    over = f"the {objects} held-out objects" if objects else "the held-out objects"
+    return (f"A pick's difference is in top-1 success (how often the grip it picks holds), "
+            f"paired over {over}, with its 95 % stratified-bootstrap interval; the leaderboard "
+            "below judges the normalised score, so its verdict on a method can differ where the "
+            "two measures part.")
+
+
+def answer_sentences(answers: dict[str, Any]) -> list[str]:
+    """The three questions and their answers (Markdown), in the order the study asks them."""
+    return [_learned_pick(answers), _hand_measures(answers), _rl_selector(answers)]
+
+
+def strong_methods(answers: dict[str, Any]) -> list[str]:
+    """The methods the answers name, for the figures to draw strongly: the best supervised
+    method, the RL selector, best-Q_G and best-Q_C."""
+    best = answers.get("best_supervised")
+    return [name for name in (best, "rl", "best_qg", "best_qc") if name]
+
+
+def _learned_pick(answers: dict[str, Any]) -> str:
+    best = answers.get("best_supervised")
+    question = "**Does a learned pick beat best-Q_C, and best-Q_G?**"
+    if best is None:
+        return f"{question} Not answered: {_no_board(answers)}."
+    return (f"{question} `{best}`, the best supervised method on the leaderboard, "
+            f"{_compare(answers, best, 'best_qc', _QC)} and "
+            f"{_compare(answers, best, 'best_qg', _QG)}.")
+
+
+def _hand_measures(answers: dict[str, Any]) -> str:
+    question = "**Do the hand measures (C1–C6) matter?**"
+    hand = answers.get("hand_measures")
+    if hand is None:
+        learned = "The ablation did not run"
+    else:
+        problem = unjudgeable(hand, hand.get("objects"), _SPAN)
+        learned = (f"A classifier ({hand['model']}) without them changes ROC-AUC by "
+                   f"{signed(hand)}, no verdict ({problem})" if problem else
+                   f"A classifier ({hand['model']}) without them **{relation(hand['ci'])}** "
+                   f"itself with all twelve measures (ROC-AUC {signed(hand)})")  # fmt: skip
+    return (f"{question} {learned}; at picking, {_QG}, whose index leaves them out, "
+            f"{_compare(answers, 'best_qg', 'best_qc', _QC)}.")
+
+
+def _rl_selector(answers: dict[str, Any]) -> str:
+    question = ("**Does the RL selector beat best-Q_C, and does it match the best supervised "
+                "method?**")
+    best = answers.get("best_supervised")
+    against_best = (f" and {_compare(answers, 'rl', best, f'`{best}`')}" if best else "")
+    found = "rl - best_qc" in answers.get("picks", {})
+    if not found:
+        return f"{question} Not answered: {_no_board(answers) or 'no RL selector was scored'}."
+    return (f"{question} {_RL[:1].upper()}{_RL[1:]} "
+            f"{_compare(answers, 'rl', 'best_qc', _QC)}{against_best}.")
+
+
+def _compare(answers: dict[str, Any], method: str, versus: str, shown: str) -> str:
+    """``beats best-Q_C (+0.035 [+0.001, +0.072])``, or the numbers with why no verdict."""
+    row = answers.get("picks", {}).get(f"{method} - {versus}")
+    if row is None:
+        return f"was not compared with {shown} (one of them was not scored)"
+    ranked = answers.get("ranked_objects", 0)
+    value = {"mean": row["estimate"], "ci": row["ci"]}
+    problem = unjudgeable(value, row.get("objects"), _SPAN)
+    if problem is None and ranked < FEW_OBJECTS:
+        problem = f"only {ranked} held-out object(s) could be ranked (fewer than {FEW_OBJECTS})"
+    if problem:
+        return f"against {shown}: {signed(row)}, no verdict ({problem})"
+    return f"**{relation(row['ci'])}** {shown} ({signed(row)})"
+
+
+def _no_board(answers: dict[str, Any]) -> str:
+    return str(answers.get("skipped") or "the leaderboard ranked no supervised method")
