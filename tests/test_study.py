@@ -123,6 +123,15 @@ def _assert_readme_is_the_run(readme: Path, metrics: dict, selector: dict) -> No
                 f"{interval_text(scores['top1_success'], 2)} |") in block
     for name, scores in selector["policies"].items():
         assert f"| {name} | {interval_text(scores['success_rate'], 2)} |" in block
+    assert "**Does a learned pick beat best-Q_C, and best-Q_G?**" in block
+    # the figures beside the README are this run's, as the committed README's test checks;
+    # its gallery line is the published one
+    from test_published_results import _check_one_run
+
+    from classifiers.report.published import GALLERY, figure_markdown
+
+    readme.write_text(figure_markdown(GALLERY) + "\n" + readme.read_text())
+    _check_one_run(readme)
 
 
 def test_study_refuses_a_bad_config(tmp_path):
