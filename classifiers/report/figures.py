@@ -128,7 +128,7 @@ def grip_gallery(
 ) -> Path:
     """Each object with its best (solid) and worst (faint) grip by Q_C and their outcomes; axes
     in mm, one legend for the figure. ``kinds`` (one per object, e.g. "mesh") head each panel's
-    title; ``title`` goes above the legend."""
+    title; ``title`` is a line under the panels."""
     rows = int(np.ceil(len(objects) / columns))
     fig = Figure(figsize=(3.2 * columns, 3.2 * rows + (0.4 if title else 0.0)))
     axes = np.atleast_1d(fig.subplots(rows, columns)).ravel()
@@ -152,14 +152,14 @@ def grip_gallery(
         ax.set_xlabel("")
         ax.set_ylabel("")
         ax.tick_params(labelsize=6)
-    fig.supxlabel("x (mm)", fontsize=9)
+    bottom = 0.4 / (3.2 * rows + 0.4) if title else 0.0
+    fig.supxlabel("x (mm)", fontsize=9, y=bottom + 0.01, va="bottom")
     fig.supylabel("y (mm)", fontsize=9)
+    if title:
+        fig.text(0.5, 0.004, title, ha="center", va="bottom", fontsize=10, weight="bold")
     handles, labels = grip_legend(others="worst grip by Q_C (faint)")
     top = add_grip_legend(fig, handles, labels, ncol=4, fontsize=8)
-    if title:
-        fig.suptitle(title, fontsize=10, y=0.995)
-        top += 0.4 / (3.2 * rows + 0.4)
-    fig.tight_layout(rect=(0, 0, 1, 1 - top))
+    fig.tight_layout(rect=(0, bottom, 1, 1 - top))
     return save_figure(fig, path, dpi=100)
 
 
