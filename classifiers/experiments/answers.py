@@ -19,7 +19,6 @@ import json
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pandas as pd
 
 from classifiers.experiments.benchmark.aggregate import estimate, mean, paired_bootstraps
@@ -91,13 +90,9 @@ def hand_difference(ablation: dict[str, Any]) -> dict[str, Any] | None:
 def write_answers(out: str | Path, seed: int) -> Path:
     """Write ``out/answers.json`` (:func:`study_answers`); returns its path."""
     path = Path(out) / ANSWERS_FILE
-    path.write_text(json.dumps(study_answers(Path(out), seed), indent=2, default=_plain))
+    path.write_text(json.dumps(study_answers(Path(out), seed), indent=2))
     return path
 
 
 def _json(path: Path) -> dict[str, Any]:
     return json.loads(path.read_text()) if path.is_file() else {}
-
-
-def _plain(value: Any) -> Any:
-    return value.item() if isinstance(value, np.generic) else str(value)
