@@ -95,6 +95,8 @@ def test_the_answers_are_worded_from_their_intervals(tmp_path):
 
     few = {**answers, "ranked_objects": 6}
     assert "no verdict (only 6 held-out object(s) could be ranked" in answer_sentences(few)[0]
+    no_rl = {**answers, "picks": {k: v for k, v in picks.items() if not k.startswith("rl")}}
+    assert answer_sentences(no_rl)[2].endswith("Not answered: no RL selector was scored.")
     flat = {**answers, "hand_measures": {"model": "hgb", "mean": 0.0, "ci": [0.0, 0.0],
                                          "objects": 40}}
     assert "changes ROC-AUC by +0.000 [+0.000, +0.000], no verdict (its interval has zero " \

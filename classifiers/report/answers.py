@@ -16,7 +16,7 @@ from typing import Any
 from classifiers.report.judge import FEW_OBJECTS, relation, unjudgeable
 
 ANSWERS_FILE = "answers.json"
-_QC, _QG, _RL = "best-Q_C", "best-Q_G", "the RL selector"
+_QC, _QG = "best-Q_C", "best-Q_G"
 #: A difference of two rates (top-1 success, ROC-AUC) lies in [-1, 1].
 _SPAN = (-1.0, 1.0)
 
@@ -84,13 +84,11 @@ def _hand_measures(answers: dict[str, Any]) -> str:
 def _rl_selector(answers: dict[str, Any]) -> str:
     question = ("**Does the RL selector beat best-Q_C, and does it match the best supervised "
                 "method?**")
+    if "rl - best_qc" not in answers.get("picks", {}):
+        return f"{question} Not answered: {answers.get('skipped') or 'no RL selector was scored'}."
     best = answers.get("best_supervised")
-    against_best = (f" and {_compare(answers, 'rl', best, f'`{best}`')}" if best else "")
-    found = "rl - best_qc" in answers.get("picks", {})
-    if not found:
-        return f"{question} Not answered: {_no_board(answers) or 'no RL selector was scored'}."
-    return (f"{question} {_RL[:1].upper()}{_RL[1:]} "
-            f"{_compare(answers, 'rl', 'best_qc', _QC)}{against_best}.")
+    against_best = f" and {_compare(answers, 'rl', best, f'`{best}`')}" if best else ""
+    return f"{question} The RL selector {_compare(answers, 'rl', 'best_qc', _QC)}{against_best}."
 
 
 def _compare(answers: dict[str, Any], method: str, versus: str, shown: str) -> str:
