@@ -33,6 +33,9 @@ MANIFEST_FILE = "manifest.json"
 EXECUTION_FIELDS = ("workers", "backend")
 #: Config sections only the learning stages read: a dataset is the same run whatever they say.
 LEARNING_SECTIONS = ("learning", "selector")
+#: Settings added after datasets were made without them, with the value that reproduces those
+#: datasets: a run identity leaves them out at that value, so such a dataset stays this code's run.
+LATER_SETTINGS: dict[str, dict[str, Any]] = {"synthesis": {"frictional_closure": False}}
 _VERSIONED_PACKAGES = ("numpy", "pandas", "pyarrow", "pybullet", "scipy", "shapely", "pydantic")
 
 Manifest = dict[str, Any]
@@ -67,6 +70,10 @@ def run_identity(
     settings = config.model_dump(mode="json")
     for name in EXECUTION_FIELDS:
         settings["dataset"].pop(name, None)
+    for section, later in LATER_SETTINGS.items():
+        for name, value in later.items():
+            if settings[section].get(name) == value:
+                del settings[section][name]
     identity = {"config": settings, "object_ids": [entry.object_id for entry in entries],
                 "label_model": LABEL_MODEL}
     if own_objects:
