@@ -61,8 +61,9 @@ class FormatVersionError(ValueError):
 def run_identity(
     config: Config, entries: list[DatasetObject], own_objects: bool = False
 ) -> dict[str, Any]:
-    """Everything that determines a dataset's rows: config (minus execution fields and the
-    learning sections), objects and the label model (a new one never resumes an old run).
+    """Everything that determines a dataset's rows: config (minus execution fields, the learning
+    sections and :data:`LATER_SETTINGS` at their reproducing value), objects and the label model
+    (a new one never resumes an old run).
 
     Named and procedural objects are fixed by their ids and the config; a caller's own objects
     (``own_objects``) also by the SHA-256 of their contours, so an edited file is a new run.
