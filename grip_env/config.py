@@ -132,6 +132,13 @@ class SynthesisConfig(_Section):
         1.0, ge=0.0, le=50.0,
         description="least depth of the force focus in front of every contact (a camera pixel)",
     )
+    frictional_closure: bool = Field(
+        False,
+        description="three-finger grasps need force closure with friction mu only, so an "
+                    "antipodal pair inside its friction cones plus a third contact (a cross's "
+                    "arm and its tip) is kept; off, their normals must positively span the plane "
+                    "(the standard dataset's planner)",
+    )
 
 
 #: The synthesis defaults, shared by every planner that is given no config.

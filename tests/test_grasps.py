@@ -7,17 +7,25 @@ import math
 import numpy as np
 import pytest
 from hypothesis import given, settings
+from hypothesis import strategies as st
 from planar_cases import Motion, cross, rigid_motions, side_regions
 
-from grip_env.config import SynthesisConfig
+from grip_env.config import PerceptionConfig, SynthesisConfig
 from grip_env.objects import PlanarObject, make_shape
-from grip_env.objects.shapes import rectangle
+from grip_env.objects.shapes import greek_cross, rectangle
 from grip_env.params import GraspParams
-from grip_env.perception.regions import Regions
-from grip_env.planning.grasps import END_FRACTION, HALF_FINGER_BASE_MM, Grasps, synthesize_grasps
+from grip_env.perception.regions import Regions, find_regions
+from grip_env.planning.grasps import (
+    END_FRACTION,
+    HALF_FINGER_BASE_MM,
+    Grasps,
+    largest_gap_rad,
+    synthesize_grasps,
+)
 
 PARAMS = GraspParams()
 ALL = SynthesisConfig(max_grasps=100_000)
+FRICTIONAL = ALL.model_copy(update={"frictional_closure": True})
 
 
 def _focus_depths(grasps: Grasps) -> np.ndarray:
@@ -113,6 +121,71 @@ def test_tilted_regions_pair_only_within_the_friction_cone():
         grasps = synthesize_grasps(side_regions(obj), obj, PARAMS, ALL)
         pairs = {tuple(r) for r in grasps.region[grasps.two_finger][:, [0, 2]]}
         assert (({(0, 2), (2, 0)} & pairs) != set()) is expected
+
+
+def _closes_with_friction(grasps: Grasps, mu: float) -> np.ndarray:
+    """(G,) whether each three-finger grasp's normals positively span the plane, or the two
+    normals that bound the largest gap make an antipodal pair: the line between their contacts
+    within arctan(mu) of both normals (force closure with friction, whatever the third)."""
+    angles = np.arctan2(grasps.normals[..., 1], grasps.normals[..., 0])
+    order = np.argsort(angles, axis=1)
+    sorted_angles = np.take_along_axis(angles, order, axis=1)
+    gaps = np.diff(sorted_angles, axis=1, append=sorted_angles[:, :1] + 2 * np.pi)
+    widest = gaps.argmax(axis=1)
+    rows = np.arange(len(grasps))
+    i, j = order[rows, widest], order[rows, (widest + 1) % 3]
+    line = grasps.contacts[rows, j] - grasps.contacts[rows, i]
+    line /= np.linalg.norm(line, axis=1, keepdims=True)
+    inside = ((np.sum(line * grasps.normals[rows, i], axis=1) > math.cos(math.atan(mu)))
+              & (np.sum(-line * grasps.normals[rows, j], axis=1) > math.cos(math.atan(mu))))
+    return (gaps.max(axis=1) < np.pi) | inside
+
+
+def _antipodal_widths(grasps: Grasps) -> np.ndarray:
+    """Distances between the contacts of every pair with opposite normals, over all grasps."""
+    pairs = ((0, 1), (0, 2), (1, 2))
+    widths = [np.linalg.norm(grasps.contacts[:, a] - grasps.contacts[:, b], axis=1)[
+        np.sum(grasps.normals[:, a] * grasps.normals[:, b], axis=1) < -1 + 1e-9] for a, b in pairs]
+    return np.concatenate(widths)
+
+
+@settings(max_examples=10, deadline=None)
+@given(width=st.floats(24.0, 60.0), arm=st.floats(25.0, 60.0), angle=st.floats(-math.pi, math.pi),
+       offset=st.tuples(st.floats(-200, 200), st.floats(-200, 200)))
+def test_a_cross_has_antipodal_grasps_across_an_arm(width, arm, angle, offset):
+    """Issue 44: a cross has only sides along its two axes, so no three of its normals
+    positively span the plane: the recorded planner finds no three-finger grasp (and, on arms
+    shorter than two fingers 50 mm apart, none at all). With friction, two opposite sides of an
+    arm and its tip are force closure (the two sides' contacts face each other along their
+    normals)."""
+    obj = PlanarObject.from_polygon(greek_cross(width, width + 2 * arm)).transformed(angle, offset)
+    regions = side_regions(obj)
+    assert synthesize_grasps(regions, obj, PARAMS, ALL).two_finger.all()
+    grasps = synthesize_grasps(regions, obj, PARAMS, FRICTIONAL)
+    three = grasps.take(np.nonzero(~grasps.two_finger)[0])
+    assert np.any(np.abs(_antipodal_widths(three) - width) < 1e-6)  # across an arm
+    assert _closes_with_friction(three, PARAMS.mu).all()
+
+
+@pytest.mark.parametrize("shape", ["star", "ellipse", "bean", "trapezoid", "l_shape"])
+def test_frictional_closure_adds_only_grasps_that_close_with_friction(shape):
+    obj = make_shape(shape)
+    regions = find_regions(obj, PerceptionConfig(), PARAMS)
+    spanning = synthesize_grasps(regions, obj, PARAMS, ALL)
+    frictional = synthesize_grasps(regions, obj, PARAMS, FRICTIONAL)
+    added = len(frictional) - len(spanning)
+    assert added > 0 if shape in ("ellipse", "bean", "l_shape") else added >= 0
+    three = frictional.take(np.nonzero(~frictional.two_finger)[0])
+    assert _closes_with_friction(three, PARAMS.mu).all()
+    # the recorded planner's grasps are among them
+    key = {tuple(np.round(c, 9).ravel()) for c in frictional.contacts}
+    assert all(tuple(np.round(c, 9).ravel()) in key for c in spanning.contacts)
+
+
+def test_the_largest_gap_is_pi_without_friction_and_pi_plus_the_cone_with_it():
+    assert largest_gap_rad(PARAMS, ALL) == pytest.approx(np.pi, abs=1e-5)
+    assert largest_gap_rad(PARAMS, ALL) < np.pi
+    assert largest_gap_rad(GraspParams(mu=0.3), FRICTIONAL) == pytest.approx(np.pi + math.atan(0.3))
 
 
 def test_max_grasps_keeps_the_best_ranked():

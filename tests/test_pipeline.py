@@ -5,13 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
+from hypothesis import strategies as st
 from planar_cases import Motion, cross, rigid_motions, side_regions
 
 from grip_env.columns import CANDIDATE_COLUMNS
 from grip_env.config import Config
 from grip_env.objects import PlanarObject, load_object_set, make_shape, procedural_objects
-from grip_env.objects.shapes import rectangle, regular_polygon
+from grip_env.objects.shapes import greek_cross, rectangle, regular_polygon
 from grip_env.params import GraspParams
 from grip_env.perception.regions import Regions, find_regions
 from grip_env.planning.barrett import (
@@ -154,7 +155,7 @@ def test_object_without_feasible_grip_gives_an_empty_table(case):
     if case == "huge":  # contacts 300 mm from the centre: beyond every finger's reach
         obj = PlanarObject.from_polygon(regular_polygon(3, 600, np.pi / 2))
         regions = side_regions(obj, inset=60)
-    elif case == "cross":  # axis-aligned sides only, arms too short for two fingers
+    elif case == "cross":  # recorded planner: no spanning normals, arms too short for 2 fingers
         obj = make_shape("cross")
         regions = side_regions(obj)
     else:
@@ -162,6 +163,38 @@ def test_object_without_feasible_grip_gives_an_empty_table(case):
     table = candidates(obj, PARAMS, CONFIG, regions=regions)
     assert len(table) == 0
     assert list(table.columns) == list(CANDIDATE_COLUMNS)
+
+
+FRICTIONAL = CONFIG.override(synthesis={"frictional_closure": True})
+
+
+@settings(max_examples=4, deadline=None)
+@given(width=st.floats(24.0, 60.0), arm=st.floats(25.0, 50.0))
+@example(width=24.0, arm=25.0625)  # lost its grips across an arm to the 200-grasp cut
+def test_the_hand_holds_a_cross_across_an_arm(width, arm):
+    """Issue 44: two contacts of a grip on the two sides of one arm, facing each other (the
+    third on the arm's tip or another side), in a configuration the hand reaches and executes
+    (the search's reach tests) and that satisfies the hand model."""
+    obj = PlanarObject.from_polygon(greek_cross(width, width + 2 * arm), name="cross")
+    assert candidates(obj, PARAMS, CONFIG).empty  # the recorded planner
+    # every grasp: with 200, a short-armed cross's grasps across the whole cross outrank them
+    table = candidates(obj, PARAMS, FRICTIONAL.override(synthesis={"max_grasps": 100_000}))
+    p, n = _xy(table, "p"), _xy(table, "n")
+    across = np.zeros(len(table), dtype=bool)
+    for a, b in ((0, 1), (0, 2), (1, 2)):
+        facing = np.sum(n[:, a] * n[:, b], axis=1) < -1 + 1e-9
+        across |= facing & (np.abs(np.linalg.norm(p[:, a] - p[:, b], axis=1) - width) < 1e-6)
+    assert across.any()
+    assert_row_geometry(table, obj, FRICTIONAL)
+
+
+@pytest.mark.parametrize("name", ["cross", "notched_rectangle"])
+def test_rectilinear_shapes_get_grips_with_frictional_closure(name):
+    obj = make_shape(name)
+    assert candidates(obj, PARAMS, CONFIG).empty
+    table = candidates(obj, PARAMS, FRICTIONAL)
+    assert len(table) > 50
+    assert_row_geometry(table, obj, FRICTIONAL)
 
 
 def test_bad_input_is_refused():

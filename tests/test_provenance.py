@@ -76,3 +76,21 @@ def test_the_dataset_identity_ignores_the_learning_sections():
     old = {**base, "config": {**base["config"], "learning": {"seed": 1}}}  # an older manifest
     assert identity_differences(without_learning(old), base) == []
     assert identity_differences(run_identity(Config().override(dataset={"seed": 9}), []), base)
+
+
+def test_the_standard_dataset_stays_the_run_of_its_recorded_config():
+    """A setting added since (``synthesis.frictional_closure``), at the value that reproduces the
+    recorded planner, leaves the identity as recorded: the dataset resumes and extends as the
+    code's run; turned on, it is another run."""
+    import json
+
+    from grip_env.dataset.manifest import identity_differences, run_identity, without_learning
+    from grip_env.datasets import standard_path
+
+    manifest = json.loads((standard_path() / "manifest.json").read_text(encoding="utf-8"))
+    config = Config.model_validate(manifest["config"])
+    recorded = without_learning(manifest["identity"])["config"]
+    assert identity_differences(recorded, run_identity(config, [])["config"]) == []
+    on = config.override(synthesis={"frictional_closure": True})
+    assert identity_differences(recorded, run_identity(on, [])["config"]) == [
+        "synthesis.frictional_closure: None -> True"]

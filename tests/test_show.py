@@ -33,6 +33,19 @@ def test_show_draws_regions_and_best_grips(runner, tmp_path):
         assert image.size[0] >= 500 and image.size[1] >= 500
 
 
+def test_show_says_when_an_object_has_grips_only_with_frictional_closure(runner, tmp_path):
+    result = runner.invoke(app, ["show", "cross", "--grips", "3", "--out", str(tmp_path / "a.png")])
+    assert result.exit_code == 0, result.output
+    assert "no grip when three-finger grasps need normals that span" in result.output
+    assert "synthesis.frictional_closure: true) it has" in result.output
+    config = tmp_path / "friction.yaml"
+    config.write_text("synthesis:\n  frictional_closure: true\n")
+    result = runner.invoke(app, ["show", "cross", "--grips", "3", "--config", str(config),
+                                 "--out", str(tmp_path / "b.png")])
+    assert result.exit_code == 0, result.output
+    assert "no grip" not in result.output
+
+
 @pytest.mark.slow
 def test_show_sim_writes_a_strip_of_the_trial(runner, tmp_path):
     out = tmp_path / "trial.png"

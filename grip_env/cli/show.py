@@ -134,10 +134,27 @@ def _draw(planar: PlanarObject, cfg: Config, grips: int, out: Path) -> Path:
         from grip_env.planning.pipeline import candidates
 
         table = candidates(planar, cfg.grasp, cfg, regions=regions).head(grips)
+        if table.empty:
+            _explain_no_grip(planar, cfg, regions)
     title = f"{planar.name}: {len(regions)} regions"
     if table is not None:
         title += f", best {len(table)} grips by Q_C"
     return save_figure(object_figure(planar, regions, table, title), out)
+
+
+def _explain_no_grip(planar: PlanarObject, cfg: Config, regions) -> None:
+    """Say when an object without grips has some under frictional closure (a cross, a notched
+    rectangle: no three of their normals positively span the plane)."""
+    from grip_env.planning.pipeline import candidates
+
+    if cfg.synthesis.frictional_closure:
+        return
+    frictional = cfg.override(synthesis={"frictional_closure": True})
+    found = len(candidates(planar, cfg.grasp, frictional, regions=regions))
+    if found:
+        typer.echo(f"{planar.name}: no grip when three-finger grasps need normals that span the "
+                   f"plane without friction (the default, the standard dataset's planner); "
+                   f"with friction (synthesis.frictional_closure: true) it has {found}")
 
 
 def _render_trial(planar: PlanarObject, cfg: Config, grips: int, seed: int, out: Path) -> Path:

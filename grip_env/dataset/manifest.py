@@ -33,6 +33,9 @@ MANIFEST_FILE = "manifest.json"
 EXECUTION_FIELDS = ("workers", "backend")
 #: Config sections only the learning stages read: a dataset is the same run whatever they say.
 LEARNING_SECTIONS = ("learning", "selector")
+#: Settings added after datasets were made without them, with the value that reproduces those
+#: datasets: a run identity leaves them out at that value, so such a dataset stays this code's run.
+LATER_SETTINGS: dict[str, dict[str, Any]] = {"synthesis": {"frictional_closure": False}}
 _VERSIONED_PACKAGES = ("numpy", "pandas", "pyarrow", "pybullet", "scipy", "shapely", "pydantic")
 
 Manifest = dict[str, Any]
@@ -58,8 +61,9 @@ class FormatVersionError(ValueError):
 def run_identity(
     config: Config, entries: list[DatasetObject], own_objects: bool = False
 ) -> dict[str, Any]:
-    """Everything that determines a dataset's rows: config (minus execution fields and the
-    learning sections), objects and the label model (a new one never resumes an old run).
+    """Everything that determines a dataset's rows: config (minus execution fields, the learning
+    sections and :data:`LATER_SETTINGS` at their reproducing value), objects and the label model
+    (a new one never resumes an old run).
 
     Named and procedural objects are fixed by their ids and the config; a caller's own objects
     (``own_objects``) also by the SHA-256 of their contours, so an edited file is a new run.
@@ -67,6 +71,10 @@ def run_identity(
     settings = config.model_dump(mode="json")
     for name in EXECUTION_FIELDS:
         settings["dataset"].pop(name, None)
+    for section, later in LATER_SETTINGS.items():
+        for name, value in later.items():
+            if settings[section].get(name) == value:
+                del settings[section][name]
     identity = {"config": settings, "object_ids": [entry.object_id for entry in entries],
                 "label_model": LABEL_MODEL}
     if own_objects:

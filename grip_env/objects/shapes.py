@@ -38,6 +38,16 @@ def star(tips: int, outer: float, inner: float) -> Vertices:
     return np.column_stack([radii * np.cos(angles), radii * np.sin(angles)])
 
 
+def greek_cross(arm_width: float, span: float) -> Vertices:
+    """A cross of four equal arms ``arm_width`` wide, ``span`` from tip to opposite tip, centred
+    at the origin with its arms along the axes."""
+    if not 0 < arm_width < span:
+        raise ValueError(f"a cross needs 0 < arm_width < span, got {arm_width} and {span}")
+    h, r = arm_width / 2, span / 2
+    return np.array([[-h, -r], [h, -r], [h, -h], [r, -h], [r, h], [h, h], [h, r], [-h, r],
+                     [-h, h], [-r, h], [-r, -h], [-h, -h]], dtype=float)
+
+
 def rounded_rectangle(width: float, height: float, radius: float, arc_points: int = 8) -> Vertices:
     """Rectangle with circular corners of the given radius."""
     w, h = width / 2 - radius, height / 2 - radius
@@ -62,9 +72,7 @@ _SHAPES: dict[str, Callable[[], Vertices]] = {
     "t_shape": lambda: np.array(
         [[-18, -60], [18, -60], [18, 20], [55, 20], [55, 55], [-55, 55], [-55, 20], [-18, 20]],
         dtype=float),
-    "cross": lambda: np.array(
-        [[-18, -55], [18, -55], [18, -18], [55, -18], [55, 18], [18, 18], [18, 55], [-18, 55],
-         [-18, 18], [-55, 18], [-55, -18], [-18, -18]], dtype=float),
+    "cross": lambda: greek_cross(36, 110),
     "star": lambda: star(5, 65, 32),
     "notched_rectangle": lambda: np.array(
         [[-50, -30], [50, -30], [50, 30], [12, 30], [12, 12], [-12, 12], [-12, 30], [-50, 30]],

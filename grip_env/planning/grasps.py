@@ -10,6 +10,13 @@ through C_G by construction. A candidate is kept when P_c lies inside its region
 ends, C_G lies in front of every contact and inside the object, and the normals positively span
 the plane (every gap between consecutive normal directions is below pi). With the lines exactly
 concurrent and the focus in front of all contacts this is planar force closure for any mu > 0.
+That rule asks for closure without friction, and a shape whose sides run along two axes only
+(a cross, a notched rectangle) has no such triplet. ``config.frictional_closure`` asks for
+closure with friction mu instead: the largest gap may reach pi + arctan(mu), where the two
+normals that bound it form an antipodal pair within their friction cones
+(:func:`largest_gap_rad`), e.g. the two sides of a cross's arm and its tip. It is off by default:
+the recorded planner (the standard dataset's) has it off, and on it changes the candidates of
+about half the standard dataset's objects (BENCHMARKS.md, "Frictional closure").
 "In front" means by at least ``config.focus_margin_mm`` along each contact's normal (default one
 pixel of the camera): a grasp whose focus sits within a pixel of a contact is on the edge of
 that rule, and which side of it the grasp falls on is decided by sub-pixel detail of the contour
@@ -157,7 +164,8 @@ def synthesize_grasps(
     if config.contacts_per_region == 1:
         t = np.array([0.5])
     grasps = Grasps.concatenate([
-        _three_finger(regions, obj, t, _SHORTLIST * config.max_grasps, config.focus_margin_mm),
+        _three_finger(regions, obj, t, _SHORTLIST * config.max_grasps, config.focus_margin_mm,
+                      largest_gap_rad(params, config)),
         _two_finger(regions, obj, config.contacts_per_region, params),
     ])
     if len(grasps) == 0:
@@ -168,13 +176,29 @@ def synthesize_grasps(
 
 
 # ----------------------------------------------------------------------------- three fingers
+def largest_gap_rad(params: GraspParams = DEFAULT_PARAMS,
+                    config: SynthesisConfig = DEFAULT_SYNTHESIS) -> float:
+    """Largest gap between consecutive normal directions a three-finger grasp may have (rad).
+
+    Below pi (less a rounding slack) the normals positively span the plane: force closure without
+    friction. With ``config.frictional_closure``, up to pi + arctan(mu): the two normals that
+    bound the largest gap are then within arctan(mu) of antiparallel, and as their lines meet at
+    the focus in front of both, the line between the two contacts lies inside both friction
+    cones (the triangle's angles at the two contacts sum to gap - pi): an antipodal pair, force
+    closure with friction mu, whatever the third contact.
+    """
+    if config.frictional_closure:
+        return np.pi + params.friction_angle
+    return np.pi - _GAP_SLACK_RAD
+
+
 def _three_finger(regions: Regions, obj: PlanarObject, t: Array, limit: int,
-                  margin: float) -> Grasps:
+                  margin: float, max_gap: float) -> Grasps:
     if len(regions) < 3:
         return Grasps.empty()
     triplets = np.array(list(combinations(range(len(regions)), 3)))
-    # the normals must positively span the plane (a property of the regions alone)
-    triplets = triplets[_largest_gap(regions.normal[triplets]) < np.pi - _GAP_SLACK_RAD]
+    # force closure (a property of the regions' normals alone; see largest_gap_rad)
+    triplets = triplets[_largest_gap(regions.normal[triplets]) < max_gap]
     # every region of a triplet takes a turn at being the one solved last (index 2)
     ordered = np.concatenate([np.roll(triplets, shift, axis=1) for shift in range(3)])
     # the first two normals must cross: parallel ones have no focus
