@@ -126,7 +126,9 @@ def test_show_sim_draws_the_phases_and_outcome_of_each_asked_grip(
     assert result.exit_code == 0, result.output
     [figure_rows] = drawn
     assert len(figure_rows) == len(simulated) == rows  # --grips was ignored with --sim
-    best = candidates(make_shape("rectangle")).head(rows)
+    from grip_env.dataset import planned_candidates
+
+    best = planned_candidates(make_shape("rectangle"))[1].head(rows)  # as generate plans it
     lines = [line for line in result.output.splitlines() if line.startswith("trial of")]
     for (title, frames), (trial, _), grip_id, line in zip(
         figure_rows, simulated, best["grip_id"], lines, strict=True
