@@ -65,6 +65,11 @@ class PlannedObject:
     def name(self) -> str:
         return self.true.name
 
+    @property
+    def outline(self) -> str:
+        """What the grips are planned on, in a figure's words."""
+        return "true outline" if self.planned_on is self.true else "perceived contour"
+
 
 def perceives(contour: Contour | None, config: Config) -> bool:
     """Whether grips are planned on the perceived contour under ``--contour`` and ``config``."""

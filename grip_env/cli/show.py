@@ -57,8 +57,8 @@ def show(
 
     Regions and grips are found where generate finds them: on the perceived contour by default
     (see --contour); the figure's title says which, and so does the output when grips are
-    drawn. Exit codes: 0 done; 2 bad input, or grips asked for
-    (--grips N, --sim) and no object has a feasible one (nothing is written).
+    drawn. Exit codes: 0 done; 2 bad input, or grips asked for (--grips N, --sim) and no object
+    has a feasible one (nothing is written).
     """
     with user_errors():
         from grip_env.config import load_config
@@ -100,14 +100,15 @@ def _echo_best(planned: list[PlannedObject], grips: int) -> None:
 def _draw_sheet(planned: list[PlannedObject], cfg: Config, grips: int, out: Path) -> Path:
     """Every object with its regions (and its best ``grips`` grips), side by side (up to 6 a
     row), in one PNG."""
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     from grip_env.drawing import draw_grip, draw_object, save_figure
     from grip_env.perception.regions import find_regions
 
     columns = min(6, len(planned))
     rows = -(-len(planned) // columns)
-    fig, axes = plt.subplots(rows, columns, figsize=(2.6 * columns, 2.6 * rows), squeeze=False)
+    fig = Figure(figsize=(2.6 * columns, 2.6 * rows))
+    axes = fig.subplots(rows, columns, squeeze=False)
     for ax in axes.flat[len(planned):]:
         ax.set_axis_off()
     for ax, item in zip(axes.flat, planned, strict=False):
@@ -120,6 +121,9 @@ def _draw_sheet(planned: list[PlannedObject], cfg: Config, grips: int, out: Path
                 draw_grip(ax, grip, highlight=rank == 0)
             title += f", best {len(best)} grips" if len(best) else ", no feasible grip"
         ax.set_title(title, fontsize=8)
+    found = "regions and grips" if grips else "regions"
+    fig.suptitle(f"{found} on each object's {planned[0].outline}", fontsize=9)
+    fig.tight_layout()
     return save_figure(fig, out)
 
 
@@ -129,8 +133,7 @@ def _draw(item: PlannedObject, cfg: Config, grips: int, out: Path) -> Path:
 
     regions = find_regions(item.planned_on, cfg.perception, cfg.grasp)
     table = None if not grips or item.table is None else item.table.head(grips)
-    outline = "perceived contour" if item.planned_on is not item.true else "true outline"
-    title = f"{item.name}: {len(regions)} regions on its {outline}"
+    title = f"{item.name}: {len(regions)} regions on its {item.outline}"
     if table is not None:
         title += f", best {len(table)} grips by Q_C"
     return save_figure(object_figure(item.planned_on, regions, table, title), out)
