@@ -191,3 +191,26 @@ def test_show_suggests_the_nearest_object_name(runner, tmp_path, name, nearest):
     result = runner.invoke(app, ["show", name, "--out", str(tmp_path / "x.png")])
     assert result.exit_code == 2
     assert f"error: unknown object {name!r}; did you mean {nearest!r}?" in result.output
+
+
+@pytest.mark.parametrize("spec", ["star", "duck"])
+def test_a_scale_is_refused_for_an_object_that_is_no_image(runner, tmp_path, spec):
+    out = tmp_path / "x.png"
+    result = runner.invoke(app, ["show", spec, "--mm-per-px", "2", "--out", str(out)])
+    assert result.exit_code == 2
+    assert f"error: --mm-per-px 2 is for image files, and {spec} is none" in result.output
+
+
+def test_generate_names_the_objects_without_grips_and_counts_the_rest(capsys):
+    from grip_env.cli.generate import _report_objects_without_grips
+    from grip_env.dataset.manifest import objects_without_grips
+
+    ids = [f"o{i:02d}" for i in range(14)]
+    manifest = {"objects": [{"object_id": i} for i in ids],
+                "shards": {i: {"rows": 0 if int(i[1:]) % 7 else 5} for i in ids[:-1]}}
+    empty = objects_without_grips(manifest)
+    assert empty == [i for i in ids[:-1] if int(i[1:]) % 7]  # o13 is unfinished: not counted
+    _report_objects_without_grips(manifest)
+    said = capsys.readouterr().out
+    assert said.startswith(f"{len(empty)} of 14 objects got no feasible grip: "
+                           f"{', '.join(empty[:10])} and {len(empty) - 10} more")

@@ -153,16 +153,16 @@ def _one_object(spec: str, mm_per_px: float | None, config: Config) -> PlanarObj
     from grip_env.objects import object_from_spec
     from grip_env.objects.sources import IMAGE_SUFFIXES, check_image_size, image_scale
 
-    mesh = mesh_from_spec(spec, config.dataset.seed, config.objects)
-    if mesh is not None:
-        return mesh
-    _check_name(spec)
     path = Path(spec)
     if path.suffix.lower() in IMAGE_SUFFIXES and path.is_file():
         check_image_size(path)
         return object_from_spec(spec, image_scale(path, mm_per_px))
     if mm_per_px is not None:
         raise ValueError(f"--mm-per-px {mm_per_px:g} is for image files, and {spec} is none")
+    mesh = mesh_from_spec(spec, config.dataset.seed, config.objects)
+    if mesh is not None:
+        return mesh
+    _check_name(spec)
     return object_from_spec(spec)
 
 
