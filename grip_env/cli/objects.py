@@ -26,6 +26,7 @@ if TYPE_CHECKING:
 
     from grip_env.config import Config
     from grip_env.objects import PlanarObject
+    from grip_env.sim.world import World
 
 
 class Contour(StrEnum):
@@ -116,7 +117,7 @@ def plan(
     ``with_grips``, its candidates; one simulation world renders them all."""
     from grip_env.dataset.jobs import planned_candidates, planned_object
 
-    def one(index: int, obj: PlanarObject, world: object) -> PlannedObject:
+    def one(index: int, obj: PlanarObject, world: World | None) -> PlannedObject:
         if with_grips:
             return PlannedObject(obj, *planned_candidates(obj, config, perceive=perceive,
                                                           index=index, world=world))
