@@ -27,7 +27,7 @@ from numpy.typing import NDArray
 from scipy.spatial.transform import Rotation
 
 from grip_env.config import ObjectsConfig
-from grip_env.objects import PlanarObject
+from grip_env.objects import PlanarObject, load_object_set
 from grip_env.objects.meshes import (
     MESH_SET_NAMES,
     MeshPose,
@@ -38,6 +38,7 @@ from grip_env.objects.meshes import (
     read_obj_pieces,
     silhouette,
 )
+from grip_env.objects.shapes import SetLoader, register_object_set
 
 LOG = logging.getLogger(__name__)
 
@@ -222,16 +223,23 @@ def _cached_mesh_object(path: str, size_mm: float) -> PlanarObject | str:
 
 
 def named_set(name: str, seed: int = 0, config: ObjectsConfig | None = None) -> MeshSet:
-    """A named object set: a mesh set (``MESH_SET_NAMES``) or a set of named shapes."""
-    from grip_env.objects import load_object_set
-
-    sizes = (config or ObjectsConfig()).mesh_size_mm
+    """A named object set (see :func:`grip_env.objects.load_object_set`) with the meshes it
+    skipped."""
     if name in MESH_SET_NAMES:
-        return mesh_set(name, None, seed, sizes)
-    try:
-        return MeshSet(load_object_set(name))
-    except ValueError as exc:
-        raise ValueError(f"{exc}, or a mesh set: {', '.join(MESH_SET_NAMES)}") from None
+        return mesh_set(name, None, seed, (config or ObjectsConfig()).mesh_size_mm)
+    return MeshSet(load_object_set(name))
+
+
+def _load_mesh_set(name: str) -> SetLoader:
+    """:func:`load_object_set`'s loader of mesh set ``name``."""
+    def load(seed: int, config: ObjectsConfig | None) -> list[PlanarObject]:
+        return named_set(name, seed, config).objects
+
+    return load
+
+
+for _name in MESH_SET_NAMES:
+    register_object_set(_name, _load_mesh_set(_name))
 
 
 def configured_meshes(config: ObjectsConfig, seed: int) -> MeshSet:

@@ -30,6 +30,7 @@ SMALL: dict[str, list[tuple[str, str]] | str | None] = {
     "show star --grips 3 --out star.png": None,
     "show rectangle --sim --out trial.png": None,
     "show part.png --mm-per-px 0.5 --out p.png": None,
+    "candidates part.png --mm-per-px 0.5 --top 5": None,
     "show duck --grips 3 --out duck.png": None,
     "generate --out data --objects default --trials 4 --workers 2":
         [("--objects default", "--objects 10"), ("--trials 4", "--trials 2"),

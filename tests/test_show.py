@@ -35,9 +35,11 @@ def test_show_draws_regions_and_best_grips(runner, tmp_path):
 
 def test_show_says_when_an_object_has_grips_only_with_frictional_closure(runner, tmp_path):
     result = runner.invoke(app, ["show", "cross", "--grips", "3", "--out", str(tmp_path / "a.png")])
-    assert result.exit_code == 0, result.output
-    assert "no grip when three-finger grasps need normals that span" in result.output
+    assert result.exit_code == 2, result.output
+    assert "has no feasible grip" in result.output
+    assert "need normals that span the plane without friction" in result.output
     assert "synthesis.frictional_closure: true) it has" in result.output
+    assert not (tmp_path / "a.png").exists()
     config = tmp_path / "friction.yaml"
     config.write_text("synthesis:\n  frictional_closure: true\n")
     result = runner.invoke(app, ["show", "cross", "--grips", "3", "--config", str(config),
@@ -139,7 +141,9 @@ def test_show_sim_draws_the_phases_and_outcome_of_each_asked_grip(
     assert result.exit_code == 0, result.output
     [figure_rows] = drawn
     assert len(figure_rows) == len(simulated) == rows  # --grips was ignored with --sim
-    best = candidates(make_shape("rectangle")).head(rows)
+    from grip_env.dataset import planned_candidates
+
+    best = planned_candidates(make_shape("rectangle"))[1].head(rows)  # as generate plans it
     lines = [line for line in result.output.splitlines() if line.startswith("trial of")]
     for (title, frames), (trial, _), grip_id, line in zip(
         figure_rows, simulated, best["grip_id"], lines, strict=True

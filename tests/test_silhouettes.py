@@ -171,7 +171,8 @@ def test_show_on_a_bad_mask_file_is_one_line_and_exit_code_2(tmp_path, cut, mess
     path = tmp_path / "bad.png"
     Image.fromarray(image).save(path)
     _register_commands()
-    result = CliRunner().invoke(app, ["show", str(path), "--out", str(tmp_path / "x.png")])
+    result = CliRunner().invoke(app, ["show", str(path), "--mm-per-px", "1",
+                                      "--out", str(tmp_path / "x.png")])
     lines = [line for line in result.output.splitlines() if line.strip()]
     assert result.exit_code == 2, result.output
     assert len(lines) == 1 and lines[0].startswith("error:") and message in lines[0], lines

@@ -58,8 +58,8 @@ def _root(
 
 
 _COMMAND_MODULES = (
-    "show", "study", "generate", "validate", "train", "ablate", "select", "calibrate", "predict",
-    "benchmark", "power",
+    "show", "candidates", "study", "generate", "validate", "train", "ablate", "select",
+    "calibrate", "predict", "benchmark", "power",
 )
 
 

@@ -60,6 +60,10 @@ def generate(
 ) -> None:
     """Plan grips on every object, simulate a stratified sample of them, write a Parquet dataset.
 
+    Grips are planned on each object's perceived contour (rendered from above and segmented,
+    perception.source: render, the default; polygon: its true outline) and simulated on the
+    true object; the output says which, and names the objects that got no feasible grip.
+
     Rerunning the same command after an interruption computes only the missing objects;
     rerunning with other settings into the same OUT is refused unless --overwrite, and so is
     a second run while one is writing OUT. Exit codes: 0 done; 1 the run failed (a worker
@@ -70,6 +74,7 @@ def generate(
         from grip_env.config import load_config
         from grip_env.dataset import WorkerLost, dataset_manifest
         from grip_env.dataset import generate as generate_dataset
+        from grip_env.dataset.jobs import plans_on_render
 
         cfg = load_config(config)
         _check_flags(objects, trials, seed, workers)
@@ -88,7 +93,10 @@ def generate(
             _fail(f"cannot write the dataset in {out}: {exc.strerror or exc}; finished objects "
                   f"are kept: free space and rerun the same command to finish")
         manifest = dataset_manifest(path)
-    typer.echo(f"wrote {path}: {manifest['rows']} grips of {len(manifest['objects'])} objects")
+        contours = "perceived contours" if plans_on_render(cfg) else "true outlines"
+    typer.echo(f"wrote {path}: {manifest['rows']} grips of {len(manifest['objects'])} objects, "
+               f"planned on their {contours}")
+    _report_objects_without_grips(manifest)
 
 
 def _check_flags(
@@ -124,6 +132,24 @@ def _objects(spec: str | None, mm_per_px: float | None) -> str | list[PlanarObje
             f"(sets: {', '.join((*OBJECT_SETS, *MESH_SET_NAMES))}, a shape name, or a number)"
         )
     return objects_from_path(spec, mm_per_px)
+
+
+#: The most objects without grips ``generate`` names on the console.
+NAMED_WITHOUT_GRIPS = 10
+
+
+def _report_objects_without_grips(manifest: dict) -> None:
+    """Name the objects that got no feasible grip (the first few, and how to list them all)."""
+    from grip_env.dataset.manifest import objects_without_grips
+
+    empty = objects_without_grips(manifest)
+    if not empty:
+        return
+    named = ", ".join(empty[:NAMED_WITHOUT_GRIPS])
+    more = (f" and {len(empty) - NAMED_WITHOUT_GRIPS} more (every object whose shard has rows 0 "
+            "in manifest.json)") if len(empty) > NAMED_WITHOUT_GRIPS else ""
+    typer.echo(f"{len(empty)} of {len(manifest['objects'])} objects got no feasible grip: "
+               f"{named}{more}")
 
 
 def _fail(message: str) -> NoReturn:

@@ -8,7 +8,14 @@
 from grip_env.dataset.backends import BACKENDS, WorkerLost
 from grip_env.dataset.catalog import load_objects, load_perceived_objects, read_objects
 from grip_env.dataset.generation import DatasetMismatchError, generate
-from grip_env.dataset.jobs import ObjectJob, ObjectTask, simulate_object, with_outcomes
+from grip_env.dataset.jobs import (
+    ObjectJob,
+    ObjectTask,
+    planned_candidates,
+    planned_object,
+    simulate_object,
+    with_outcomes,
+)
 from grip_env.dataset.loading import (
     dataset_label_model,
     dataset_manifest,
@@ -38,6 +45,8 @@ __all__ = [
     "load",
     "load_objects",
     "load_perceived_objects",
+    "planned_candidates",
+    "planned_object",
     "read_objects",
     "simulate_object",
     "split_objects",

@@ -77,14 +77,71 @@ def kept_grips(task: ObjectTask) -> pd.DataFrame:
     """The candidates planned on the task's (perceived) contour, at the true body's height, that
     ``dataset.sampling`` keeps (seeded by the task's sampling seed)."""
     from grip_env.dataset.sampling import keep_grips
+
+    table = _candidates_on(task, task.planned_on or planning_contour(task))
+    return keep_grips(table, task.config.dataset, task.sampling_seed())
+
+
+def planned_candidates(
+    obj: PlanarObject, config: Config | None = None, *, perceive: bool | None = None,
+    index: int = 0, world: World | None = None,
+) -> tuple[PlanarObject, pd.DataFrame]:
+    """Every candidate ``generate`` plans for ``obj`` as object ``index`` of a run (before
+    ``dataset.sampling`` keeps some), and the object it plans them on.
+
+    :func:`grip_env.pipeline.candidates` plans on the object it is given; ``generate`` plans on
+    :func:`planned_object` (by default the contour segmented from a top-down render) at the true
+    body's height. This is that plan; the arguments are :func:`planned_object`'s.
+
+    Returns:
+        The object planned on and its candidate table, best first by Q_C.
+    """
+    planned_on = planned_object(obj, config, perceive=perceive, index=index, world=world)
+    return planned_on, _candidates_on(_run_task(obj, config, index), planned_on)
+
+
+def planned_object(
+    obj: PlanarObject, config: Config | None = None, *, perceive: bool | None = None,
+    index: int = 0, world: World | None = None,
+) -> PlanarObject:
+    """The object ``generate`` plans the grips of ``obj`` on, as object ``index`` of a run.
+
+    That is its contour segmented from a top-down render when ``plans_on_render(config)`` (the
+    default, ``perception.source: render``), seeded by the object's seed (a function of
+    ``config.dataset.seed`` and ``index`` only), else ``obj`` itself.
+
+    Args:
+        obj: the true object.
+        config: the run's settings (defaults when None).
+        perceive: the perceived contour (True) or ``obj``'s own (False); None: as ``generate``
+            plans under ``config``.
+        index: the object's position in the run (its seed, so its perceived contour).
+        world: a simulation world to render in (one is opened when None).
+    """
+    task = _run_task(obj, config, index)
+    perceive = plans_on_render(task.config) if perceive is None else perceive
+    return perceived_contour(task, world) if perceive else obj
+
+
+def _run_task(obj: PlanarObject, config: Config | None, index: int) -> ObjectTask:
+    """The task of ``obj`` as object ``index`` of a run under ``config`` (defaults when None)."""
+    if not isinstance(obj, PlanarObject):
+        raise ValueError(f"obj must be a PlanarObject, got {type(obj).__name__}")
+    if not isinstance(index, int) or isinstance(index, bool) or index < 0:
+        raise ValueError(f"index must be an integer >= 0, got {index!r}")
+    config = Config() if config is None else config
+    seed = object_seeds(config.dataset.seed, index + 1)[index]
+    return ObjectTask(index, obj.name, obj, config, seed)
+
+
+def _candidates_on(task: ObjectTask, planned_on: PlanarObject) -> pd.DataFrame:
+    """The candidates planned on ``planned_on`` at the height of the task's true body."""
     from grip_env.objects.meshes import execution_height_mm
     from grip_env.planning.pipeline import candidates
 
     config = task.config
-    planned_on = task.planned_on or planning_contour(task)
     height = execution_height_mm(task.obj, config.objects)  # of the true body
-    table = candidates(planned_on, config.grasp, config, height_mm=height)
-    return keep_grips(table, config.dataset, task.sampling_seed())
+    return candidates(planned_on, config.grasp, config, height_mm=height)
 
 
 def plans_on_render(config: Config) -> bool:
@@ -96,8 +153,12 @@ def plans_on_render(config: Config) -> bool:
 def planning_contour(task: ObjectTask, world: World | None = None) -> PlanarObject:
     """The object the task's grips are planned on: its rendered and segmented contour (seeded by
     the task's perception seed) when ``plans_on_render``, else the true object."""
-    if not plans_on_render(task.config):
-        return task.obj
+    return perceived_contour(task, world) if plans_on_render(task.config) else task.obj
+
+
+def perceived_contour(task: ObjectTask, world: World | None = None) -> PlanarObject:
+    """The task's object as the camera sees it: rendered from above and segmented, seeded by the
+    task's perception seed; ``world`` (optional) is reused for the rendering."""
     from grip_env.sim.camera import perceive
 
     config = task.config

@@ -191,6 +191,13 @@ def shard_records(manifest: Manifest) -> dict[str, ShardRecord]:
     return {object_id: ShardRecord(**record) for object_id, record in manifest["shards"].items()}
 
 
+def objects_without_grips(manifest: Manifest) -> list[str]:
+    """The ids of the finished objects that got no grip (a shard of 0 rows), in run order."""
+    shards = manifest["shards"]
+    return [entry["object_id"] for entry in manifest["objects"]
+            if entry["object_id"] in shards and shards[entry["object_id"]]["rows"] == 0]
+
+
 def identity_differences(old: dict[str, Any], new: dict[str, Any], prefix: str = "") -> list[str]:
     """Human-readable ``key: old -> new`` lines where two run identities differ."""
     if isinstance(old, dict) and isinstance(new, dict):

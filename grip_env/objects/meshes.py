@@ -25,8 +25,8 @@ from shapely.geometry import MultiPoint, Polygon
 from grip_env.columns import MESH_POSE
 from grip_env.config import ObjectsConfig
 
-#: The object sets of pybullet_data meshes (built by :func:`grip_env.mesh_sets.named_set`, which
-#: drops each mesh in the simulator until it rests).
+#: The object sets of pybullet_data meshes (loaded by :func:`grip_env.objects.load_object_set`;
+#: built by :mod:`grip_env.mesh_sets`, which drops each mesh in the simulator until it rests).
 MESH_SET_NAMES = ("household", "random_urdfs", "mesh")
 #: Parts and holes of a silhouette smaller than this (mm²) are numerical slivers between pieces.
 SLIVER_MM2 = 1.0

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import difflib
 from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
 
+from grip_env.config import ObjectsConfig
 from grip_env.objects.meshes import MESH_SET_NAMES
 from grip_env.objects.planar import PlanarObject
 
@@ -110,15 +112,40 @@ def make_shape(name: str) -> PlanarObject:
     return PlanarObject.from_polygon(_SHAPES[name](), name=name).centred()
 
 
-def load_object_set(name: str = "default") -> list[PlanarObject]:
-    """A named set of objects (``"default"`` holds every named shape)."""
+#: Loads a named set built above the geometry layer: ``(seed, objects config) -> objects``.
+SetLoader = Callable[[int, ObjectsConfig | None], list[PlanarObject]]
+_SET_LOADERS: dict[str, SetLoader] = {}
+
+
+def register_object_set(name: str, loader: SetLoader) -> None:
+    """Let :func:`load_object_set` load set ``name`` with ``loader`` (the mesh sets are
+    registered by :mod:`grip_env.mesh_sets`, which ``import grip_env`` loads)."""
+    _SET_LOADERS[name] = loader
+
+
+def load_object_set(
+    name: str = "default", seed: int = 0, config: ObjectsConfig | None = None
+) -> list[PlanarObject]:
+    """The objects of a named set, or the one object of a shape name.
+
+    Sets: ``default`` (every named shape, ``SHAPE_NAMES``), ``basic``, and the sets of
+    ``pybullet_data`` meshes (``MESH_SET_NAMES``): ``household``, ``random_urdfs`` (about 1,000
+    meshes: minutes) and ``mesh`` (both). A mesh object is the silhouette of the mesh at rest on
+    the table in PyBullet, sized in ``config.mesh_size_mm`` by ``seed`` (the run seed) as in a
+    dataset; a mesh that does not rest stably or whose silhouette has several parts is skipped
+    with a logged warning (:func:`grip_env.mesh_sets.mesh_set` lists them).
+
+    Raises:
+        ValueError: an unknown name.
+    """
     if name in OBJECT_SETS:
         return [make_shape(shape) for shape in OBJECT_SETS[name]]
     if name in _SHAPES:
         return [make_shape(name)]
-    if name in MESH_SET_NAMES:
-        raise ValueError(f"{name!r} is a set of pybullet_data meshes, which rest in the simulator "
-                         f"first: use grip_env.mesh_sets.named_set({name!r}).objects")
-    raise ValueError(
-        f"unknown object set {name!r}; known sets: {', '.join(OBJECT_SETS)} or a shape name"
-    )
+    if name in _SET_LOADERS:
+        return _SET_LOADERS[name](seed, config)
+    known = (*OBJECT_SETS, *MESH_SET_NAMES)
+    close = difflib.get_close_matches(str(name), [*known, *SHAPE_NAMES], n=1, cutoff=0.6)
+    hint = f"; did you mean {close[0]!r}?" if close else ""
+    raise ValueError(f"unknown object set {name!r}{hint} (sets: {', '.join(known)}, or a "
+                     "shape name)")
