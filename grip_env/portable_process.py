@@ -196,6 +196,8 @@ def serve(descriptor: int) -> None:
             reply = _reply(function, args, kwargs)
             try:
                 connection.send(reply)
+            except OSError:  # the caller is gone
+                return
             except Exception as exc:  # a result that does not pickle
                 connection.send((("error", _picklable(exc), traceback.format_exc()), []))
 

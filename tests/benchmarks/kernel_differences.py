@@ -10,7 +10,8 @@ result. A process with the AVX-512 kernels live (numpy imported first, so nothin
 either: the functions are called unwrapped) replays each recorded call and counts the calls whose
 result differs in any bit; it also plans the same objects itself and counts the stages whose
 products differ. Calls through operators (``a @ b``, ``x ** y``, ``.sum()``) are not seen one by
-one: the stage counts include them.
+one: the stage counts include them. Beforehand, both processes compute each function on 200,000
+seeded random inputs, and the results that differ are counted.
 """
 
 from __future__ import annotations
@@ -35,6 +36,40 @@ TRACED = ("sin", "cos", "tan", "arcsin", "arccos", "arctan", "arctan2", "sinh", 
           "linalg.eigh", "linalg.eigvalsh", "linalg.matrix_rank", "linalg.solve", "linalg.inv",
           "linalg.svd", "linalg.lstsq")
 _KEPT_PER_NAME = 4000
+
+
+def _probe_results() -> dict[str, bytes]:
+    """Each kernel-dependent candidate on seeded random inputs, as bytes."""
+    import numpy as np
+
+    rng = np.random.default_rng(0)
+    x, u = rng.uniform(-10, 10, 200_000), rng.uniform(-1, 1, 200_000)
+    p = rng.uniform(0, 1e3, 200_000)
+    sizes = range(1, 3000, 7)
+    cases = {
+        "sin": lambda: np.sin(x), "cos": lambda: np.cos(x), "tan": lambda: np.tan(x),
+        "arcsin": lambda: np.arcsin(u), "arccos": lambda: np.arccos(u),
+        "arctan": lambda: np.arctan(x), "arctan2": lambda: np.arctan2(x, u),
+        "exp": lambda: np.exp(x), "expm1": lambda: np.expm1(x), "log": lambda: np.log(p),
+        "log1p": lambda: np.log1p(p), "power": lambda: np.power(p, u), "cbrt": lambda: np.cbrt(x),
+        "sqrt": lambda: np.sqrt(p), "hypot": lambda: np.hypot(x, u), "tanh": lambda: np.tanh(x),
+        "sum (1..2994 terms)": lambda: np.array([x[:k].sum() for k in sizes]),
+        "dot (1..2994 terms)": lambda: np.array([x[:k] @ u[:k] for k in sizes]),
+        "(n, 3) @ (3, 3)": lambda: x[:199_998].reshape(-1, 3) @ u[:9].reshape(3, 3),
+        "(n, 2) @ (2, 2)": lambda: x.reshape(-1, 2) @ u[:4].reshape(2, 2),
+        "(n, 3) @ (3,)": lambda: x[:199_998].reshape(-1, 3) @ u[:3],
+    }
+    return {name: case().tobytes() for name, case in cases.items()}
+
+
+def _count_differing(held: dict[str, bytes], live: dict[str, bytes]) -> dict[str, list[int]]:
+    import numpy as np
+
+    counts = {}
+    for name, bits in held.items():
+        a, b = np.frombuffer(bits), np.frombuffer(live[name])
+        counts[name] = [int((a.view(np.uint64) != b.view(np.uint64)).sum()), len(a)]
+    return counts
 
 
 def _target(np, name: str):  # type: ignore[no-untyped-def]
@@ -101,9 +136,10 @@ def record(objects: int, out: Path) -> None:
     calls: list = []
     counts: Counter = Counter()
     _trace(np, calls, counts)
+    probe = _probe_results()
     stages, simulated = _path(objects)
     out.write_bytes(pickle.dumps({"live": live_beyond_v3(), "calls": calls, "counts": counts,
-                                  "stages": stages, "simulated": simulated}))
+                                  "stages": stages, "simulated": simulated, "probe": probe}))
 
 
 def replay(objects: int, recorded: Path) -> dict:
@@ -112,6 +148,7 @@ def replay(objects: int, recorded: Path) -> dict:
     from grip_env.portable_math import live_beyond_v3
 
     held = pickle.loads(recorded.read_bytes())
+    probe = _count_differing(held["probe"], _probe_results())
     differing: Counter = Counter()
     replayed: Counter = Counter()
     for name, arguments, result in held["calls"]:
@@ -123,7 +160,7 @@ def replay(objects: int, recorded: Path) -> dict:
     stages = _unwrapped_path(objects, held["simulated"])
     moved = sorted(k for k in held["stages"] if held["stages"][k] != stages.get(k))
     return {
-        "held": held["live"], "live": live_beyond_v3(),
+        "held": held["live"], "live": live_beyond_v3(), "probe": probe,
         "calls": {name: {"calls": held["counts"][name], "replayed": replayed[name],
                          "differ": differing[name]} for name in sorted(held["counts"])},
         "stages": len(held["stages"]), "stages differing": moved,
@@ -175,6 +212,10 @@ def main() -> None:
             check=True, capture_output=True, text=True)
     found = json.loads(done.stdout.strip().splitlines()[-1])
     print(f"held: {found['held'] or 'x86-64-v3'}; live: {', '.join(found['live'])}")
+    print("seeded random inputs: results that differ")
+    for name, (differ, count) in found["probe"].items():
+        print(f"  {name:22} {differ:8} of {count}")
+    print("calls on the path (planning and one trial of two grips an object)")
     print(f"{'function':22} {'calls':>8} {'replayed':>8} {'differ':>8}")
     for name, row in found["calls"].items():
         print(f"{name:22} {row['calls']:8} {row['replayed']:8} {row['differ']:8}")
