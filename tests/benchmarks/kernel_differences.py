@@ -133,10 +133,10 @@ def record(objects: int, out: Path) -> None:
 
     from grip_env.portable_math import live_beyond_v3
 
+    probe = _probe_results()  # before the tracing: not calls of the path
     calls: list = []
     counts: Counter = Counter()
     _trace(np, calls, counts)
-    probe = _probe_results()
     stages, simulated = _path(objects)
     out.write_bytes(pickle.dumps({"live": live_beyond_v3(), "calls": calls, "counts": counts,
                                   "stages": stages, "simulated": simulated, "probe": probe}))
