@@ -11,7 +11,8 @@ into other candidates and other outcomes (BENCHMARKS.md, "Import order"). The fu
 single-threaded like a dataset worker: started on the first such call, kept for the next ones,
 stopped when this process exits. Arguments and results travel pickled; an exception raised there
 is raised here with its own type (the worker's traceback as a note), and its warnings are issued
-here. In a process whose kernels are portable (grip_env imported first) they run in place.
+here. In a process whose kernels are portable (grip_env imported first) they run in place, and
+so they do where no worker can be started (not POSIX), with a warning.
 """
 
 from __future__ import annotations
@@ -95,7 +96,17 @@ def _runs_here() -> bool:
 
 @functools.cache
 def _portable_here() -> bool:
-    return math_is_portable()  # the kernels were picked at load: they do not change after
+    """Whether this process's kernels are portable (picked at load: they do not change after),
+    or no worker can be started here (not POSIX: then it says so, once)."""
+    if math_is_portable():
+        return True
+    if os.name != "posix":  # the worker's socket is passed as an inherited descriptor
+        warnings.warn("numpy's kernels beyond x86-64-v3 are live (numpy was imported before "
+                      "grip_env) and no held worker runs on this platform: candidates and trial "
+                      "outcomes computed here may differ from other machines'; import grip_env "
+                      "first", RuntimeWarning, stacklevel=4)
+        return True
+    return False
 
 
 class _Worker:

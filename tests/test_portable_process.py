@@ -80,3 +80,11 @@ def test_a_lost_worker_is_replaced_and_a_stopped_one_exits(delegating):
     portable_process.stop_worker()
     assert last.poll() == 0  # it left its loop and exited by itself
     assert portable_process._running is None
+
+
+def test_where_no_worker_can_start_the_calls_run_here_and_say_so(monkeypatch):
+    monkeypatch.setattr(portable_process, "math_is_portable", lambda: False)
+    assert not portable_process._portable_here.__wrapped__()  # POSIX: the worker
+    monkeypatch.setattr(portable_process.os, "name", "nt")
+    with pytest.warns(RuntimeWarning, match="no held worker runs on this platform"):
+        assert portable_process._portable_here.__wrapped__()
