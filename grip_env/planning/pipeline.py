@@ -55,7 +55,8 @@ def candidates(
         A DataFrame with exactly ``CANDIDATE_COLUMNS``, one row per configuration, sorted by Q_C
         ascending (best first), index 0..n-1. ``grip_id`` is ``"{object_id}/{grasp_id}/{thumb}"``
         where ``thumb`` is the grasp contact (0-2) the thumb takes. No feasible grip gives an
-        empty table with the same columns.
+        empty table with the same columns. The same bits whatever was imported first
+        (:mod:`grip_env.portable_process`).
     """
     if not isinstance(obj, PlanarObject):
         raise ValueError(f"obj must be a PlanarObject, got {type(obj).__name__}")

@@ -103,8 +103,8 @@ def run_trials(
 ) -> pd.DataFrame:
     """Per-grip labels from ``run_trial_outcomes`` (``dataset.trials`` trials when None):
     trial k of every grip of an object shares one draw, keyed by (seed, object_id, k), and an
-    outcome depends on (seed, object, grip, trial) only, never on order, chunking, workers or
-    machine.
+    outcome depends on (seed, object, grip, trial) only, never on order, chunking, workers,
+    machine or the order of imports (:mod:`grip_env.portable_process`).
 
     Returns:
         DataFrame indexed like ``grips`` with ``trials``, ``successes`` (trials that held the
