@@ -11,18 +11,15 @@ both give the recorded bits.
 Importing :mod:`grip_env` sets ``NPY_DISABLE_CPU_FEATURES`` and, on a CPU with AVX-512,
 ``OPENBLAS_CORETYPE=Haswell`` (each unless set already) before numpy loads; child processes
 inherit them. When numpy was imported first (``import gymnasium, grip_env``), its AVX-512 kernels
-are live in this process: the first plan or trial run in it warns once
-(:class:`NonPortableMathWarning`; loading data and learning, which do not depend on it, say
-nothing), and the commands that record labels (generate, calibrate, validate, the study's
-replication) make them in a worker process held at x86-64-v3 instead of in this one, so a
-dataset is the same on every machine whatever the order of imports.
+are live in this process: planning, perception and trials then run in a worker process held at
+x86-64-v3 (:mod:`grip_env.portable_process`), and the commands that record labels (generate,
+calibrate, validate, the study's replication) make them in held workers, so candidates, outcomes
+and datasets are the same on every machine whatever the order of imports.
 """
 
 from __future__ import annotations
 
-import functools
 import os
-import warnings
 from pathlib import Path
 
 #: numpy's dispatch targets above x86-64-v3 (the names of numpy 2.4, then of 1.26 to 2.3).
@@ -66,26 +63,7 @@ def live_beyond_v3() -> list[str]:
     return live + [f"OpenBLAS {k}" for k in sorted(kernels & set(OPENBLAS_BEYOND_V3))]
 
 
-class NonPortableMathWarning(RuntimeWarning):
-    """numpy's or OpenBLAS's AVX-512 kernels are live in this process: candidates and trial
-    outcomes computed here may differ in their last bits, and so in their labels, from other
-    machines'."""
-
-
 def math_is_portable() -> bool:
     """Whether this process computes with x86-64-v3 kernels only (the recorded labels' bits)."""
     return not live_beyond_v3()
 
-
-@functools.cache
-def warn_if_not_portable() -> None:
-    """Warn, once a process, when AVX-512 kernels are live here (:class:`NonPortableMathWarning`);
-    called where candidates are planned and trials run."""
-    live = live_beyond_v3()
-    if live:
-        warnings.warn(
-            f"{', '.join(live)} kernels are live (numpy was imported before grip_env): candidates "
-            "and trial outcomes computed in this process may differ from other machines'. Datasets "
-            "are still made in worker processes held at x86-64-v3. For this process too, import "
-            f"grip_env before numpy, or set {NUMPY_ENVIRONMENT}=\"{' '.join(BEYOND_V3)}\" and "
-            f"{OPENBLAS_ENVIRONMENT}={OPENBLAS_V3}", NonPortableMathWarning, stacklevel=3)

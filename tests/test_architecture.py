@@ -32,6 +32,9 @@ ONLY: dict[str, set[str]] = {
     "grip_env.progress": set(),
     "grip_env.label_model": set(),
     "grip_env.config": {"grip_env.params", "grip_env.hand_geometry"},
+    "grip_env.portable_math": set(),
+    # the held worker that planning and the simulator delegate to: below both
+    "grip_env.portable_process": {"grip_env.portable_math"},
 }
 # every other unit -> the units it must never import (foundations are always allowed)
 FORBIDDEN: dict[str, set[str]] = {

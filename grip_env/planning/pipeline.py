@@ -25,11 +25,12 @@ from grip_env.planning.barrett import Configurations, ReachTest, configurations
 from grip_env.planning.features import OUTPUT_NAMES, features_from_arrays
 from grip_env.planning.finger import executable
 from grip_env.planning.grasps import synthesize_grasps
-from grip_env.portable_math import warn_if_not_portable
+from grip_env.portable_process import portable
 
 _FINGERS = ("1", "2", "3")
 
 
+@portable
 def candidates(
     obj: PlanarObject,
     params: GraspParams | None = None,
@@ -54,11 +55,11 @@ def candidates(
         A DataFrame with exactly ``CANDIDATE_COLUMNS``, one row per configuration, sorted by Q_C
         ascending (best first), index 0..n-1. ``grip_id`` is ``"{object_id}/{grasp_id}/{thumb}"``
         where ``thumb`` is the grasp contact (0-2) the thumb takes. No feasible grip gives an
-        empty table with the same columns.
+        empty table with the same columns. The same bits whatever was imported first
+        (:mod:`grip_env.portable_process`).
     """
     if not isinstance(obj, PlanarObject):
         raise ValueError(f"obj must be a PlanarObject, got {type(obj).__name__}")
-    warn_if_not_portable()
     config, params = _settings(params, config)
     if regions is None:
         from grip_env.perception.regions import find_regions

@@ -20,6 +20,7 @@ from grip_env.config import PerceptionConfig
 from grip_env.objects import PlanarObject
 from grip_env.objects.masks import contour_from_mask, segment
 from grip_env.perception.corners import sharpen_corners
+from grip_env.portable_process import portable
 from grip_env.sim.world import World
 
 _MARGIN_PX = 4  # background pixels kept around the object on each side
@@ -78,6 +79,7 @@ def image_scale(obj: PlanarObject, config: PerceptionConfig) -> float:
     return max(config.mm_per_px, needed)
 
 
+@portable(stays_here=("world",))
 def perceive(
     obj: PlanarObject, config: PerceptionConfig | None = None, thickness_mm: float = 30.0,
     seed: int = 0, world: World | None = None,

@@ -8,7 +8,7 @@ from numpy.typing import NDArray
 
 from grip_env.config import Config
 from grip_env.objects import PlanarObject
-from grip_env.portable_math import warn_if_not_portable
+from grip_env.portable_process import portable
 from grip_env.sim.trial import TrialScene, grip_plans
 from grip_env.sim.uncertainty import stable_key, trial_noises
 
@@ -40,6 +40,7 @@ def _count(name: str, value: object, minimum: int) -> int:
     return int(value)
 
 
+@portable
 def run_trial_outcomes(
     obj: PlanarObject,
     grips: pd.DataFrame,
@@ -73,7 +74,6 @@ def run_trial_outcomes(
         raise ValueError(f"obj must be a PlanarObject, got {type(obj).__name__}")
     if not isinstance(grips, pd.DataFrame):
         raise ValueError(f"grips must be a pandas DataFrame, got {type(grips).__name__}")
-    warn_if_not_portable()
     config = config if config is not None else Config()
     trials = _count("trials", config.dataset.trials if trials is None else trials, 1)
     seed = _count("seed", seed, 0)
@@ -93,6 +93,7 @@ def run_trial_outcomes(
     return pd.DataFrame(rows, columns=list(OUTCOME_COLUMNS))
 
 
+@portable
 def run_trials(
     obj: PlanarObject,
     grips: pd.DataFrame,
@@ -102,8 +103,8 @@ def run_trials(
 ) -> pd.DataFrame:
     """Per-grip labels from ``run_trial_outcomes`` (``dataset.trials`` trials when None):
     trial k of every grip of an object shares one draw, keyed by (seed, object_id, k), and an
-    outcome depends on (seed, object, grip, trial) only, never on order, chunking, workers or
-    machine.
+    outcome depends on (seed, object, grip, trial) only, never on order, chunking, workers,
+    machine or the order of imports (:mod:`grip_env.portable_process`).
 
     Returns:
         DataFrame indexed like ``grips`` with ``trials``, ``successes`` (trials that held the
