@@ -214,3 +214,16 @@ def test_the_results_page_includes_the_readme_block_the_study_writes():
     readme = (ROOT / "README.md").read_text()
     assert readme.index(BEGIN) < readme.index(END)
 
+
+def test_where_robustness_is_defined_g_is_said_once_to_be_gravity_not_grams():
+    """The data card (written by grip_env.dataset.card), the concepts page and the column
+    reference each say once what a level in g is."""
+    from grip_env.dataset.card import GRAVITY_UNIT, dataset_card
+    from grip_env.datasets import standard_path
+
+    def said(text: str) -> int:
+        return " ".join(text.split()).lower().count(GRAVITY_UNIT.lower())
+
+    for page in ("concepts.md", "datasets.md", "dataset.md"):
+        assert said((DOCS / page).read_text()) == 1, page
+    assert said(dataset_card(standard_path())) == 1
