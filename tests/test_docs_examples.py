@@ -227,3 +227,23 @@ def test_where_robustness_is_defined_g_is_said_once_to_be_gravity_not_grams():
     for page in ("concepts.md", "datasets.md", "dataset.md"):
         assert said((DOCS / page).read_text()) == 1, page
     assert said(dataset_card(standard_path())) == 1
+
+
+def test_the_pages_say_what_the_main_job_learns_on():
+    """``scripts/study.sh`` runs ``grip-env study`` with neither --data nor --regenerate: it
+    learns on the shipped standard dataset (and --quick alone generates a tiny one), which is
+    what the quick start and the learning page say, not that it generates a dataset."""
+    from grip_env.cli.study import study_data
+    from grip_env.datasets import standard_path
+
+    script = (ROOT / "scripts" / "study.sh").read_text()
+    assert "grip-env study" in script and "--data" not in script and "--regenerate" not in script
+    assert study_data(None, regenerate=False, quick=False) == standard_path()
+    assert study_data(None, regenerate=False, quick=True) is None  # None: generate one
+    said = {"quickstart.md": "The first generates no dataset: it learns on the standard dataset "
+                             "shipped with the package, after simulating a seeded sample",
+            "learning.md": "learns on the shipped standard dataset after re-simulating a seeded "
+                           "sample of it"}  # fmt: skip
+    for page, sentence in said.items():
+        text = " ".join((DOCS / page).read_text().split())
+        assert sentence in text and "generates a labelled dataset" not in text, page
