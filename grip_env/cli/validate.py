@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from dataclasses import asdict
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -73,7 +73,7 @@ def validate(
         raise typer.Exit(code=1)
 
 
-def _counts(directory: Path, manifest: dict[str, object]) -> str:
+def _counts(directory: Path, manifest: dict[str, Any]) -> str:
     """The grips and objects of the shards present on disk; "incomplete" when some are not."""
     from grip_env.dataset.manifest import shard_records
 
