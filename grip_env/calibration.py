@@ -475,14 +475,15 @@ def retest_check(trials: pd.DataFrame, settings: CalibrationSettings) -> dict[st
     if not {"A", "B"} <= set(table.columns):
         return _check("retest", None, [None, None], f"Spearman >= {RETEST_TARGET}", None)
     pooled = spearman_bootstrap(table["A"], table["B"], settings.bootstrap, settings.seed)
-    within = [_spearman(g["A"].to_numpy(), g["B"].to_numpy())
-              for _, g in table.groupby("object_id")]
+    within = np.array([_spearman(g["A"].to_numpy(), g["B"].to_numpy())
+                       for _, g in table.groupby("object_id")])
+    ranked = within[np.isfinite(within)]  # an object with a constant side ranks nothing
     value = pooled["value"]
     passed = None if value is None or not np.isfinite(value) else bool(value >= RETEST_TARGET)
     return _check("retest", value, pooled["ci"], f"Spearman >= {RETEST_TARGET}", passed,
                   grips=len(table), objects=int(table["object_id"].nunique()),
                   trials_per_set=settings.trials_per_set,
-                  within_object_mean=float(np.nanmean(within)) if within else None)
+                  within_object_mean=float(ranked.mean()) if ranked.size else None)
 
 
 def within_object_spearman(table: pd.DataFrame) -> pd.Series:

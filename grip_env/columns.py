@@ -23,7 +23,8 @@ HAND_FEATURES = ("C1", "C2", "C3", "C4", "C5", "C6")
 FEATURES = SHARED_FEATURES + GRASP_FEATURES + HAND_FEATURES
 INDEXES = ("Q_G", "Q_C")
 OUTCOMES = ("trials", "successes", "success_rate", "success")
-#: Graded outcome: the highest disturbance (g) held per trial, mean and spread over trials.
+#: Graded outcome: the highest disturbance held per trial, mean and spread over trials, in g (an
+#: acceleration of the object in multiples of gravity's 9.81 m/s², not grams).
 ROBUSTNESS = ("robustness_mean", "robustness_std")
 
 DESCRIPTORS = CONTACTS + NORMALS + FORCES + REGIONS + CURVATURES + FOCI + HAND + OBJECT

@@ -1,6 +1,9 @@
 #!/usr/bin/env bash
 # Create .venv when missing and install the project into it (torch's CPU wheel first, so that no
 # CUDA build is pulled). Sourced by study.sh and test.sh; re-running is cheap when nothing changed.
+# The work runs in a subshell: sourcing this file leaves the caller's shell options (set -euo
+# pipefail) and working directory as they were, and a failure is the source's exit status.
+(
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 PYTHON=${PYTHON:-python3.11}
@@ -16,3 +19,4 @@ if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
     .venv/bin/python -m pip install --quiet -e ".[dev,cluster,docs]"
     echo "$want" > "$stamp"
 fi
+)

@@ -378,3 +378,18 @@ def test_the_study_recomputes_its_calibration_when_the_calibration_sizes_change(
     monkeypatch.setattr("grip_env.calibration.CalibrationSettings",
                         functools.partial(CalibrationSettings, cone_objects=50))
     assert stage_key("calibration", Config(), "0" * 64) != before
+
+
+def test_retest_where_no_object_ranks_its_grips_has_no_within_mean_and_no_warning():
+    """Every grip of every object held nothing in both sets (a quick study's few trials): no
+    object ranks its grips, so there is no within-object mean, not NaN with a RuntimeWarning."""
+    import warnings
+
+    rng = np.random.default_rng(5)
+    grips = {f"g{i}": ("best", -10.0) for i in range(6)}  # clipped to robustness 0 everywhere
+    trials = pd.concat([_trials("retest", grips, 4, rng, obj=o) for o in "uv"])
+    assert (trials["robustness"] == 0).all()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = retest_check(trials, CalibrationSettings(trials_per_set=2, bootstrap=50))
+    assert result["within_object_mean"] is None

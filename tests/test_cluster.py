@@ -74,3 +74,38 @@ def test_cluster_docs_name_what_they_run():
                    "grip-env generate", "grip-env study", "bench_cluster"):
         assert needed in text, needed
     assert Path(ROOT / "tests" / "benchmarks" / "bench_cluster.py").is_file()
+
+
+#: Runs the CLI with ``ray`` unimportable: a finder at the head of sys.meta_path refuses it, as
+#: Python does for a package that is not installed.
+_WITHOUT_RAY = """
+import sys
+from importlib.abc import MetaPathFinder
+
+class NoRay(MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name == "ray" or name.startswith("ray."):
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+        return None
+
+sys.meta_path.insert(0, NoRay())
+from grip_env.cli import main
+sys.argv = ["grip-env", *sys.argv[1:]]
+main()
+"""
+
+
+def test_backend_ray_without_ray_is_refused_before_anything_is_written(tmp_path):
+    import subprocess
+    import sys
+
+    out = tmp_path / "g"
+    done = subprocess.run(
+        [sys.executable, "-c", _WITHOUT_RAY, "generate", "--out", str(out), "--objects", "1",
+         "--trials", "1", "--backend", "ray"],
+        capture_output=True, text=True, timeout=120, cwd=ROOT,
+    )
+    assert done.returncode == 2, done.stdout + done.stderr
+    assert done.stderr.strip().splitlines() == [
+        "error: backend 'ray' needs Ray: pip install 'grip-env[cluster]'"], done.stderr
+    assert not out.exists()

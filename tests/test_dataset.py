@@ -519,3 +519,29 @@ def test_frames_derived_from_a_loaded_table_share_its_manifest(generated_dataset
     part = table[table["object_id"] == table["object_id"].iloc[0]][["Q_C", "success"]]
     assert part.attrs["manifest"] is manifest and copy.deepcopy(manifest) is manifest
     assert json.loads(json.dumps(manifest)) == dict(manifest)  # still plain JSON
+
+
+def test_a_string_format_version_is_refused_as_the_wrong_type(tmp_path: Path) -> None:
+    out = run(tmp_path / "d")
+    manifest = json.loads((out / "manifest.json").read_text())
+    manifest["format_version"] = str(FORMAT_VERSION)
+    (out / "manifest.json").write_text(json.dumps(manifest))
+    with pytest.raises(FormatVersionError) as caught:
+        load(out)
+    message = str(caught.value)
+    assert f"the string '{FORMAT_VERSION}'" in message and "an integer" in message, message
+    assert f"format version '{FORMAT_VERSION}', this grip-env reads" not in message
+
+
+def test_a_truncated_manifest_is_refused_with_how_to_recover(tmp_path: Path) -> None:
+    out = run(tmp_path / "d")
+    text = (out / "manifest.json").read_text()
+    (out / "manifest.json").write_text(text[: len(text) // 2])
+    for call in (load, validate):
+        with pytest.raises(ValueError, match="corrupt") as caught:
+            call(out)
+        assert "--overwrite" in str(caught.value) and "\n" not in str(caught.value)
+    with pytest.raises(DatasetMismatchError, match=r"manifest.json is unreadable.*--overwrite"):
+        run(out)
+    run(out, overwrite=True)  # the recovery the message names works
+    assert len(load(out)) == len(load(run(tmp_path / "fresh")))

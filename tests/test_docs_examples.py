@@ -4,8 +4,8 @@ a small dataset generated for real), is run by the test its marker names, or say
 A block is marked by an HTML comment on the line before its fence, which the site does not show:
 ``<!-- not run: REASON -->`` or ``<!-- run by: tests/FILE.py::TEST -->``. The first ``bash`` block
 of the commands page is walked line by line by ``tests/test_readme_commands.py``. The generated
-pages (``docs/_generated``, written by ``docs/_ext/grip_docs.py`` at build time) are checked
-against the code they are generated from.
+parts of the pages (written into them by ``python docs/_ext/grip_docs.py``) are checked against
+the code they are generated from.
 """
 
 from __future__ import annotations
@@ -48,9 +48,8 @@ class Block:
 
 
 def pages() -> list[Path]:
-    """Every Markdown source of the site (not the build, not the generated pages) and the README."""
-    found = [path for path in DOCS.rglob("*.md")
-             if not {"_build", "_generated"} & set(path.relative_to(DOCS).parts)]
+    """Every Markdown source of the site (not the build) and the README."""
+    found = [path for path in DOCS.rglob("*.md") if "_build" not in path.relative_to(DOCS).parts]
     return [*sorted(found), ROOT / "README.md"]
 
 
@@ -151,23 +150,35 @@ def _grip_docs():
     return grip_docs
 
 
-def test_generated_pages_are_included_and_none_is_committed():
+def test_the_generated_parts_of_the_pages_are_written_in_and_current():
+    """The configuration, CLI and environment pages read whole in the repository (no include of
+    a file that exists only after a build), and what they hold is what the code writes now."""
     grip_docs = _grip_docs()
-    included = {match for path in pages()
-                for match in re.findall(r"```\{include\} \.\./_generated/(\S+)", path.read_text())}
-    assert included == set(grip_docs.generated_file_names())
-    assert not (DOCS / "_generated").exists() or not any(
-        (DOCS / "_generated" / name).is_file() and _tracked(DOCS / "_generated" / name)
-        for name in included)
+    for page in grip_docs.generators():
+        text = (DOCS / page).read_text()
+        body = text[text.index(grip_docs.BEGIN) + len(grip_docs.BEGIN):text.index(grip_docs.END)]
+        assert len(body.strip().splitlines()) > 20, page
+    missing = [f"{path.name}: {name}" for path in pages()
+               for name in re.findall(r"```\{include\} (\S+)", path.read_text())
+               if not (path.parent / name).is_file()]
+    assert not missing, f"includes of files not in the repository: {missing}"
+    assert grip_docs.stale_pages() == [], "rewrite them: python docs/_ext/grip_docs.py"
 
 
-def _tracked(path: Path) -> bool:
-    """Whether git tracks ``path`` (False outside a git checkout)."""
-    import subprocess
-
-    result = subprocess.run(["git", "ls-files", "--error-unmatch", str(path)], cwd=ROOT,
-                            capture_output=True, check=False)
-    return result.returncode == 0
+def test_a_stale_generated_part_is_found_and_rewritten(tmp_path, monkeypatch):
+    grip_docs = _grip_docs()
+    page = "reference/configuration.md"
+    monkeypatch.setattr(grip_docs, "generators", lambda: {page: grip_docs.config_markdown})
+    copy = tmp_path / page
+    copy.parent.mkdir(parents=True)
+    stale = (DOCS / page).read_text().replace("| `grasp.mu` | 0.4 |", "| `grasp.mu` | 0.5 |")
+    copy.write_text(stale)
+    assert grip_docs.stale_pages(tmp_path) == [page]
+    assert grip_docs.write_generated(tmp_path) == [copy]
+    assert copy.read_text() == (DOCS / page).read_text() and grip_docs.stale_pages(tmp_path) == []
+    copy.write_text("# no markers\n")
+    with pytest.raises(ValueError, match="lacks the markers"):
+        grip_docs.stale_pages(tmp_path)
 
 
 def test_the_cli_reference_is_every_command_as_its_help_shows_it():
@@ -202,3 +213,37 @@ def test_the_results_page_includes_the_readme_block_the_study_writes():
     assert f':start-after: "{BEGIN}"' in page and f':end-before: "{END}"' in page
     readme = (ROOT / "README.md").read_text()
     assert readme.index(BEGIN) < readme.index(END)
+
+
+def test_where_robustness_is_defined_g_is_said_once_to_be_gravity_not_grams():
+    """The data card (written by grip_env.dataset.card), the concepts page and the column
+    reference each say once what a level in g is."""
+    from grip_env.dataset.card import GRAVITY_UNIT, dataset_card
+    from grip_env.datasets import standard_path
+
+    def said(text: str) -> int:
+        return " ".join(text.split()).lower().count(GRAVITY_UNIT.lower())
+
+    for page in ("concepts.md", "datasets.md", "dataset.md"):
+        assert said((DOCS / page).read_text()) == 1, page
+    assert said(dataset_card(standard_path())) == 1
+
+
+def test_the_pages_say_what_the_main_job_learns_on():
+    """``scripts/study.sh`` runs ``grip-env study`` with neither --data nor --regenerate: it
+    learns on the shipped standard dataset (and --quick alone generates a tiny one), which is
+    what the quick start and the learning page say, not that it generates a dataset."""
+    from grip_env.cli.study import study_data
+    from grip_env.datasets import standard_path
+
+    script = (ROOT / "scripts" / "study.sh").read_text()
+    assert "grip-env study" in script and "--data" not in script and "--regenerate" not in script
+    assert study_data(None, regenerate=False, quick=False) == standard_path()
+    assert study_data(None, regenerate=False, quick=True) is None  # None: generate one
+    said = {"quickstart.md": "The first generates no dataset: it learns on the standard dataset "
+                             "shipped with the package, after simulating a seeded sample",
+            "learning.md": "learns on the shipped standard dataset after re-simulating a seeded "
+                           "sample of it"}  # fmt: skip
+    for page, sentence in said.items():
+        text = " ".join((DOCS / page).read_text().split())
+        assert sentence in text and "generates a labelled dataset" not in text, page

@@ -526,6 +526,24 @@ def test_docs_sb3_snippet_runs_on_a_generated_dataset(generated_dataset_dir, cap
     assert line.startswith("first pick holds: selector ") and ", best Q_C " in line
 
 
+@pytest.mark.slow
+def test_the_sb3_pages_best_q_c_figure_is_what_its_snippet_prints_now():
+    """The page quotes one printed line of its snippet. Its best-Q_C half does not depend on
+    training (slot 0 of the same 500 seeded test episodes), so it must be today's figure."""
+    import re
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[1] / "docs" / "environments" / "sb3.md").read_text()
+    quoted = re.findall(r"`first pick holds: selector (\d\.\d\d), best Q_C (\d\.\d\d)`", page)
+    assert len(quoted) == 1, "the page quotes one printed line"
+    test = gymnasium.make("GripSelect-v0", data="standard", split="test")
+    best_q_c = []
+    for episode in range(500):
+        test.reset(seed=episode)
+        best_q_c.append(test.step(0)[-1]["is_success"])
+    assert quoted[0][1] == f"{np.mean(best_q_c):.2f}"
+
+
 # ------------------------------------------------------------------ conventions (issue 20)
 @pytest.mark.parametrize("env_class", [GripSelectEnv, GripAcceptEnv])
 def test_reset_options_pin_the_object(data, env_class):

@@ -159,3 +159,26 @@ def test_validate_of_a_too_old_dataset_says_regenerate_in_one_line(tmp_path: Pat
     assert code == 2 and len(text.strip().splitlines()) == 1
     assert text.startswith(f"error: dataset {out} has format version 1, this grip-env reads "
                            "version 2; it is too old: regenerate it")
+
+
+def test_validate_of_an_unfinished_dataset_lists_the_missing_shards_before_any_count(
+    tmp_path: Path,
+) -> None:
+    from test_dataset import toy_job
+
+    from grip_env.dataset import generate
+
+    out = generate(SMALL, tmp_path / "d", objects=3, workers=1, progress=False, job=toy_job)
+    manifest = json.loads((out / "manifest.json").read_text())
+    first, second, third = (entry["object_id"] for entry in manifest["objects"])
+    del manifest["shards"][first]  # the run stopped before this object's shard
+    (out / "manifest.json").write_text(json.dumps(manifest))
+    (out / manifest["shards"][second]["file"]).unlink()  # a shard lost since
+    kept = manifest["shards"][third]["rows"]
+    code, text = cli("validate", str(out))
+    lines = text.strip().splitlines()
+    assert code == 1
+    assert lines[0] == f"{out}: 2 problem(s)", text
+    assert f"object {first}: no shard" in lines[1] and "missing" in lines[2], text
+    assert f"{out}: incomplete: {kept} grips in the shards of 1 of 3 objects" in lines[3], text
+    assert len(lines) == 4, text

@@ -1,8 +1,10 @@
 """A normal (non-editable) install works: build the wheel, install it into a fresh venv, run it.
 
-The fresh venv borrows the dependencies of the running environment through a ``.pth`` line (a
-plain path: the editable install's finder is not activated), so the check is fast and offline,
-and runs from a folder outside the checkout, so only the wheel's files can be found.
+The fresh venv holds only what the wheel's own metadata asks for: CPU torch first (any other
+torch build pulls CUDA; that wheel lies in pip's find-links on the CI machines), then the wheel
+with its dependencies resolved by pip from the package index. Nothing is borrowed from the
+development environment, so an import that only a dev or extra package satisfies fails here.
+Everything runs from a folder outside the checkout, so only the wheel's files can be found.
 """
 
 from __future__ import annotations
@@ -11,7 +13,6 @@ import os
 import shutil
 import subprocess
 import sys
-import sysconfig
 import zipfile
 from pathlib import Path
 
@@ -41,22 +42,22 @@ def build_wheel(work: Path) -> Path:
     return wheel
 
 
+#: Installed before the wheel, so that the wheel's ``torch`` requirement is met by the CPU build.
+TORCH = "torch==2.13.0"
+
+
 def fresh_venv(work: Path, wheel: Path) -> Path:
-    """A new venv with the wheel installed; dependencies come from the running environment."""
+    """A new venv holding CPU torch, the wheel and the wheel's dependencies, and nothing else."""
     venv = work / "venv"
     base = getattr(sys, "_base_executable", sys.executable)
     subprocess.run([base, "-m", "venv", "--without-pip", str(venv)], check=True)
     python = venv / "bin" / "python"
-    subprocess.run(
-        [sys.executable, "-m", "pip", "--python", str(python), "install", "--quiet", "--no-deps",
-         "--no-index", str(wheel)],
-        check=True, capture_output=True, text=True,
-    )
-    purelib = subprocess.run(
-        [str(python), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
-        check=True, capture_output=True, text=True,
-    ).stdout.strip()
-    (Path(purelib) / "borrowed_dependencies.pth").write_text(sysconfig.get_paths()["purelib"])
+    for requirement in (TORCH, str(wheel)):
+        done = subprocess.run(
+            [sys.executable, "-m", "pip", "--python", str(python), "install", "--quiet",
+             requirement], capture_output=True, text=True, timeout=1800,
+        )
+        assert done.returncode == 0, done.stdout + done.stderr
     return venv
 
 
@@ -96,6 +97,11 @@ def test_wheel_installs_and_runs_outside_the_checkout(tmp_path):
     venv = fresh_venv(tmp_path, wheel)
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
+    absent = "import importlib.util as u; print(u.find_spec('pytest'), u.find_spec('ray'))"
+    out = run_outside(venv, elsewhere, str(venv / "bin" / "python"), "-c", absent)
+    assert out.split() == ["None", "None"]  # neither a dev nor an extra package: truly fresh
+    version = run_outside(venv, elsewhere, str(venv / "bin" / "grip-env"), "--version")
+    assert "grip-env 0.1.0" in version, version
     out = run_outside(venv, elsewhere, str(venv / "bin" / "grip-env"), "show", "star",
                       "--out", "star.png")
     assert out.strip() == "wrote star.png"
@@ -117,4 +123,5 @@ if __name__ == "__main__":  # the CI's wheel check: python tests/test_packaging.
 
     with tempfile.TemporaryDirectory() as folder:
         test_wheel_installs_and_runs_outside_the_checkout(Path(folder))
-    print("wheel check: grip-env show star and gymnasium.make('GripSelect-v0') ran from a wheel")
+    print("wheel check: grip-env --version, grip-env show star and gymnasium.make('GripSelect-v0')"
+          " ran from a wheel in a venv holding only its dependencies")

@@ -93,10 +93,12 @@ def test_a_dataset_that_lacks_a_sampled_object_is_refused(small, tmp_path):
         resimulate(broken, 8)
 
 
-def test_the_cli_reports_what_is_identical(small):
+def test_the_cli_reports_what_is_identical_with_a_progress_bar(small):
     code, output = cli("validate", small, "--resimulate", "2", "--workers", "1")
     assert code == 0, output
     assert "re-simulated 2 grips: outcomes identical on 2" in output
+    bar = next((line for line in output.splitlines() if line.startswith("resimulate")), None)
+    assert bar is not None and "1/1" in bar, output  # one object sampled, one bar: not silent
 
 
 # ------------------------------------------------------------------ the standard dataset

@@ -213,3 +213,17 @@ def test_stratified_draws_put_one_trial_in_each_stratum_of_a_block():
 def test_an_unknown_draw_scheme_is_refused_by_name():
     with pytest.raises(ValueError, match="draws"):
         Config().override(uncertainty={"draws": "shared"})
+
+
+def test_importing_and_connecting_pybullet_prints_nothing():
+    """pybullet's C code prints a build banner on stderr at import and ``argv[0]=`` on stdout at
+    connection: the simulation layer keeps both off every command's output."""
+    import subprocess
+    import sys
+
+    script = ("import sys\nfrom grip_env.sim import World\nWorld().close()\n"
+              "print('done'); print('still', file=sys.stderr)\n")
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert (done.stdout, done.stderr) == ("done\n", "still\n")

@@ -1,18 +1,19 @@
-"""Pages of the documentation that a program can write, written at build time.
+"""Parts of the documentation that a program can write, written from the code they document.
 
-Sphinx runs :func:`write_generated` before it reads any page, so every table below comes from the
-code the site documents, never from a copy kept by hand:
+Each page below holds its generated part inline, between :data:`BEGIN` and :data:`END`, so that
+it reads whole as Markdown in the repository; ``python docs/_ext/grip_docs.py`` rewrites those
+parts from the code (:func:`write_generated`), and the site's build (a warning: an error under
+``-W``) and the tests refuse a page whose part is stale (:func:`stale_pages`):
 
-- ``_generated/config.md``: the configuration reference,
+- ``reference/configuration.md``: the configuration reference,
   :func:`grip_env.config.config_reference_markdown`;
-- ``_generated/cli.md``: every ``grip-env`` command, its usage, help text and options, read from the
-  Typer/click command tree (:func:`cli_reference_markdown`);
-- ``_generated/env-<id>.md``: one page body per registered environment in Gymnasium's form: a
+- ``reference/cli.md``: every ``grip-env`` command, its usage, help text and options, read from the
+  Typer command tree (:func:`cli_reference_markdown`);
+- ``environments/<name>.md``: one page body per registered environment in Gymnasium's form: a
   summary table and spaces from a live ``gymnasium.make(id)``, the sections of the class docstring,
   the ``info`` keys of a live episode and the arguments of ``make`` from the constructor's
   signature (:func:`env_page_markdown`).
 
-The pages in ``docs/`` include these files (MyST ``{include}``); ``_generated/`` is not committed.
 The module also turns the ``## Section`` headings of the environments' docstrings into rubrics
 for autodoc (:func:`markdown_headings_as_rubrics`), so the API reference shows them as headings.
 """
@@ -21,16 +22,22 @@ from __future__ import annotations
 
 import inspect
 import re
+import sys
 from collections.abc import Callable
 from functools import partial
 from importlib import import_module
 from pathlib import Path
 from typing import Any
 
-GENERATED = "_generated"
+BEGIN = ("<!-- generated:begin (written from the code by `python docs/_ext/grip_docs.py`; "
+         "do not edit) -->")
+END = "<!-- generated:end -->"
+DOCS = Path(__file__).resolve().parents[1]
 #: The order of a Gymnasium environment page; the docstring must hold each of these sections.
 ENV_SECTIONS = ("Description", "Action Space", "Observation Space", "Rewards", "Starting State",
                 "Episode End", "Arguments", "Version History")
+#: The test that runs the environments' docstring examples (the pages' Example blocks).
+_DOCTEST = "tests/test_envs.py::test_docstrings_have_gymnasiums_sections_and_a_running_example"
 _ROLE = re.compile(r":(meth|class|func|data|attr|mod):`(~?)([^`]+)`")
 
 
@@ -117,7 +124,8 @@ def env_page_markdown(env_id: str) -> str:
     if "Example" in sections:
         lines += ["## Example", "",
                   "The class docstring's example; the test suite runs it as a doctest "
-                  "(`tests/test_envs.py`).", "", "```pycon", sections["Example"].strip(), "```", ""]
+                  "(`tests/test_envs.py`).", "", f"<!-- run by: {_DOCTEST} -->", "```pycon",
+                  sections["Example"].strip(), "```", ""]
     return "\n".join(lines)
 
 
@@ -155,7 +163,8 @@ def _info_table(env_id: str) -> list[str]:
     live = _first_step_infos(gymnasium.make(env_id, objects=["rectangle"], max_candidates=8))
     replay = _first_step_infos(gymnasium.make(env_id, data=synthetic_grips(n_objects=4, seed=0),
                                               max_candidates=8))
-    rows = ["Measured on one live episode (`objects=[\"rectangle\"]`) when the site was built:", "",
+    rows = ["Measured on one live episode (`objects=[\"rectangle\"]`) when this page was written:",
+            "",
             "| key | in `reset` | in `step` | type |", "| --- | --- | --- | --- |"]
     reset_info, step_info = live
     for key in dict.fromkeys([*reset_info, *step_info]):
@@ -187,35 +196,58 @@ def _arguments_table(env_class: type) -> list[str]:
     return rows
 
 
-# ------------------------------------------------------------------ Sphinx
+# ------------------------------------------------------------------ the pages
 def generators() -> dict[str, Callable[[], str]]:
-    """Each generated file's name under ``_generated/`` and the function that writes its text."""
+    """Each page (its path under ``docs/``) with a generated part, and the function writing it."""
     from grip_env.envs.registration import ENV_IDS
 
-    found: dict[str, Callable[[], str]] = {"config.md": config_markdown,
-                                           "cli.md": cli_reference_markdown}
+    found: dict[str, Callable[[], str]] = {"reference/configuration.md": config_markdown,
+                                           "reference/cli.md": cli_reference_markdown}
     for env_id in ENV_IDS:
-        found[f"env-{env_id}.md"] = partial(env_page_markdown, env_id)
+        found[f"environments/{env_page_name(env_id)}.md"] = partial(env_page_markdown, env_id)
     return found
 
 
-def generated_file_names() -> list[str]:
-    """The names of the generated files."""
-    return list(generators())
+def env_page_name(env_id: str) -> str:
+    """The page of an environment: ``GripSelect-v0`` is ``grip_select``."""
+    return re.sub(r"(?<!^)(?=[A-Z])", "_", env_id.split("-")[0]).lower()
 
 
-def write_generated(folder: Path) -> list[Path]:
-    """Write the files of :func:`generators` into ``folder`` (only those whose text changed)."""
-    folder.mkdir(exist_ok=True)
+def with_generated(text: str, generated: str, page: str) -> str:
+    """``text`` of ``page`` with the part between :data:`BEGIN` and :data:`END` replaced."""
+    start, end = text.find(BEGIN), text.find(END)
+    if start < 0 or end < start:
+        raise ValueError(f"{page} lacks the markers of its generated part: {BEGIN} ... {END}")
+    return f"{text[:start + len(BEGIN)]}\n{generated.rstrip()}\n{text[end:]}"
+
+
+def _pages_as_generated(docs: Path) -> dict[Path, tuple[str, str]]:
+    """Each page with a generated part: its text now and its text with the part written anew."""
+    found = {}
+    for page, generate in generators().items():
+        path = docs / page
+        text = path.read_text(encoding="utf-8")
+        found[path] = (text, with_generated(text, generate(), page))
+    return found
+
+
+def stale_pages(docs: Path = DOCS) -> list[str]:
+    """The pages whose generated part differs from what the code writes now."""
+    return [str(path.relative_to(docs)) for path, (text, fresh) in _pages_as_generated(docs).items()
+            if text != fresh]
+
+
+def write_generated(docs: Path = DOCS) -> list[Path]:
+    """Rewrite the generated part of each page whose part is stale; the pages rewritten."""
     written = []
-    for name, generate in generators().items():
-        text, path = generate(), folder / name
-        if not path.is_file() or path.read_text() != text:
-            path.write_text(text)
+    for path, (text, fresh) in _pages_as_generated(docs).items():
+        if text != fresh:
+            path.write_text(fresh, encoding="utf-8")
             written.append(path)
     return written
 
 
+# ------------------------------------------------------------------ Sphinx
 def markdown_headings_as_rubrics(app: Any, what: str, name: str, obj: Any, options: Any,
                                  lines: list[str]) -> None:
     """autodoc hook: a docstring's ``## Title`` lines become ``.. rubric:: Title``."""
@@ -225,7 +257,12 @@ def markdown_headings_as_rubrics(app: Any, what: str, name: str, obj: Any, optio
 
 
 def _on_builder_inited(app: Any) -> None:
-    write_generated(Path(app.srcdir) / GENERATED)
+    from sphinx.util import logging
+
+    for page in stale_pages(Path(app.srcdir)):
+        logging.getLogger(__name__).warning(
+            f"{page}: its generated part is out of date with the code; rewrite it with "
+            "python docs/_ext/grip_docs.py")
 
 
 def setup(app: Any) -> dict[str, Any]:
@@ -233,3 +270,9 @@ def setup(app: Any) -> dict[str, Any]:
     app.connect("builder-inited", _on_builder_inited)
     app.connect("autodoc-process-docstring", markdown_headings_as_rubrics)
     return {"parallel_read_safe": True, "parallel_write_safe": True}
+
+
+if __name__ == "__main__":  # python docs/_ext/grip_docs.py: rewrite the stale generated parts
+    sys.path.insert(0, str(DOCS.parent))  # the checkout's grip_env and classifiers
+    for rewritten in write_generated():
+        print(f"wrote {rewritten.relative_to(DOCS.parent)}")

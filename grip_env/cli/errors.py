@@ -23,8 +23,8 @@ from pathlib import Path
 from types import TracebackType
 from typing import TypeVar
 
-import click
 import typer
+from typer.exceptions import TyperException
 
 T = TypeVar("T")
 
@@ -44,7 +44,7 @@ def user_errors() -> Iterator[None]:
     """Report bad input as ``error: ...`` (exit 2) and anything else as an internal error (1)."""
     try:
         yield
-    except (click.exceptions.Exit, typer.Exit, click.ClickException, click.Abort):
+    except (typer.Exit, typer.Abort, TyperException):  # Typer's own exits and usage errors
         raise
     except Exception as exc:
         if is_input_error(exc):

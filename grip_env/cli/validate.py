@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from dataclasses import asdict
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -13,6 +13,7 @@ from grip_env.cli.errors import checked, user_errors
 from grip_env.cli.notices import warn_label_model
 from grip_env.cli.options import dataset_folder
 from grip_env.cli.paths import output_file
+from grip_env.progress import shown
 
 
 def validate(
@@ -50,14 +51,15 @@ def validate(
         manifest = read_manifest(directory)
         problems = validate_dataset(directory)
     warn_label_model(directory)
-    summary = (f"{directory}: {manifest['rows']} grips, {len(manifest['objects'])} objects, "
-               f"label model {label_model_of(manifest)}")
-    if problems:
-        typer.echo(f"{summary}: {len(problems)} problem(s)")
+    label_model = f"label model {label_model_of(manifest)}"
+    if problems:  # the problems first, then what the shards on disk hold: not a whole dataset's
+        typer.echo(f"{directory}: {len(problems)} problem(s)")
         for problem in problems:
             typer.echo(f"  - {problem}")
+        typer.echo(f"{directory}: {_counts(directory, manifest)}, {label_model}")
         raise typer.Exit(code=1)
-    typer.echo(f"{summary}: OK (schema, checksums, features, outcomes)")
+    typer.echo(f"{directory}: {manifest['rows']} grips, {len(manifest['objects'])} objects, "
+               f"{label_model}: OK (schema, checksums, features, outcomes)")
     if report is not None:
         checked(lambda: output_file(report, ".json", "--report"))
     found: dict[str, object] = {}
@@ -71,9 +73,23 @@ def validate(
         raise typer.Exit(code=1)
 
 
+def _counts(directory: Path, manifest: dict[str, Any]) -> str:
+    """The grips and objects of the shards present on disk; "incomplete" when some are not."""
+    from grip_env.dataset.manifest import shard_records
+
+    total = len(manifest["objects"])
+    present = [record for record in shard_records(manifest).values()
+               if (directory / record.file).is_file()]
+    rows = sum(record.rows for record in present)
+    if len(present) == total:
+        return f"{rows} grips, {total} objects"
+    return (f"incomplete: {rows} grips in the shards of {len(present)} of {total} objects "
+            f"({total - len(present)} without a shard on disk)")
+
+
 def _resimulate(directory: Path, grips: int, seed: int, workers: int) -> dict[str, object]:
     """Report the re-simulation (every difference on its own line)."""
-    with user_errors():
+    with user_errors(), shown():
         from grip_env.dataset.resimulation import resimulate
 
         found = resimulate(directory, grips, seed=seed, workers=workers)
@@ -85,7 +101,7 @@ def _resimulate(directory: Path, grips: int, seed: int, workers: int) -> dict[st
 
 def _retest(directory: Path, objects: int, seed: int, workers: int) -> dict[str, object]:
     """Report the within-object test-retest."""
-    with user_errors():
+    with user_errors(), shown():
         from grip_env.dataset.resimulation import retest
 
         found = retest(directory, objects, seed=seed, workers=workers)

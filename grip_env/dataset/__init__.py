@@ -22,7 +22,7 @@ from grip_env.dataset.loading import (
     label_model_notice,
     load,
 )
-from grip_env.dataset.manifest import FORMAT_VERSION, FormatVersionError
+from grip_env.dataset.manifest import FORMAT_VERSION, CorruptManifestError, FormatVersionError
 from grip_env.dataset.sampling import keep_grips, kept_ranks
 from grip_env.dataset.split import held_out_objects, split_objects, split_table
 from grip_env.dataset.validation import validate
@@ -30,6 +30,7 @@ from grip_env.dataset.validation import validate
 __all__ = [
     "BACKENDS",
     "FORMAT_VERSION",
+    "CorruptManifestError",
     "DatasetMismatchError",
     "FormatVersionError",
     "ObjectJob",

@@ -38,9 +38,12 @@ __all__ = ["BACKENDS", "WorkerLost", "check_backend", "in_this_process", "ray_ad
 
 
 def check_backend(backend: str, workers: int) -> None:
-    """Raise ``ValueError`` for an unknown backend or a worker count below 1."""
+    """Raise ``ValueError`` for an unknown backend, backend ``"ray"`` without Ray installed, or
+    a worker count below 1: before a run writes anything."""
     if backend not in BACKENDS:
         raise ValueError(f"unknown backend {backend!r}; choose from {', '.join(BACKENDS)}")
+    if backend == "ray":
+        _import_ray()
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be an integer >= 1, got {workers!r}")
 

@@ -22,6 +22,9 @@ from grip_env.dataset.loading import load
 from grip_env.dataset.manifest import earlier_runs
 from grip_env.label_model import label_model_of
 
+#: What "g" means wherever robustness is defined (the card, the concepts page, the columns).
+GRAVITY_UNIT = ("A level in g is an acceleration of the object, a multiple of gravity's 9.81 m/s² "
+                "(a force of level × mass × 9.81 N), not grams")
 #: The quantiles of mean robustness the card tabulates.
 QUANTILES = (0.1, 0.25, 0.5, 0.75, 0.9)
 
@@ -122,7 +125,8 @@ def _outcomes(grips: pd.DataFrame, manifest: dict[str, Any]) -> str:
         "## Outcomes", "",
         f"A grip's `success` is holding the {sim['reference_level_g']:g} g reference in at least "
         f"half its trials; `robustness_mean` is the mean over its trials of the highest planar "
-        f"disturbance held in every direction ({sim['ramp_levels_g'][0]:g}–{cap:g} g).",
+        f"disturbance held in every direction ({sim['ramp_levels_g'][0]:g}–{cap:g} g). "
+        f"{GRAVITY_UNIT}.",
         "",
         f"- Success rate {_share(grips['success'])}; per-object success rates range "
         f"{_per_object_range(grips)}.",

@@ -37,6 +37,7 @@ from grip_env.dataset.lock import dataset_lock
 from grip_env.dataset.manifest import (
     FORMAT_VERSION,
     MANIFEST_FILE,
+    CorruptManifestError,
     FormatVersionError,
     Manifest,
     current_commit,
@@ -192,6 +193,8 @@ def _compare_with_existing(
         old = read_manifest(directory)
     except FormatVersionError as exc:
         return None, [f"format_version: {exc.version!r} -> {FORMAT_VERSION}"]
+    except CorruptManifestError:
+        return None, [f"its {MANIFEST_FILE} is unreadable"]
     return old, identity_differences(old["identity"], run_identity(config, entries, own))
 
 

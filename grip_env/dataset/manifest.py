@@ -46,16 +46,39 @@ class FormatVersionError(ValueError):
 
     def __init__(self, directory: Path, version: object) -> None:
         self.version = version
-        if isinstance(version, int) and version < FORMAT_VERSION:
+        if not isinstance(version, int) or isinstance(version, bool):
+            super().__init__(
+                f"dataset {directory} has format_version {_described(version)}, not an integer "
+                f"(this grip-env reads format version {FORMAT_VERSION}): regenerate it "
+                "(grip-env generate --overwrite into it)"
+            )
+            return
+        if version < FORMAT_VERSION:
             advice = "it is too old: regenerate it (grip-env generate --overwrite into it)"
-        elif isinstance(version, int):
-            advice = "it is newer: upgrade grip-env to read it"
         else:
-            advice = "regenerate it (grip-env generate --overwrite into it)"
+            advice = "it is newer: upgrade grip-env to read it"
         super().__init__(
             f"dataset {directory} has format version {version!r}, this grip-env reads version "
             f"{FORMAT_VERSION}; {advice}"
         )
+
+
+class CorruptManifestError(ValueError):
+    """A manifest that cannot be read as JSON (a truncated copy, a disk that filled up)."""
+
+    def __init__(self, path: Path, reason: object) -> None:
+        super().__init__(
+            f"{path} is corrupt ({reason}): the dataset cannot be read without it; restore "
+            f"{MANIFEST_FILE} from a copy of the dataset, or rerun the generate command that made "
+            "it with --overwrite to regenerate it"
+        )
+
+
+def _described(value: object) -> str:
+    """``value`` with its type, for a message: "the string '2'", "None"."""
+    kinds = {str: "the string", float: "the float", bool: "the boolean"}
+    kind = kinds.get(type(value))
+    return f"{kind} {value!r}" if kind else f"{value!r} ({type(value).__name__})"
 
 
 def run_identity(
@@ -140,7 +163,8 @@ def read_manifest(directory: Path) -> Manifest:
     """Read and check the manifest of a dataset directory.
 
     Raises:
-        ValueError: no manifest, not JSON, or not a grip-env dataset.
+        ValueError: no manifest, or not a grip-env dataset.
+        CorruptManifestError: a manifest that is not JSON (a ``ValueError``).
         FormatVersionError: a dataset of another format version (a ``ValueError``).
     """
     path = Path(directory) / MANIFEST_FILE
@@ -149,7 +173,7 @@ def read_manifest(directory: Path) -> Manifest:
     try:
         manifest = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise ValueError(f"{path} is corrupt: {exc}") from None
+        raise CorruptManifestError(path, exc) from None
     if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
         raise ValueError(f"{path} is not a grip-env dataset manifest")
     version = manifest.get("format_version")

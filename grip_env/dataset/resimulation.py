@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import TypeVar
@@ -27,6 +27,7 @@ from grip_env.dataset.catalog import load_objects
 from grip_env.dataset.jobs import ObjectTask, kept_grips
 from grip_env.dataset.loading import load
 from grip_env.dataset.manifest import read_manifest
+from grip_env.progress import progress_bar
 
 #: Grips re-simulated per sampled object (the sample spreads over N / this many objects).
 GRIPS_PER_OBJECT = 5
@@ -59,15 +60,24 @@ _Result = TypeVar("_Result")
 
 
 def _map(
-    function: Callable[[_Item], _Result], items: Sequence[_Item], workers: int
+    function: Callable[[_Item], _Result], items: Sequence[_Item], workers: int, description: str
 ) -> list[_Result]:
     """``function`` over ``items`` in order: in this process, or on up to ``workers`` fresh
-    worker processes (:func:`~grip_env.dataset.backends.in_this_process`)."""
-    if in_this_process(1 if len(items) < 2 else workers):
-        return [function(item) for item in items]
-    size = max(1, min(workers, len(items)))
-    with ProcessPoolExecutor(size, mp_context=worker_context()) as pool:
-        return list(pool.map(function, items))
+    worker processes (:func:`~grip_env.dataset.backends.in_this_process`); a progress bar named
+    ``description`` counts the items done (shown under :func:`grip_env.progress.shown`)."""
+    with progress_bar(len(items), description) as bar:
+        if in_this_process(1 if len(items) < 2 else workers):
+            results = []
+            for item in items:
+                results.append(function(item))
+                bar.advance()
+            return results
+        size = max(1, min(workers, len(items)))
+        with ProcessPoolExecutor(size, mp_context=worker_context()) as pool:
+            futures = [pool.submit(function, item) for item in items]
+            for _ in as_completed(futures):
+                bar.advance()
+            return [future.result() for future in futures]
 
 
 @dataclass(frozen=True)
@@ -90,7 +100,7 @@ def resimulate(path: str | Path, grips: int, seed: int = 0, workers: int = 1) ->
     directory = Path(path)
     checks = _sample(directory, int(grips), seed)
     result = Resimulation()
-    found = _map(_check_object, checks, workers)
+    found = _map(_check_object, checks, workers, "resimulate")
     for check, (same_candidates, same_outcomes, notes) in zip(checks, found, strict=True):
         result.objects += 1
         result.candidates_identical += same_candidates
@@ -204,7 +214,7 @@ def retest(path: str | Path, objects: int, seed: int = 0, workers: int = 1) -> R
         ValueError: ``objects`` is not a positive integer, or the dataset is unreadable.
     """
     checks = _retest_sample(Path(path), objects, seed)
-    means = _map(_retest_means, checks, workers)
+    means = _map(_retest_means, checks, workers, "retest")
     return _retest_figures(checks, means, seed)
 
 

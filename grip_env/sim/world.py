@@ -24,24 +24,28 @@ from grip_env.sim.gantry import mounted_urdf
 
 
 @contextlib.contextmanager
-def _quiet_native_stdout() -> Iterator[None]:
-    """Silence what pybullet's C code prints to file descriptor 1 (build banner, ``argv[0]=``)."""
+def _quiet_native(*fds: int) -> Iterator[None]:
+    """Silence what pybullet's C code prints to the file descriptors ``fds`` (1: ``argv[0]=``;
+    2: the ``pybullet build time`` banner of the import)."""
     try:
         sys.stdout.flush()
-        saved = os.dup(1)
+        sys.stderr.flush()
+        saved = [os.dup(fd) for fd in fds]
     except (OSError, ValueError):
         yield
         return
     try:
         with open(os.devnull, "w") as devnull:
-            os.dup2(devnull.fileno(), 1)
+            for fd in fds:
+                os.dup2(devnull.fileno(), fd)
             yield
     finally:
-        os.dup2(saved, 1)
-        os.close(saved)
+        for fd, copy in zip(fds, saved, strict=True):
+            os.dup2(copy, fd)
+            os.close(copy)
 
 
-with _quiet_native_stdout():
+with _quiet_native(1, 2):
     import pybullet
     from pybullet_utils.bullet_client import BulletClient
 
@@ -73,7 +77,7 @@ class World:
     def __init__(self, timestep: float = 1.0 / 240.0, solver_iterations: int = 50) -> None:
         # A stop signal during the connection would leave a half-built client whose finaliser
         # fails noisily at exit: the connection is made whole first, then the signal acts.
-        with deferred_signals(), _quiet_native_stdout():
+        with deferred_signals(), _quiet_native(1):
             self.client = BulletClient(connection_mode=pybullet.DIRECT)
         self.timestep = timestep
         self.solver_iterations = solver_iterations
