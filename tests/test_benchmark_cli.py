@@ -112,11 +112,14 @@ def test_entry_point_round_trip(data: Path, methods: Path) -> None:
     assert found["split"]["version"] == STANDARD_SPLIT.version
     assert sorted(found["objects"] + found["degenerate_objects"]) == sorted(STANDARD_TEST_OBJECTS)
     assert "| by_qc |" in (out / "leaderboard.md").read_text()
+    assert found["split"]["seeds"] == [0]  # a deterministic function: one run, seed 0
+    assert "training seeds [0];" in (out / "leaderboard.md").read_text()
     assert (out / "performance_profile.png").stat().st_size > 0
     code, output = cli("benchmark", "my_methods:seeded", "--data", data, "--out", out / "s",
                        "--reps", 200)  # fmt: skip
     assert code == 0, output
     assert board(out / "s")["methods"]["seeded"]["runs"] == 5
+    assert board(out / "s")["split"]["seeds"] == list(STANDARD_SPLIT.seeds)
     code, output = cli("benchmark", "my_methods:first", "--data", data, "--out", out / "f",
                        "--reps", 200)  # fmt: skip
     assert code == 0, output

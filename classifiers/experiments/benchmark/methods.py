@@ -12,8 +12,9 @@ long table ``method, seed, object_id, candidate, score`` (:data:`SCORE_COLUMNS`)
 - an SB3 zip (:func:`sb3_scores`): MaskablePPO or PPO trained on ``GripSelect-v0``; the score is
   the policy's probability of each valid slot on the object's first observation, so the top-1 is
   the deterministic action (masked, for PPO as for MaskablePPO);
-- a skops file (:func:`skops_scores`): a scikit-learn model taking the candidate table; scores
-  are ``decision_function``, else ``P(success)``, else ``predict`` (a regressor);
+- a saved model (:func:`saved_model_scores`): a skops file, or a model ``grip-env train`` saved
+  (any of its files, as ``grip-env predict`` takes them), taking the candidate table; scores
+  are ``decision_function``, else ``P(success)``, else ``predict`` (a regressor, a ranker);
 - a Python entry point ``module:function`` (:func:`entry_point_scores`): called with one
   object's candidate table (outcome columns removed, rows in slot order) and, when it takes a
   ``seed`` argument, once per training seed of the split; or a class, made once per run
@@ -156,10 +157,11 @@ def _selector(function: Callable[..., Any], spec: str, seed: int | None) -> Call
     return instance
 
 
-# ------------------------------------------------------------------ skops models
-def skops_scores(path: Path, sets: Sequence[CandidateSet], name: str) -> pd.DataFrame:
-    """Score table of a scikit-learn model saved with skops (one run)."""
-    model = load_skops(path)
+# ------------------------------------------------------------------ saved models
+def saved_model_scores(path: Path, sets: Sequence[CandidateSet], name: str) -> pd.DataFrame:
+    """Score table of a scikit-learn model (one run): a bare skops file, or any file of a model
+    ``grip-env train`` saved (``NAME.json`` and its ``.skops``, ``.pt`` or ``.txt``)."""
+    model = load_saved_model(path)
     frames = []
     for found in sets:
         rows = public_rows(found)
@@ -169,6 +171,36 @@ def skops_scores(path: Path, sets: Sequence[CandidateSet], name: str) -> pd.Data
                                f"{path.name} on object {found.object_id!r}")  # fmt: skip
         frames.append(score_frame(name, 0, _slots(found), scores))
     return pd.concat(frames, ignore_index=True)
+
+
+def load_saved_model(path: Path) -> Any:
+    """The model of ``path``: through its ``NAME.json`` when it has one (as ``grip-env
+    predict`` reads it), else a bare skops file."""
+    from classifiers.learners.persistence import model_format
+
+    meta = path.with_suffix(".json")
+    if meta.is_file() and model_format(meta) is not None:
+        return _load_with_metadata(path.parent, path.stem)
+    if path.suffix.lower() == ".skops":
+        return load_skops(path)
+    raise ValueError(f"{path}: not a saved model (grip-env train writes OUT/models/NAME.json "
+                     f"beside its .skops, .pt or .txt)")  # fmt: skip
+
+
+def _load_with_metadata(directory: Path, name: str) -> Any:
+    import json
+    import pickle
+
+    from classifiers.learners.persistence import load_model
+
+    try:
+        model, _ = load_model(directory, name)
+    except (pickle.UnpicklingError, RuntimeError, KeyError, TypeError, OSError,
+            zipfile.BadZipFile, json.JSONDecodeError) as exc:  # fmt: skip
+        reason = " ".join(str(exc).split())[:300]
+        raise ValueError(f"cannot load model {directory / name}: {type(exc).__name__}: "
+                         f"{reason}") from None  # fmt: skip
+    return model
 
 
 def load_skops(path: Path) -> Any:
