@@ -85,12 +85,18 @@ def benchmark(
                                  seed)  # fmt: skip
         _check_out(out)
         written = [*write_leaderboard(board, out), write_leaderboard_markdown(board, out)]
+    from classifiers.report.judge import leaderboard_caution
+
     row, chosen = board["methods"][label], board["split"]
+    caution = leaderboard_caution(board)
     typer.echo(f"split {chosen['name']} v{chosen['version']}"
                + (f": {chosen['note']}" if chosen.get("note") else ""))  # fmt: skip
-    typer.echo(f"{label}: top-1 success {row['success']:.3f}, normalised IQM "
-               f"{row['iqm']['estimate']:.3f} [{row['iqm']['ci'][0]:.3f}, "
-               f"{row['iqm']['ci'][1]:.3f}], {row['verdict']}")  # fmt: skip
+    typer.echo(f"{label}: top-1 success {row['success']:.3f} [{row['success_ci'][0]:.3f}, "
+               f"{row['success_ci'][1]:.3f}], normalised IQM {row['iqm']['estimate']:.3f} "
+               f"[{row['iqm']['ci'][0]:.3f}, {row['iqm']['ci'][1]:.3f}], "
+               f"{'no verdict' if caution else row['verdict']}")  # fmt: skip
+    if caution:
+        typer.echo(f"caution: {caution}")
     if row.get("training"):
         typer.echo(f"{label}: {row['training']['note']}")
     typer.echo(f"wrote {written[0]} and {written[-1]}")

@@ -65,9 +65,11 @@ def train(
         from classifiers.experiments.training import train_and_save
 
         metrics = train_and_save(table, out, settings, chosen)
-        for name, summary in metrics["models"].items():
-            auc = summary["roc_auc"]["mean"]
-            typer.echo(f"{name:12s} ROC-AUC {auc:.3f}" if auc is not None else name)
+        blocks = {name: summary["roc_auc"] for name, summary in metrics["models"].items()}
+        for name, block in blocks.items():
+            typer.echo(auc_line(name, block, 12))
+        for line in cautions(blocks, metrics["cv"]["n_objects"]):
+            typer.echo(line)
         typer.echo(_fitted_on(table, chosen))
         typer.echo(f"wrote {out / 'metrics.json'}")
 
@@ -95,6 +97,33 @@ def _fitted_on(table: Any, chosen: dict[str, Any]) -> str:
     seed = f"; benchmark them with --seed {chosen['split_seed']}" if auto else ""
     return (f"models fitted on the {objects} training objects of {chosen['split_name']} "
             f"v{chosen['split_version']} ({chosen['held_out_objects']} held out){seed}")
+
+
+def auc_line(name: str, block: dict[str, Any], width: int) -> str:
+    """``name  ROC-AUC 0.712 [0.650, 0.770]``: the CV mean and its 95 % interval."""
+    mean, (low, high) = block.get("mean"), block.get("ci") or (None, None)
+    if mean is None:
+        return f"{name:{width}s} ROC-AUC n/a (undefined on these folds)"
+    interval = f" [{low:.3f}, {high:.3f}]" if low is not None and high is not None else ""
+    return f"{name:{width}s} ROC-AUC {mean:.3f}{interval}"
+
+
+def cautions(blocks: dict[str, dict[str, Any]], objects: int, subject: str = "") -> list[str]:
+    """The lines under the scores when they cannot be judged: ``blocks`` (ROC-AUC per name)
+    that predicted a constant, and too few objects (the report's rule,
+    :mod:`classifiers.report.judge`). ``subject``: whose blocks they are, when not learners."""
+    from classifiers.report.judge import constant_scores, small_data_caution
+
+    lines = []
+    constant = constant_scores(blocks)
+    if constant:
+        names = (f"{len(constant)} of {len(blocks)}" if len(constant) > 3 else
+                 ", ".join(constant))  # fmt: skip
+        lines.append(f"caution: {subject}{names} scored every grip alike in every fold (ROC-AUC "
+                     f"0.500, zero-width interval): a constant prediction, nothing learnt from "
+                     f"data this small")  # fmt: skip
+    small = small_data_caution(objects)
+    return [*lines, small] if small else lines
 
 
 def model_names(text: str) -> tuple[str, ...]:
