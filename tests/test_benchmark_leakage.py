@@ -126,6 +126,9 @@ def test_a_saved_model_is_checked_by_its_metadata(data, tmp_path: Path) -> None:
     code, output = cli("benchmark", tmp_path / "models" / "clean.json", "--data", path,
                        "--out", tmp_path / "lb", "--reps", 100)  # fmt: skip
     assert code == 0 and "none of the" in output, output
+    code, output = cli("benchmark", tmp_path / "models" / "clean", "--data", path,
+                       "--out", tmp_path / "bare", "--reps", 100)  # the bare name, as predict
+    assert code == 0 and "clean: top-1 success" in output, output
 
 
 def _agent(folder: Path, table: pd.DataFrame, name: str, record: bool = True) -> Path:

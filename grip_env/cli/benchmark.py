@@ -108,6 +108,8 @@ def _default_name(spec: str) -> str:
     path = Path(spec)
     if path.suffix.lower() in (".zip", *MODEL_SUFFIXES):
         return path.stem
+    if path.name and path.with_name(f"{path.name}.json").is_file():  # a saved model's bare name
+        return path.name
     return spec.rpartition(":")[2]
 
 

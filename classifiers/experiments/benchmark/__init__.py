@@ -33,13 +33,15 @@ __all__ = ["benchmark_method", "method_kind", "study_benchmark"]
 
 def method_kind(spec: str) -> str:
     """Which kind of method ``spec`` names: an existing ``.zip``, a saved model's file
-    (:data:`MODEL_SUFFIXES`) or an entry point ``module:function``."""
+    (:data:`MODEL_SUFFIXES`, or its name without one) or an entry point ``module:function``."""
     path = Path(spec)
     suffix = path.suffix.lower()
     if suffix == ".zip" or suffix in MODEL_SUFFIXES:
         if not path.is_file():
             raise ValueError(f"method file not found: {spec}")
         return METHOD_KINDS[0] if suffix == ".zip" else METHOD_KINDS[1]
+    if path.name and path.with_name(f"{path.name}.json").is_file():  # a bare name, as predict
+        return METHOD_KINDS[1]
     if ":" in spec and not path.exists():
         return METHOD_KINDS[2]
     raise ValueError(f"a method is an SB3 .zip, a saved model (NAME.json or its .skops, .pt, "
