@@ -38,6 +38,7 @@ def test_train_split_train_fits_on_the_benchmark_splits_training_objects_only(
     trained: Path, generated_dataset_dir: Path,
 ) -> None:
     from classifiers.experiments.benchmark.split import DatasetObjects, choose_split
+    from classifiers.learners.persistence import dataset_checksum
     from grip_env.dataset import load
 
     table = load(generated_dataset_dir)
@@ -47,6 +48,7 @@ def test_train_split_train_fits_on_the_benchmark_splits_training_objects_only(
         record = json.loads((trained / "train" / "models" / f"{name}.json").read_text())
         assert record[RECORD_KEY]["objects"] == sorted(set(everything) - set(split.test_objects))
         assert record[RECORD_KEY]["split_name"] == split.name
+        assert record[RECORD_KEY]["dataset_sha256"] == dataset_checksum(table)  # the source
         record = json.loads((trained / "all" / "models" / f"{name}.json").read_text())
         assert record[RECORD_KEY]["objects"] == everything
 

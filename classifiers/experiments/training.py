@@ -63,8 +63,9 @@ def train_and_save(
 ) -> dict[str, Any]:
     """Cross-validate, plot, refit on everything and save; returns the metrics dict.
 
-    ``split``: how ``table`` was chosen from its dataset (default ``{"split": "all"}``), recorded
-    with ``table``'s object ids as every saved model's ``trained_on``
+    ``split``: how ``table`` was chosen from its dataset (default ``{"split": "all"}``; its
+    ``dataset_sha256``: that dataset's checksum, default ``table``'s), recorded with ``table``'s
+    object ids as every saved model's ``trained_on``
     (:func:`~classifiers.experiments.benchmark.provenance.training_record`)."""
     with single_threaded():
         return _train_and_save(table, out_dir, config or Config(), split or {"split": "all"})
@@ -76,7 +77,8 @@ def _train_and_save(table: pd.DataFrame, out_dir: str | Path, config: Config,
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     checksum = dataset_checksum(table)
-    trained_on = {"trained_on": training_record(table["object_id"], **split)}
+    record = {"dataset_sha256": checksum, **split}  # the split's source dataset, when given
+    trained_on = {"trained_on": training_record(table["object_id"], **record)}
     metrics, out_of_fold = evaluate_models_out_of_fold(table, learning.models, FEATURES, learning)
     metrics["held_out"] = held_out_scores(table, config)
     metrics["family_holdout"] = family_holdout_scores(table, config)

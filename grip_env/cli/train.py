@@ -80,11 +80,12 @@ def _fitted_table(table: Any, settings: Any, split: TrainSplit) -> tuple[Any, di
         return table, {"split": "all"}
     from classifiers.evaluation.cross_validation import check_dataset
     from classifiers.experiments.benchmark.split import training_objects
+    from classifiers.learners.persistence import dataset_checksum
     from grip_env.columns import FEATURES
 
     train_table, chosen = training_objects(table, settings)
     check_dataset(train_table, FEATURES, settings.learning.folds)
-    return train_table, chosen
+    return train_table, {**chosen, "dataset_sha256": dataset_checksum(table)}
 
 
 def _fitted_on(table: Any, chosen: dict[str, Any]) -> str:
