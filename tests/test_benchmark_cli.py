@@ -39,6 +39,35 @@ METHODS = textwrap.dedent("""
 
     def short(table):
         return np.zeros(len(table) - 1)
+
+    def by_qg_sorted(table):
+        return -table.sort_values("Q_G")["Q_G"]  # a Series in Q_G order, on the table's index
+
+    def by_qc_shuffled(table):
+        return (-table["Q_C"]).sample(frac=1.0, random_state=0)
+
+    def other_index(table):
+        return (-table["Q_C"]).set_axis(table.index + 1)
+
+    def nothing(table):
+        return None
+
+    def text(table):
+        return "0"
+
+    def texts(table):
+        return [str(v) for v in range(len(table))]
+
+    class Noisy:
+        def __init__(self, seed=0):
+            self.rng = np.random.default_rng(seed)
+
+        def __call__(self, table):
+            return self.rng.random(len(table))
+
+    class ByQC:
+        def __call__(self, table):
+            return -table["Q_C"].to_numpy()
 """)
 
 
@@ -83,11 +112,14 @@ def test_entry_point_round_trip(data: Path, methods: Path) -> None:
     assert found["split"]["version"] == STANDARD_SPLIT.version
     assert sorted(found["objects"] + found["degenerate_objects"]) == sorted(STANDARD_TEST_OBJECTS)
     assert "| by_qc |" in (out / "leaderboard.md").read_text()
+    assert found["split"]["seeds"] == [0]  # a deterministic function: one run, seed 0
+    assert "training seeds [0];" in (out / "leaderboard.md").read_text()
     assert (out / "performance_profile.png").stat().st_size > 0
     code, output = cli("benchmark", "my_methods:seeded", "--data", data, "--out", out / "s",
                        "--reps", 200)  # fmt: skip
     assert code == 0, output
     assert board(out / "s")["methods"]["seeded"]["runs"] == 5
+    assert board(out / "s")["split"]["seeds"] == list(STANDARD_SPLIT.seeds)
     code, output = cli("benchmark", "my_methods:first", "--data", data, "--out", out / "f",
                        "--reps", 200)  # fmt: skip
     assert code == 0, output
@@ -101,6 +133,10 @@ def test_entry_point_round_trip(data: Path, methods: Path) -> None:
     ("my_methods:short", "scores"),
     ("my_methods:peeks", "success_rate"),
     ("my_methods:missing", "no function"),
+    ("my_methods:other_index", "index"),
+    ("my_methods:nothing", "returned None"),
+    ("my_methods:text", "text '0'"),
+    ("my_methods:texts", "text '0'"),
     ("nope.zip", "not found"),
 ])  # fmt: skip
 def test_bad_functions_are_refused_and_nothing_written(
@@ -109,6 +145,30 @@ def test_bad_functions_are_refused_and_nothing_written(
     out = methods / "never"
     assert_refused(*cli("benchmark", method, "--data", data, "--out", out), fragment)
     assert not out.exists()
+
+
+def test_a_series_is_aligned_on_the_candidates_index(data: Path, methods: Path) -> None:
+    """A Series in another row order scores each row by its own value (issue 44, item 3)."""
+    for method, same_as in (("by_qg_sorted", "best_qg"), ("by_qc_shuffled", "best_qc")):
+        out = methods / method
+        code, output = cli("benchmark", f"my_methods:{method}", "--data", data, "--out", out,
+                           "--reps", 100)  # fmt: skip
+        assert code == 0, output
+        found = board(out)["methods"]
+        assert found[method]["success"] == found[same_as]["success"], method
+        assert found[method]["ndcg5"] == found[same_as]["ndcg5"], method
+
+
+def test_a_selector_class_is_made_once_per_seed(data: Path, methods: Path) -> None:
+    code, output = cli("benchmark", "my_methods:Noisy", "--data", data, "--out", methods / "n",
+                       "--reps", 100)  # fmt: skip
+    assert code == 0, output
+    assert board(methods / "n")["methods"]["Noisy"]["runs"] == len(STANDARD_SPLIT.seeds)
+    code, output = cli("benchmark", "my_methods:ByQC", "--data", data, "--out", methods / "q",
+                       "--reps", 100)  # fmt: skip
+    assert code == 0, output
+    found = board(methods / "q")["methods"]
+    assert found["ByQC"]["runs"] == 1 and found["ByQC"]["success"] == found["best_qc"]["success"]
 
 
 def test_each_version_pins_the_split_of_its_default_objects() -> None:

@@ -37,3 +37,9 @@ def test_rl_zoo_trains_a_few_hundred_steps(generated_dataset_dir, tmp_path):
     from stable_baselines3 import PPO
 
     assert PPO.load(model, device="cpu").num_timesteps >= 256
+    # trained on split "all" (the env's default): the benchmark reads args.yml and refuses it
+    from cli_runs import assert_refused, cli
+
+    assert_refused(*cli("benchmark", model, "--data", generated_dataset_dir, "--out",
+                        tmp_path / "never"), "args.yml", "in-sample")  # fmt: skip
+    assert not (tmp_path / "never").exists()

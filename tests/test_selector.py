@@ -185,6 +185,8 @@ def test_run_selector_writes_report_model_and_curve(grips, small_config, tmp_pat
     assert all(s["success_rate"]["mean"] <= oracle + 1e-12 for s in policies.values())
     split = report["split"]
     assert set(split["train"]).isdisjoint(split["test"])
+    record = json.loads((tmp_path / "model.json").read_text())["trained_on"]  # for benchmark
+    assert record["objects"] == sorted(split["train"]) and record["split"] == "train"
     assert len(policies["rl"]["per_object"]) == len(split["test"])
     assert report["training"]["policy"] == policy
     assert MaskablePPO.load(tmp_path / "model.zip").num_timesteps == report["training"]["timesteps"]

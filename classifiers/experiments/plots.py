@@ -126,21 +126,30 @@ def plot_ablation(result: Mapping[str, Any], metric: str, path: Path) -> Path:
     summaries = [sets[name]["models"][model][metric] for name in names]
     differences = [sets[name]["paired_difference"][model][metric] for name in names]
     figure, (left, right) = plt.subplots(1, 2, figsize=(11, 0.35 * len(names) + 1.5), sharey=True)
-    _bars(left, names, summaries, f"{metric} ({model})")
+    objects = result.get("cv", {}).get("n_objects")
+    _bars(left, names, summaries, f"{metric} ({model})"
+          + (f", {objects} objects" if objects is not None else ""), mark_flat=True)  # fmt: skip
     _bars(right, names, differences, f"paired difference to '{result['reference']}'")
     right.axvline(0.0, color="black", linewidth=0.8)
     left.invert_yaxis()  # shared: the reference set on top
     return _save(figure, path)
 
 
-def _bars(axes: plt.Axes, names: list[str], summaries: list[dict[str, Any]], title: str) -> None:
+def _bars(axes: plt.Axes, names: list[str], summaries: list[dict[str, Any]], title: str,
+          mark_flat: bool = False) -> None:  # fmt: skip
+    """Horizontal bars with their intervals; ``mark_flat``: grey the zero-width ones (a model
+    that scored every grip alike in every fold), and say how many in the title."""
     means = np.array([np.nan if s["mean"] is None else s["mean"] for s in summaries], dtype=float)
     low = np.array([np.nan if s["ci"][0] is None else s["ci"][0] for s in summaries], dtype=float)
     high = np.array([np.nan if s["ci"][1] is None else s["ci"][1] for s in summaries], dtype=float)
     errors = np.vstack([means - low, high - means])
     positions = np.arange(len(names))
-    axes.barh(positions, means, xerr=errors, capsize=3, color="tab:blue", alpha=0.75)
+    flat = np.isclose(low, high) & mark_flat  # zero width: constant scores in every fold
+    colours = np.where(flat, "tab:gray", "tab:blue")
+    axes.barh(positions, means, xerr=errors, capsize=3, color=list(colours), alpha=0.75)
     axes.set_yticks(positions, names, fontsize=8)
+    if flat.any():
+        title += f"\ngrey: zero-width interval ({int(flat.sum())} of {len(names)}: constant scores)"
     axes.set_title(title, fontsize=9)
 
 

@@ -14,7 +14,8 @@
 - ``roc.png``, ``calibration.png``: curves of the out-of-fold predictions of the CV's first
   repeat, pooled (each grip scored by a model that never saw its object);
 - ``models/<name>.{json,skops|pt}``: each model refitted on the whole table, with its metadata
-  (feature list, parameters, dataset checksum, seed);
+  (feature list, parameters, dataset checksum, seed, and ``trained_on``: the table's object ids
+  and the split that chose them, which ``grip-env benchmark`` checks);
 - when the table has the graded outcome: ``regression.json`` (grouped CV of
   ``learning.regressors`` on ``robustness_mean``, see :mod:`classifiers.evaluation.regression`) and
   ``models/regressor_<name>.*``;
@@ -44,6 +45,7 @@ from classifiers.evaluation.cross_validation import (
 )
 from classifiers.evaluation.ranking import evaluate_rankers
 from classifiers.evaluation.regression import TARGET_COLUMN, evaluate_regressors, has_target
+from classifiers.experiments.benchmark.provenance import training_record
 from classifiers.experiments.candidate_scores import SCORES_FILE, learner_scores, write_scores
 from classifiers.experiments.plots import plot_calibration, plot_roc
 from classifiers.learners.models import make_model, make_regressor
@@ -56,36 +58,47 @@ from grip_env.config import Config
 
 
 def train_and_save(
-    table: pd.DataFrame, out_dir: str | Path, config: Config | None = None
+    table: pd.DataFrame, out_dir: str | Path, config: Config | None = None,
+    split: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """Cross-validate, plot, refit on everything and save; returns the metrics dict."""
+    """Cross-validate, plot, refit on everything and save; returns the metrics dict.
+
+    ``split``: how ``table`` was chosen from its dataset (default ``{"split": "all"}``; its
+    ``dataset_sha256``: that dataset's checksum, default ``table``'s), recorded with ``table``'s
+    object ids as every saved model's ``trained_on``
+    (:func:`~classifiers.experiments.benchmark.provenance.training_record`)."""
     with single_threaded():
-        return _train_and_save(table, out_dir, config or Config())
+        return _train_and_save(table, out_dir, config or Config(), split or {"split": "all"})
 
 
-def _train_and_save(table: pd.DataFrame, out_dir: str | Path, config: Config) -> dict[str, Any]:
+def _train_and_save(table: pd.DataFrame, out_dir: str | Path, config: Config,
+                    split: dict[str, Any]) -> dict[str, Any]:  # fmt: skip
     learning = config.learning
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     checksum = dataset_checksum(table)
+    record = {"dataset_sha256": checksum, **split}  # the split's source dataset, when given
+    trained_on = {"trained_on": training_record(table["object_id"], **record)}
     metrics, out_of_fold = evaluate_models_out_of_fold(table, learning.models, FEATURES, learning)
     metrics["held_out"] = held_out_scores(table, config)
     metrics["family_holdout"] = family_holdout_scores(table, config)
-    metrics["dataset"] = {"sha256": checksum, "rows": len(table)}
+    metrics["dataset"] = {"sha256": checksum, "rows": len(table),
+                          "objects": int(table["object_id"].nunique()), **split}  # fmt: skip
     labels = table[LABEL_COLUMN].to_numpy().astype(bool)
     sampled = {}
     fitted = fit_all(((make_model(name, learning.seed, FEATURES), table, labels)
                       for name in learning.models), learning.workers)  # fmt: skip
     for name, model in zip(learning.models, fitted, strict=True):
-        meta = {"features": list(FEATURES), "dataset_sha256": checksum, "seed": learning.seed}
+        meta = {"features": list(FEATURES), "dataset_sha256": checksum, "seed": learning.seed,
+                **trained_on}  # fmt: skip
         save_model(model, out_dir / "models", name, meta)
         sampled |= sampled_fit(name, model, len(table))
     metrics["sampled"] = sampled  # the kernel learners' stated subsamples (all grips: absent)
     (out_dir / "metrics.json").write_text(json.dumps(metrics, indent=2))
     _out_of_fold_plots(table, out_of_fold, learning.folds, out_dir)
     if has_target(table):
-        train_regressors(table, out_dir, config, checksum)
-    train_rankers(table, out_dir, config, checksum)
+        train_regressors(table, out_dir, config, checksum, trained_on)
+    train_rankers(table, out_dir, config, checksum, trained_on)
     write_scores(learner_scores(table, config), out_dir / SCORES_FILE)
     return metrics
 
@@ -107,7 +120,8 @@ def family_holdout_scores(table: pd.DataFrame, config: Config) -> dict[str, Any]
 
 
 def train_regressors(
-    table: pd.DataFrame, out_dir: Path, config: Config, checksum: str
+    table: pd.DataFrame, out_dir: Path, config: Config, checksum: str,
+    metadata: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Cross-validate the regressors into ``regression.json``, refit and save each one."""
     learning = config.learning
@@ -119,7 +133,7 @@ def train_regressors(
                       for name in learning.regressors), learning.workers)  # fmt: skip
     for name, model in zip(learning.regressors, fitted, strict=True):
         meta = {"features": list(FEATURES), "target": TARGET_COLUMN, "dataset_sha256": checksum,
-                "seed": learning.seed}  # fmt: skip
+                "seed": learning.seed, **(metadata or {})}  # fmt: skip
         save_model(model, out_dir / "models", f"regressor_{name}", meta)
         result["sampled"] |= sampled_fit(name, model, len(table))
     (out_dir / "regression.json").write_text(json.dumps(result, indent=2))
@@ -134,7 +148,8 @@ def sampled_fit(name: str, model: Pipeline, rows: int) -> dict[str, int]:
 
 
 def train_rankers(
-    table: pd.DataFrame, out_dir: Path, config: Config, checksum: str
+    table: pd.DataFrame, out_dir: Path, config: Config, checksum: str,
+    metadata: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Cross-validate the rankers into ``ranking.json``, refit and save each one."""
     learning = config.learning
@@ -146,7 +161,7 @@ def train_rankers(
                       for name in learning.rankers), learning.workers)  # fmt: skip
     for name, model in zip(learning.rankers, fitted, strict=True):
         meta = {"features": list(FEATURES), "target": result["relevance"],
-                "dataset_sha256": checksum, "seed": learning.seed}  # fmt: skip
+                "dataset_sha256": checksum, "seed": learning.seed, **(metadata or {})}  # fmt: skip
         if isinstance(model, GroupedRanker):
             path = model.save(out_dir / "models", f"ranker_{name}")
             meta |= {"name": f"ranker_{name}", "format": "lightgbm_text", "model": path.name,

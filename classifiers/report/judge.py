@@ -80,3 +80,23 @@ def leaderboard_caution(board: dict[str, Any]) -> str | None:
     return (f"No method is declared to beat or to lose to best-Q_C: only {ranked} held-out "
             f"object(s) could be ranked (fewer than {FEW_OBJECTS}), so the intervals say "
             "nothing either way.")
+
+
+def small_data_caution(objects: int) -> str | None:
+    """The console's one-line caution when a run rests on fewer than :data:`FEW_OBJECTS`
+    objects (the rule the report's toy-study banner and the leaderboard apply), else None."""
+    if objects >= FEW_OBJECTS:
+        return None
+    return (f"caution: only {objects} object(s) (fewer than {FEW_OBJECTS}): too few to judge; "
+            f"read these numbers and their intervals as indicative only")
+
+
+def constant_scores(blocks: dict[str, dict[str, Any] | None], chance: float = 0.5) -> list[str]:
+    """The names whose ROC-AUC block is exactly ``chance`` with a zero-width interval: every
+    fold scored every grip alike (a learner that predicts a constant)."""
+    found = []
+    for name, block in blocks.items():
+        problem = unjudgeable(block)
+        if problem and "zero width" in problem and abs(float(block["mean"]) - chance) < _TOLERANCE:
+            found.append(name)
+    return found

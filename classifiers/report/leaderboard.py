@@ -71,7 +71,7 @@ def leaderboard_markdown(board: Mapping[str, Any]) -> str:
     split = board["split"]
     lines = [
         f"# Grip-selection leaderboard ({split.get('name', 'split')})", "",
-        split_line(board), "", _table(main), "",
+        split_line(board), "", *_training_lines(board), _table(main), "",
         f"Normalised score: (method - random) / (oracle - random) of the top-1 pick's expected "
         f"success, per object; {board['interval']}. {verdict_sentence(board)}", "",
         "## Success within k attempts (GripAccept-v0 / GripSelect-v0 with max_attempts = k)", "",
@@ -100,6 +100,18 @@ def split_line(board: Mapping[str, Any]) -> str:
             f"candidates each (lowest Q_C first); training seeds {seeds}; dataset sha256 "
             f"`{str(split.get('dataset_sha256', ''))[:12]}`." + _not_standard(split)
             + _few_objects(board))  # fmt: skip
+
+
+def training_sentences(board: Mapping[str, Any]) -> list[str]:
+    """What each scored method was trained on, as the benchmark checked it (one sentence per
+    method with a ``training`` entry: a user's method)."""
+    return [f"`{name}`: {row['training']['note']}." for name, row in board["methods"].items()
+            if isinstance(row.get("training"), Mapping)]  # fmt: skip
+
+
+def _training_lines(board: Mapping[str, Any]) -> list[str]:
+    sentences = training_sentences(board)
+    return [" ".join(sentences), ""] if sentences else []
 
 
 def _not_standard(split: Mapping[str, Any]) -> str:

@@ -26,7 +26,7 @@ def ablate(
 ) -> None:
     """Write OUT/ablation.json (metrics, paired differences, importances) and OUT/ablation.png."""
     with stop_on_signals(f"rerun the same command to redo {out}"), user_errors(), shown():
-        from grip_env.cli.train import check_model_names
+        from grip_env.cli.train import auc_line, cautions, check_model_names
         from grip_env.config import load_config
 
         settings = load_config(config)
@@ -38,9 +38,12 @@ def ablate(
         from classifiers.experiments.ablation import run_ablation
 
         result = run_ablation(table, out, settings, model)
-        for name, entry in result["feature_sets"].items():
-            auc = entry["models"][model]["roc_auc"]["mean"]
-            typer.echo(f"{name:18s} ROC-AUC {auc:.3f}" if auc is not None else name)
+        blocks = {name: entry["models"][model]["roc_auc"]
+                  for name, entry in result["feature_sets"].items()}  # fmt: skip
+        for name, block in blocks.items():
+            typer.echo(auc_line(name, block, 18))
+        for line in cautions(blocks, result["cv"]["n_objects"], f"{model} on feature sets "):
+            typer.echo(line)
         typer.echo(f"wrote {out / 'ablation.json'}")
 
 

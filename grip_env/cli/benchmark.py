@@ -27,8 +27,9 @@ def benchmark(
     methods: Annotated[
         list[str],
         typer.Argument(help="the method: an SB3 .zip (MaskablePPO or PPO on GripSelect-v0), a "
-                            ".skops model, or module:function; several = runs (seeds) of one "
-                            "method", show_default=False),
+                            "model grip-env train saved (NAME.json or its .skops, .pt, .txt), a "
+                            ".skops model, or module:function (or module:Class); several = runs "
+                            "(seeds) of one method", show_default=False),
     ],
     out: OutputDir,
     data: DatasetDir = STANDARD_DATA,
@@ -58,8 +59,10 @@ def benchmark(
     A function method takes one object's candidate table (outcomes removed, rows in slot order)
     and returns a score per row (higher = pick first) or one row index; with a `seed` argument it
     is called once per training seed 0..4; `module` is imported from the current folder first.
-    Writes OUT/leaderboard.json, OUT/leaderboard.md and the performance-profile and attempts
-    figures; bad input writes nothing (exit 2).
+    A method trained on a held-out object (by its record: a saved model's trained_on, NAME.json
+    beside an agent's NAME.zip, an RL Zoo run's args.yml, a function's trained_on) is refused;
+    one without a record is scored and marked. Writes OUT/leaderboard.json, OUT/leaderboard.md
+    and the performance-profile and attempts figures; bad input writes nothing (exit 2).
     """
     with stop_on_signals(f"rerun the same command to redo {out}"), user_errors():
         from grip_env.config import load_config
@@ -82,18 +85,32 @@ def benchmark(
                                  seed)  # fmt: skip
         _check_out(out)
         written = [*write_leaderboard(board, out), write_leaderboard_markdown(board, out)]
+    from classifiers.report.judge import leaderboard_caution
+
     row, chosen = board["methods"][label], board["split"]
+    caution = leaderboard_caution(board)
     typer.echo(f"split {chosen['name']} v{chosen['version']}"
                + (f": {chosen['note']}" if chosen.get("note") else ""))  # fmt: skip
-    typer.echo(f"{label}: top-1 success {row['success']:.3f}, normalised IQM "
-               f"{row['iqm']['estimate']:.3f} [{row['iqm']['ci'][0]:.3f}, "
-               f"{row['iqm']['ci'][1]:.3f}], {row['verdict']}")  # fmt: skip
+    typer.echo(f"{label}: top-1 success {row['success']:.3f} [{row['success_ci'][0]:.3f}, "
+               f"{row['success_ci'][1]:.3f}], normalised IQM {row['iqm']['estimate']:.3f} "
+               f"[{row['iqm']['ci'][0]:.3f}, {row['iqm']['ci'][1]:.3f}], "
+               f"{'no verdict' if caution else row['verdict']}")  # fmt: skip
+    if caution:
+        typer.echo(f"caution: {caution}")
+    if row.get("training"):
+        typer.echo(f"{label}: {row['training']['note']}")
     typer.echo(f"wrote {written[0]} and {written[-1]}")
 
 
 def _default_name(spec: str) -> str:
+    from classifiers.experiments.benchmark import MODEL_SUFFIXES
+
     path = Path(spec)
-    return path.stem if path.suffix.lower() in (".zip", ".skops") else spec.rpartition(":")[2]
+    if path.suffix.lower() in (".zip", *MODEL_SUFFIXES):
+        return path.stem
+    if path.name and path.with_name(f"{path.name}.json").is_file():  # a saved model's bare name
+        return path.name
+    return spec.rpartition(":")[2]
 
 
 def _check_out(out: Path) -> None:

@@ -4,10 +4,12 @@
 >>> board = benchmark_method(table, ["mine.zip"], "mine", config)   # leaderboard dict
 
 Modules: ``split`` (the fixed, versioned standard split, or a seeded split of a dataset's own
-objects), ``methods`` (baselines and loaders of SB3 zips, skops files and ``module:function``
-entry points, as score tables), ``selection`` (exact per-object metrics), ``aggregate``
-(rliable's IQM, stratified bootstrap, probability of improvement, performance profiles),
-``leaderboard`` (tables, verdicts, files), ``plots``.
+objects), ``methods`` (baselines and loaders of SB3 zips, saved models and ``module:function``
+entry points, as score tables), ``outputs`` (what a method returns, as scores),
+``provenance`` (what a method was trained on: a run that saw a held-out object is refused),
+``selection`` (exact per-object metrics), ``aggregate`` (rliable's IQM, stratified bootstrap,
+probability of improvement, performance profiles), ``leaderboard`` (tables, verdicts, files),
+``plots``.
 """
 
 from __future__ import annotations
@@ -21,21 +23,29 @@ import pandas as pd
 
 from grip_env.config import Config
 
-METHOD_KINDS = ("sb3 zip", "skops file", "module:function")
+METHOD_KINDS = ("sb3 zip", "saved model", "module:function")
+#: The files of a saved model (``grip-env train``'s ``NAME.json`` and what it names, or a bare
+#: ``.skops``): the suffixes ``grip-env predict`` takes.
+MODEL_SUFFIXES = (".skops", ".json", ".pt", ".txt")
 
 __all__ = ["benchmark_method", "method_kind", "study_benchmark"]
 
 
 def method_kind(spec: str) -> str:
-    """Which kind of method ``spec`` names: an existing ``.zip``, ``.skops`` or an entry point."""
+    """Which kind of method ``spec`` names: an existing ``.zip``, a saved model's file
+    (:data:`MODEL_SUFFIXES`, or its name without one) or an entry point ``module:function``."""
     path = Path(spec)
-    if path.suffix.lower() in (".zip", ".skops"):
+    suffix = path.suffix.lower()
+    if suffix == ".zip" or suffix in MODEL_SUFFIXES:
         if not path.is_file():
             raise ValueError(f"method file not found: {spec}")
-        return METHOD_KINDS[0] if path.suffix.lower() == ".zip" else METHOD_KINDS[1]
+        return METHOD_KINDS[0] if suffix == ".zip" else METHOD_KINDS[1]
+    if path.name and path.with_name(f"{path.name}.json").is_file():  # a bare name, as predict
+        return METHOD_KINDS[1]
     if ":" in spec and not path.exists():
         return METHOD_KINDS[2]
-    raise ValueError(f"a method is an SB3 .zip, a .skops file or 'module:function', got {spec!r}")
+    raise ValueError(f"a method is an SB3 .zip, a saved model (NAME.json or its .skops, .pt, "
+                     f".txt) or 'module:function', got {spec!r}")  # fmt: skip
 
 
 def benchmark_method(
@@ -45,15 +55,12 @@ def benchmark_method(
     """The leaderboard of one user method (``specs``: its runs, e.g. one zip per seed) against
     the baselines, on the split :func:`~classifiers.experiments.benchmark.split.choose_split`
     picks (``split``: ``"auto"`` or ``"standard"``; ``seed``: the auto split's). Its ``split``
-    entry says which, ``standard`` whether it is the standard one and ``note`` why another.
-    Raises ValueError on any bad input, before any file is written."""
+    entry says which, ``standard`` whether it is the standard one, ``note`` why another and
+    ``seeds`` the runs' seeds; the method's row says what it was trained on (``training``,
+    :mod:`~classifiers.experiments.benchmark.provenance`). Raises ValueError on any bad input,
+    a method trained on a held-out object included, before any file is written."""
     from classifiers.experiments.benchmark.leaderboard import NoRankableObject
-    from classifiers.experiments.benchmark.methods import (
-        baseline_scores,
-        entry_point_scores,
-        sb3_scores,
-        skops_scores,
-    )
+    from classifiers.experiments.benchmark.methods import baseline_scores
     from classifiers.experiments.benchmark.split import (
         DatasetObjects,
         candidate_sets,
@@ -69,34 +76,66 @@ def benchmark_method(
     kinds = {method_kind(s) for s in specs}
     if len(kinds) > 1:
         raise ValueError(f"the runs of one method must be of one kind, got {sorted(kinds)}")
-    chosen, note = choose_split(DatasetObjects.of(table), split, split_version, seed,
+    kind = kinds.pop()
+    objects = DatasetObjects.of(table)
+    chosen, note = choose_split(objects, split, split_version, seed,
                                 config.selector.max_candidates)
     table = _bare(table)
+    checksum = dataset_checksum(table)
+    training = _training(kind, specs, chosen.test_objects, checksum, objects.with_grips)
     sets = candidate_sets(table, config, chosen)
     candidates = candidate_table(sets)
-    kind = kinds.pop()
-    frames = []
-    for run, spec in enumerate(specs):
-        if kind == METHOD_KINDS[0]:
-            frames.append(sb3_scores(Path(spec), sets, run, name))
-        elif kind == METHOD_KINDS[1]:
-            frames.append(skops_scores(Path(spec), sets, name).assign(seed=run))
-        else:
-            offset = len(chosen.seeds) * run
-            frames.append(entry_point_scores(spec, sets, chosen.seeds, name).assign(
-                seed=lambda f, o=offset: f["seed"] + o))  # fmt: skip
+    mine = pd.concat([_run_scores(kind, spec, run, sets, chosen.seeds, name)
+                      for run, spec in enumerate(specs)], ignore_index=True)  # fmt: skip
     # the standard split's baselines do not depend on the user's config (epsilon: default mu)
-    scores = pd.concat([baseline_scores(candidates), *frames], ignore_index=True)
+    scores = pd.concat([baseline_scores(candidates), mine], ignore_index=True)
     info = {**chosen.describe(), **({"note": note} if note else {}),
-            "dataset_sha256": dataset_checksum(table), "method_files": list(specs)}  # fmt: skip
+            "seeds": sorted(int(s) for s in mine["seed"].unique()),
+            "dataset_sha256": checksum, "method_files": list(specs)}  # fmt: skip
     try:
-        return _board(candidates, scores, info, reps, config.learning.seed)
+        board = _board(candidates, scores, info, reps, config.learning.seed)
     except NoRankableObject as exc:
         if chosen.standard:
             raise
         raise NoRankableObject(f"{exc} (the auto split's held-out {list(chosen.test_objects)}, "
                                f"seed {seed}): try another --seed or a dataset with more "
                                f"objects") from None  # fmt: skip
+    board["methods"][name]["training"] = training
+    return board
+
+
+def _training(kind: str, specs: Sequence[str], held_out: Sequence[str], checksum: str,
+              dataset_objects: Sequence[str]) -> dict[str, Any]:  # fmt: skip
+    """What each run of the method was trained on, checked against the held-out objects."""
+    from classifiers.experiments.benchmark.methods import load_entry_point
+    from classifiers.experiments.benchmark.provenance import (
+        check_training,
+        recorded_file,
+        recorded_function,
+    )
+
+    if kind == METHOD_KINDS[2]:
+        records = [recorded_function(load_entry_point(s), s) for s in specs]
+    else:
+        records = [recorded_file(Path(s), checksum, dataset_objects) for s in specs]
+    return check_training(records, specs, held_out)
+
+
+def _run_scores(kind: str, spec: str, run: int, sets: Sequence[Any], seeds: Sequence[int],
+                name: str) -> pd.DataFrame:  # fmt: skip
+    """The score table of one run (one file, or one entry point's seeds offset by the run)."""
+    from classifiers.experiments.benchmark.methods import (
+        entry_point_scores,
+        saved_model_scores,
+        sb3_scores,
+    )
+
+    if kind == METHOD_KINDS[0]:
+        return sb3_scores(Path(spec), sets, run, name)
+    if kind == METHOD_KINDS[1]:
+        return saved_model_scores(Path(spec), sets, name).assign(seed=run)
+    offset = len(seeds) * run
+    return entry_point_scores(spec, sets, seeds, name).assign(seed=lambda f: f["seed"] + offset)
 
 
 def study_benchmark(

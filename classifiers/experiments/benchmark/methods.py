@@ -12,15 +12,19 @@ long table ``method, seed, object_id, candidate, score`` (:data:`SCORE_COLUMNS`)
 - an SB3 zip (:func:`sb3_scores`): MaskablePPO or PPO trained on ``GripSelect-v0``; the score is
   the policy's probability of each valid slot on the object's first observation, so the top-1 is
   the deterministic action (masked, for PPO as for MaskablePPO);
-- a skops file (:func:`skops_scores`): a scikit-learn model taking the candidate table; scores
-  are ``decision_function``, else ``P(success)``, else ``predict`` (a regressor);
+- a saved model (:func:`saved_model_scores`): a skops file, or a model ``grip-env train`` saved
+  (any of its files, as ``grip-env predict`` takes them), taking the candidate table; scores
+  are ``decision_function``, else ``P(success)``, else ``predict`` (a regressor, a ranker);
 - a Python entry point ``module:function`` (:func:`entry_point_scores`): called with one
   object's candidate table (outcome columns removed, rows in slot order) and, when it takes a
-  ``seed`` argument, once per training seed of the split.
+  ``seed`` argument, once per training seed of the split; or a class, made once per run
+  (with ``seed=`` when its ``__init__`` takes one) and its instance called on each table;
+  what it returns is read by :mod:`classifiers.experiments.benchmark.outputs`.
 """
 
 from __future__ import annotations
 
+import functools
 import importlib
 import inspect
 import sys
@@ -32,6 +36,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from classifiers.experiments.benchmark.outputs import choice_scores
 from grip_env.columns import OUTCOMES, ROBUSTNESS
 from grip_env.envs.observation import CandidateSet
 
@@ -68,29 +73,6 @@ def baseline_scores(candidates: pd.DataFrame, grasp: Any = None) -> pd.DataFrame
     }
     return pd.concat([score_frame(n, 0, candidates, s) for n, s in scores.items()],
                      ignore_index=True)  # fmt: skip
-
-
-def choice_scores(choice: Any, count: int, where: str) -> np.ndarray:
-    """A method's output for one object as scores: an index becomes a one-hot score."""
-    if np.ndim(choice) == 0:
-        if isinstance(choice, bool | np.bool_) or not float(choice).is_integer():
-            raise ValueError(f"{where}: a choice must be an integer index, got {choice!r}")
-        index = int(choice)
-        if not 0 <= index < count:
-            raise ValueError(f"{where}: invalid index {index} for {count} candidates")
-        scores = np.zeros(count)
-        scores[index] = 1.0
-        return scores
-    try:
-        scores = np.asarray(choice, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        raise ValueError(f"{where}: scores must be numbers, got {type(choice).__name__}") from None
-    if np.ndim(choice) != 1 or scores.size != count:
-        raise ValueError(f"{where}: {scores.size} scores (shape {np.shape(choice)}) for "
-                         f"{count} candidates")  # fmt: skip
-    if not np.all(np.isfinite(scores)):
-        raise ValueError(f"{where}: scores hold NaN or infinite values")
-    return scores
 
 
 def public_rows(found: CandidateSet) -> pd.DataFrame:
@@ -139,16 +121,19 @@ def _no_module(spec: str, module_name: str, folder: str) -> str:
 
 def entry_point_scores(spec: str, sets: Sequence[CandidateSet], seeds: Sequence[int],
                        name: str) -> pd.DataFrame:  # fmt: skip
-    """Score tables of a ``module:function`` method (one run, or one per seed)."""
+    """Score tables of a ``module:function`` method (one run, or one per seed when it takes a
+    ``seed`` argument). A class is a selector too: made once per run (``Class(seed=...)`` when
+    its ``__init__`` takes ``seed``, else ``Class()``), its instance called on each object."""
     function = load_entry_point(spec)
     seeded = "seed" in inspect.signature(function).parameters
     frames = []
     for seed in (seeds if seeded else (0,)):
+        pick = _selector(function, spec, int(seed) if seeded else None)
         for found in sets:
             rows = public_rows(found)
             where = f"{spec} on object {found.object_id!r}"
             try:
-                output = function(rows, seed=int(seed)) if seeded else function(rows)
+                output = pick(rows)
             except Exception as exc:  # the user's code: its failure is bad input, in one line
                 raise ValueError(f"{where} failed: {type(exc).__name__}: {exc}") from None
             scores = choice_scores(output, found.count, where)
@@ -156,10 +141,27 @@ def entry_point_scores(spec: str, sets: Sequence[CandidateSet], seeds: Sequence[
     return pd.concat(frames, ignore_index=True)
 
 
-# ------------------------------------------------------------------ skops models
-def skops_scores(path: Path, sets: Sequence[CandidateSet], name: str) -> pd.DataFrame:
-    """Score table of a scikit-learn model saved with skops (one run)."""
-    model = load_skops(path)
+def _selector(function: Callable[..., Any], spec: str, seed: int | None) -> Callable[..., Any]:
+    """What is called on each object's table: the function (with ``seed`` bound), or an
+    instance of the class (made with ``seed`` when it takes one)."""
+    if not inspect.isclass(function):
+        return function if seed is None else functools.partial(function, seed=seed)
+    try:
+        instance = function() if seed is None else function(seed=seed)
+    except Exception as exc:  # the user's class failing as it is made: bad input, in one line
+        raise ValueError(f"{spec}: making the selector failed: {type(exc).__name__}: "
+                         f"{exc}") from None  # fmt: skip
+    if not callable(instance):
+        raise ValueError(f"{spec} is a class whose instances are not callable: give it a "
+                         f"__call__(self, table) returning scores or one row index")  # fmt: skip
+    return instance
+
+
+# ------------------------------------------------------------------ saved models
+def saved_model_scores(path: Path, sets: Sequence[CandidateSet], name: str) -> pd.DataFrame:
+    """Score table of a scikit-learn model (one run): a bare skops file, or any file of a model
+    ``grip-env train`` saved (``NAME.json`` and its ``.skops``, ``.pt`` or ``.txt``)."""
+    model = load_saved_model(path)
     frames = []
     for found in sets:
         rows = public_rows(found)
@@ -169,6 +171,36 @@ def skops_scores(path: Path, sets: Sequence[CandidateSet], name: str) -> pd.Data
                                f"{path.name} on object {found.object_id!r}")  # fmt: skip
         frames.append(score_frame(name, 0, _slots(found), scores))
     return pd.concat(frames, ignore_index=True)
+
+
+def load_saved_model(path: Path) -> Any:
+    """The model of ``path``: through its ``NAME.json`` when it has one (as ``grip-env
+    predict`` reads it), else a bare skops file."""
+    from classifiers.learners.persistence import model_format
+
+    meta = path.with_suffix(".json")
+    if meta.is_file() and model_format(meta) is not None:
+        return _load_with_metadata(path.parent, path.stem)
+    if path.suffix.lower() == ".skops":
+        return load_skops(path)
+    raise ValueError(f"{path}: not a saved model (grip-env train writes OUT/models/NAME.json "
+                     f"beside its .skops, .pt or .txt)")  # fmt: skip
+
+
+def _load_with_metadata(directory: Path, name: str) -> Any:
+    import json
+    import pickle
+
+    from classifiers.learners.persistence import load_model
+
+    try:
+        model, _ = load_model(directory, name)
+    except (pickle.UnpicklingError, RuntimeError, KeyError, TypeError, OSError,
+            zipfile.BadZipFile, json.JSONDecodeError) as exc:  # fmt: skip
+        reason = " ".join(str(exc).split())[:300]
+        raise ValueError(f"cannot load model {directory / name}: {type(exc).__name__}: "
+                         f"{reason}") from None  # fmt: skip
+    return model
 
 
 def load_skops(path: Path) -> Any:

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
+from typing import Any
 
 import pandas as pd
 
@@ -291,6 +292,19 @@ def choose_split(objects: DatasetObjects, mode: str = "auto", version: int | Non
                    f"this dataset's own {len(objects.with_grips)} objects with grips, "
                    f"{len(split.test_objects)} held out: do not compare its scores with "
                    f"{STANDARD_NAME} scores")  # fmt: skip
+
+
+def training_objects(table: pd.DataFrame, config: Config) -> tuple[pd.DataFrame, dict[str, Any]]:
+    """The grips of the objects a method may train on to be scored by ``grip-env benchmark`` on
+    ``table``: all but the held-out objects of the split it picks (``--split auto``, seed
+    ``learning.seed``: the standard split on the standard dataset), and that split in words
+    (the ``split`` entry of a saved model's ``trained_on`` record)."""
+    chosen, _ = choose_split(DatasetObjects.of(table), "auto", None, config.learning.seed,
+                             config.selector.max_candidates)  # fmt: skip
+    held_out = table["object_id"].astype(str).isin(chosen.test_objects).to_numpy()
+    return table[~held_out], {"split": "train", "split_name": chosen.name,
+                              "split_version": chosen.version, "split_seed": chosen.split_seed,
+                              "held_out_objects": len(chosen.test_objects)}  # fmt: skip
 
 
 def study_split(table: pd.DataFrame, config: Config, seeds: Sequence[int]) -> BenchmarkSplit:

@@ -24,7 +24,7 @@ from classifiers.experiments.selector.data import check_grip_table
 from grip_env.config import Config
 
 METHOD = "rl"
-_COPIED = ("model.zip", "learning_curve.png")
+_COPIED = ("model.zip", "model.json", "learning_curve.png")
 
 
 def seed_dir(out: str | Path, seed: int) -> Path:
@@ -74,7 +74,8 @@ def run_selectors(
              "seconds": report["training"]["seconds"]}
             for seed, report in zip(seeds, reports, strict=True)]  # fmt: skip
     for name in _COPIED:
-        shutil.copyfile(seed_dir(out, settings.seed) / name, out / name)
+        if (seed_dir(out, settings.seed) / name).exists():  # a run from before model.json
+            shutil.copyfile(seed_dir(out, settings.seed) / name, out / name)
     first = reports[0]
     training = {**first["training"], "tensorboard": f"{seed_dir(out, settings.seed).name}/tb"}
     first = {**first, "training": training, "seeds": runs, "scores": SCORES_FILE}

@@ -266,6 +266,9 @@ def train_selector(
         model.learn(int(steps), callback=callbacks, progress_bar=progress,
                     tb_log_name=f"selector_{policy}")  # fmt: skip
     model.save(out / MODEL_FILE)
+    from classifiers.experiments.benchmark.provenance import write_agent_record
+
+    write_agent_record(out / MODEL_FILE, env)  # model.json: the objects it was trained on
     recorder = callbacks[0]
     baselines = None
     if table is not None:
