@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 import grip_env
-from grip_env.config import Config
+from grip_env.config import DEFAULT_ENGINE, Config
 from grip_env.dataset.catalog import OBJECTS_FILE, DatasetObject
 from grip_env.dataset.files import write_text_atomically
 from grip_env.dataset.sampling import sampling_record
@@ -60,6 +60,8 @@ def run_identity(
 ) -> dict[str, Any]:
     """Everything that determines a dataset's rows: config (minus execution fields and the
     learning sections), objects and the label model (a new one never resumes an old run).
+    ``sim.engine`` enters only when it is not the default engine, so a PyBullet run keeps the
+    identity it had before engines could be chosen.
 
     Named and procedural objects are fixed by their ids and the config; a caller's own objects
     (``own_objects``) also by the SHA-256 of their contours, so an edited file is a new run.
@@ -67,6 +69,8 @@ def run_identity(
     settings = config.model_dump(mode="json")
     for name in EXECUTION_FIELDS:
         settings["dataset"].pop(name, None)
+    if settings["sim"]["engine"] == DEFAULT_ENGINE:  # what every run before the seam meant
+        settings["sim"].pop("engine")
     identity = {"config": settings, "object_ids": [entry.object_id for entry in entries],
                 "label_model": LABEL_MODEL}
     if own_objects:
