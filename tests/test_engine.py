@@ -62,3 +62,18 @@ def test_a_pybullet_run_keeps_its_identity_and_a_mujoco_run_is_another():
     mujoco = run_identity(Config().override(sim={"engine": "mujoco"}), [])
     assert mujoco["config"]["sim"]["engine"] == "mujoco"
     assert fingerprint(mujoco) != fingerprint(default)
+
+
+def test_only_the_mujoco_world_imports_mujoco():
+    import ast
+    from pathlib import Path
+
+    root = Path(engine.__file__).resolve().parents[1]
+    importers = set()
+    for path in root.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                     else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            if any(name.split(".")[0] == "mujoco" for name in names):
+                importers.add(path.relative_to(root).as_posix())
+    assert importers == {"sim/mujoco_world.py"}
