@@ -8,12 +8,12 @@ import pytest
 
 pytest.importorskip("mujoco")
 
-from grip_env.config import Config  # noqa: E402
-from grip_env.objects import load_object_set  # noqa: E402
-from grip_env.sim.gantry import MOUNT_JOINTS  # noqa: E402
-from grip_env.sim.hand import HAND_URDF, Hand  # noqa: E402
-from grip_env.sim.mujoco_world import MujocoWorld  # noqa: E402
-from grip_env.sim.world import World  # noqa: E402
+from grip_env.config import Config
+from grip_env.objects import load_object_set
+from grip_env.sim.gantry import MOUNT_JOINTS
+from grip_env.sim.hand import HAND_URDF, Hand
+from grip_env.sim.mujoco_world import MujocoWorld
+from grip_env.sim.world import World
 
 
 @pytest.fixture(scope="module")
