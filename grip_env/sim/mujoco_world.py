@@ -347,6 +347,18 @@ class MujocoWorld:
                 links.add(int(link_of[b]))
         return links
 
+    def contact_normal_force_n(self, body: int, other: int) -> float:
+        """The sum of the normal forces (N) of ``body``'s contacts with ``other`` in the last
+        step."""
+        m, d = self._compiled()
+        uids, total, wrench = self._body_uid, 0.0, np.empty(6)
+        for i, contact in enumerate(d.contact[: d.ncon]):
+            pair = {uids[m.geom_bodyid[contact.geom1]], uids[m.geom_bodyid[contact.geom2]]}
+            if pair == {body, other}:
+                mujoco.mj_contactForce(m, d, i, wrench)
+                total += wrench[0]
+        return float(total)
+
     # ------------------------------------------------------------------ states and loads
     def save(self) -> int:
         """Save the whole simulation state in memory; returns a state id."""

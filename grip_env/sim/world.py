@@ -362,6 +362,16 @@ class World:
         """The links of ``body`` in contact with ``other``."""
         return {point[3] for point in self.client.getContactPoints(bodyA=body, bodyB=other)}
 
+    def contact_normal_force_n(self, body: int, other: int) -> float:
+        """The sum of the normal forces (N) of ``body``'s contacts with ``other`` in the last
+        step."""
+        points = self.client.getContactPoints(bodyA=body, bodyB=other)
+        return float(sum(point[9] for point in points))
+
+    def set_gravity(self, gravity: tuple[float, float, float]) -> None:
+        """Gravity (m/s², world frame); ``reset`` restores 9.81 down."""
+        self.client.setGravity(*gravity)
+
     # ------------------------------------------------------------------ states and loads
     def save(self) -> int:
         """Save the whole world in memory; returns a state id (``restore``, ``forget``)."""
