@@ -77,3 +77,15 @@ def test_only_the_mujoco_world_imports_mujoco():
             if any(name.split(".")[0] == "mujoco" for name in names):
                 importers.add(path.relative_to(root).as_posix())
     assert importers == {"sim/mujoco_world.py"}
+
+
+def test_a_manifest_records_the_engine_its_version_and_its_label_model():
+    from grip_env.dataset.manifest import new_manifest
+    from grip_env.label_model import LABEL_MODEL, MUJOCO_LABEL_MODEL
+
+    default = new_manifest(Config(), [], [], "0" * 64)
+    assert default["label_model"] == LABEL_MODEL
+    assert default["engine"]["name"] == "pybullet" and default["engine"]["version"]
+    mujoco = new_manifest(Config().override(sim={"engine": "mujoco"}), [], [], "0" * 64)
+    assert mujoco["label_model"] == mujoco["identity"]["label_model"] == MUJOCO_LABEL_MODEL
+    assert mujoco["engine"]["name"] == "mujoco"

@@ -22,7 +22,7 @@ from grip_env.dataset.catalog import OBJECTS_FILE, DatasetObject
 from grip_env.dataset.files import write_text_atomically
 from grip_env.dataset.sampling import sampling_record
 from grip_env.dataset.shards import GRIPS_DIR, SHARD_FILE, ShardRecord
-from grip_env.label_model import LABEL_MODEL
+from grip_env.label_model import LABEL_MODEL, label_model_for
 from grip_env.objects.family import object_family
 
 FORMAT = "grip-env-dataset"
@@ -72,7 +72,7 @@ def run_identity(
     if settings["sim"]["engine"] == DEFAULT_ENGINE:  # what every run before the seam meant
         settings["sim"].pop("engine")
     identity = {"config": settings, "object_ids": [entry.object_id for entry in entries],
-                "label_model": LABEL_MODEL}
+                "label_model": label_model_for(config.sim.engine)}
     if own_objects:
         identity["object_contours_sha256"] = contours_sha256(entries)
     return without_learning(identity)
@@ -111,7 +111,8 @@ def new_manifest(
         "git_commit": _git_commit(),
         "created": datetime.now(UTC).isoformat(timespec="seconds"),
         "versions": _versions(),
-        "label_model": LABEL_MODEL,
+        "label_model": label_model_for(config.sim.engine),
+        "engine": _engine(config.sim.engine),
         "seed": config.dataset.seed,
         "trials": config.dataset.trials,
         "sampling": sampling_record(config.dataset),
@@ -227,6 +228,15 @@ def _machine() -> str:
     except OSError:
         pass
     return f"{model} x {os.cpu_count()}"
+
+
+def _engine(name: str) -> dict[str, str | None]:
+    """The physics engine that made the labels and its installed version."""
+    try:
+        version: str | None = metadata.version(name)
+    except metadata.PackageNotFoundError:
+        version = None
+    return {"name": name, "version": version}
 
 
 def _versions() -> dict[str, str]:
