@@ -89,3 +89,28 @@ def test_a_manifest_records_the_engine_its_version_and_its_label_model():
     mujoco = new_manifest(Config().override(sim={"engine": "mujoco"}), [], [], "0" * 64)
     assert mujoco["label_model"] == mujoco["identity"]["label_model"] == MUJOCO_LABEL_MODEL
     assert mujoco["engine"]["name"] == "mujoco"
+
+
+def test_an_environment_refuses_an_unknown_engine():
+    import gymnasium
+
+    import grip_env.envs  # noqa: F401  (registers the environments)
+
+    with pytest.raises(ValueError, match="unknown engine 'physx'"):
+        gymnasium.make("GripSelect-v0", objects=["rectangle"], engine="physx")
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(__import__("importlib").util.find_spec("mujoco") is None,
+                    reason="mujoco not installed")
+def test_an_environment_runs_live_in_mujoco():
+    import gymnasium
+
+    import grip_env.envs  # noqa: F401
+
+    env = gymnasium.make("GripSelect-v0", objects=["rectangle"], engine="mujoco")
+    assert env.unwrapped.config.sim.engine == "mujoco"
+    env.reset(seed=0)
+    _, reward, _, _, info = env.step(0)
+    assert reward in (0.0, 1.0) and "success" in info
+    env.close()
