@@ -4,6 +4,7 @@ and link frames; the same object the same mass, inertia and outline; a trial run
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 
 pytest.importorskip("mujoco")
@@ -111,3 +112,17 @@ def test_a_mujoco_trial_runs_and_repeats_bit_for_bit():
     second = run_trial_outcomes(obj, grips, config, trials=1, seed=3)
     assert first.equals(second)
     assert int(first["steps"].iloc[0]) > 100
+
+
+@pytest.mark.slow
+def test_a_mujoco_outcome_does_not_depend_on_the_order_of_the_grips():
+    from grip_env.planning.pipeline import candidates
+    from grip_env.sim import run_trial_outcomes
+
+    obj = next(o for o in load_object_set("default") if o.name == "pentagon")
+    grips = candidates(obj).sort_values("Q_C", kind="stable").head(2)
+    config = Config().override(sim={"engine": "mujoco"})
+    forward = run_trial_outcomes(obj, grips, config, trials=1, seed=5)
+    backward = run_trial_outcomes(obj, grips.iloc[::-1], config, trials=1, seed=5)
+    pd.testing.assert_frame_equal(forward.set_index("grip").sort_index(),
+                                  backward.set_index("grip").sort_index())
