@@ -16,6 +16,12 @@ def _config(engine: str) -> Config:
     return Config().override(sim={"engine": engine})
 
 
+def _held_box(engine: str) -> analytic.CaseResult:
+    from tests.benchmarks.engines import held_box_grip
+
+    return analytic.held_box(_config(engine), *held_box_grip(Config()))
+
+
 @pytest.mark.parametrize("engine", ENGINES)
 @pytest.mark.parametrize("case", [analytic.tilted_plane, analytic.pushed_block])
 def test_a_block_slides_at_coulombs_load(engine, case):
@@ -40,7 +46,7 @@ def test_a_load_with_no_threshold_is_refused():
 @pytest.mark.skipif(__import__("importlib").util.find_spec("mujoco") is None,
                     reason="mujoco not installed")
 def test_mujoco_s_held_box_slips_at_coulombs_load_on_its_own_normal_forces():
-    result = analytic.held_box(_config("mujoco"))
+    result = _held_box("mujoco")
     assert abs(result.error) < 0.02, result
 
 
@@ -48,5 +54,5 @@ def test_mujoco_s_held_box_slips_at_coulombs_load_on_its_own_normal_forces():
 @pytest.mark.xfail(strict=True, reason="PyBullet's held box resists only about 68 % of mu times "
                    "its reported normal forces (BENCHMARKS.md, 'PyBullet beside MuJoCo')")
 def test_pybullets_held_box_slips_at_coulombs_load_on_its_own_normal_forces():
-    result = analytic.held_box(_config("pybullet"))
+    result = _held_box("pybullet")
     assert abs(result.error) < 0.02, result

@@ -6,7 +6,8 @@ Coulomb's law:
 * ``tilted_plane``: a block on a plane tilted by theta slides when tan theta > mu (gravity is
   tilted instead of the plane: the same statics);
 * ``pushed_block``: a block pushed through its centre of mass slides at F = mu m g;
-* ``held_box``: a box held by the hand (the real trial up to the hold, paper's mu = 0.4) slides
+* ``held_box``: a box held by the hand (the real trial up to the hold of a grip the caller
+  planned, e.g. the default rectangle's best by Q_C; paper's mu = 0.4) slides
   out along the fingers when the pull plus its weight exceeds mu times the sum of the pads'
   normal forces, as the engine itself reports them at the largest pull it held (``detail`` gives
   that sum and the one at the hold before any pull: how far the squeeze gave way).
@@ -22,6 +23,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 
 from grip_env.config import Config
 from grip_env.objects import PlanarObject
@@ -131,21 +133,19 @@ class _Held(Exception):
         self.result = result
 
 
-def held_box(config: Config, mu: float = 0.4) -> CaseResult:
+def held_box(config: Config, box: PlanarObject, grip: pd.DataFrame,
+             mu: float = 0.4) -> CaseResult:
     """The pull along the fingers (plus the weight) a box held by the hand resists, against mu
-    times the sum of the pads' normal forces at the hold.
+    times the sum of the pads' normal forces (at the largest pull held); ``grip`` is one
+    candidate row of ``box``, executed without execution error at friction ``mu``.
 
     Raises:
         ValueError: the hand did not hold the box after the lift.
     """
-    from grip_env.objects import load_object_set
-    from grip_env.planning.pipeline import candidates
     from grip_env.sim.trial import TrialScene, grip_plans
     from grip_env.sim.uncertainty import TrialNoise
 
-    box = next(o for o in load_object_set("default") if o.name == "rectangle")
     config = config.override(grasp={"mu": mu})
-    grips = candidates(box, config=config).sort_values("Q_C", kind="stable").head(1)
     noise = TrialNoise((0.0, 0.0), 0.0, mu, 1.0)
 
     def measure(phase: str, scene: TrialScene) -> None:
@@ -183,28 +183,25 @@ def held_box(config: Config, mu: float = 0.4) -> CaseResult:
 
     with TrialScene(box, config) as scene:
         try:
-            result = scene.run(grip_plans(grips)[0], noise, on_phase=measure)
+            result = scene.run(grip_plans(grip)[0], noise, on_phase=measure)
         except _Held as held:
             return held.result
     raise ValueError(f"the hand did not hold the box in {config.sim.engine}: "
                      f"{result.describe()}")
 
 
-CASES: dict[str, Callable[[Config], CaseResult]] = {
-    "tilted plane": tilted_plane, "pushed block": pushed_block, "held box": held_box,
-}
-
-
-def run_cases(config: Config, engines: tuple[str, ...] = ("pybullet", "mujoco"),
-              ) -> list[CaseResult]:
-    """Every case in every engine (the config's other settings), in order."""
+def run_cases(config: Config, box: PlanarObject, grip: pd.DataFrame,
+              engines: tuple[str, ...] = ("pybullet", "mujoco")) -> list[CaseResult]:
+    """Every case in every engine (the config's other settings), in order; the held box is
+    ``box`` held by ``grip`` (see :func:`held_box`)."""
+    cases: list[Callable[[Config], CaseResult]] = [
+        tilted_plane, pushed_block, lambda c: held_box(c, box, grip)]
     results = []
     for engine in engines:
         engine_config = config.override(sim={"engine": engine})
-        for case in CASES.values():
+        for name, case in zip(("tilted plane", "pushed block", "held box"), cases, strict=True):
             try:
                 results.append(case(engine_config))
             except ValueError as failed:
-                results.append(CaseResult(f"{case.__name__}: {failed}", engine, 1.0,
-                                          float("nan"), ""))
+                results.append(CaseResult(f"{name}: {failed}", engine, 1.0, float("nan"), ""))
     return results

@@ -24,15 +24,25 @@ from datetime import UTC, datetime
 import pandas as pd
 
 from grip_env.config import Config
+from grip_env.objects import PlanarObject, load_object_set
+from grip_env.planning.pipeline import candidates
 from grip_env.sim.analytic import run_cases
 
 ENGINES = ("pybullet", "mujoco")
 
 
+def held_box_grip(config: Config) -> tuple[PlanarObject, pd.DataFrame]:
+    """The default rectangle and its best grip by Q_C at the paper's mu = 0.4."""
+    box = next(o for o in load_object_set("default") if o.name == "rectangle")
+    config = config.override(grasp={"mu": 0.4})
+    return box, candidates(box, config=config).sort_values("Q_C", kind="stable").head(1)
+
+
 def cases() -> None:
     print("| case | engine | Coulomb | simulated | error | note |")
     print("| --- | --- | --- | --- | --- | --- |")
-    for r in run_cases(Config(), ENGINES):
+    box, grip = held_box_grip(Config())
+    for r in run_cases(Config(), box, grip, ENGINES):
         print(f"| {r.case} ({r.quantity}) | {r.engine} | {r.analytic:.4g} | {r.simulated:.4g} "
               f"| {r.error:+.2%} | {r.detail} |")
 
