@@ -433,23 +433,18 @@ class MujocoWorld:
 
     def _compile(self) -> None:
         spec = self._spec
-        free_geoms = [g for uid, free in enumerate(self._free) if free
-                      for name in self._bodies[uid] for g in spec.body(name).geoms]
-        for geom in free_geoms:  # contacts of free bodies come from pairs only
-            geom.contype, geom.conaffinity = 0, 0
-        free_names = {id(g) for g in free_geoms}
-        pairs = []
-        for geom in free_geoms:
-            for other in spec.geoms:
-                if id(other) == id(geom) or (id(other) in free_names and id(other) < id(geom)):
-                    continue
-                if other.parent.name == geom.parent.name:
-                    continue
-                pairs.append((geom, other))
         for k, geom in enumerate(spec.geoms):
             geom.name = geom.name or f"geom{k}"
+        body_of = {geom.name: geom.parent.name for geom in spec.geoms}
+        free = [g.name for uid, is_free in enumerate(self._free) if is_free
+                for body in self._bodies[uid] for g in spec.body(body).geoms]
+        for name in free:  # contacts of free bodies come from pairs only
+            spec.geom(name).contype, spec.geom(name).conaffinity = 0, 0
+        rank = {name: k for k, name in enumerate(free)}
+        pairs = [(name, other) for name in free for other in body_of
+                 if body_of[other] != body_of[name] and rank.get(other, len(free)) > rank[name]]
         for k, (a, b) in enumerate(pairs):
-            spec.add_pair(name=f"pair{k}", geomname1=a.name, geomname2=b.name, condim=4)
+            spec.add_pair(name=f"pair{k}", geomname1=a, geomname2=b, condim=4)
         self._model = m = spec.compile()
         self._data = mujoco.MjData(m)
         self._pair_geoms = np.stack([m.pair_geom1, m.pair_geom2], axis=1) if m.npair else (
