@@ -16,7 +16,7 @@ from grip_env.objects import load_object_set
 
 pytest.importorskip("mujoco")
 
-TINY = Config().override(dataset={"trials": 2, "max_grips_per_object": 4, "workers": 1})
+TINY = Config().override(dataset={"trials": 3, "max_grips_per_object": 4, "workers": 1})
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +30,7 @@ def tiny(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def test_every_grip_runs_in_both_engines_and_pybullet_reproduces_its_labels(tiny):
     found = crosscheck(tiny, 2, seed=0)
     assert (found.engine, found.other) == ("pybullet", "mujoco")
-    assert found.objects == 2 and found.grips == 8 and found.trials == 16
+    assert found.objects == 2 and found.grips == 8 and found.trials == 24
     assert found.reproduced == found.grips  # the own engine's run is the recorded labels
     assert 0.0 <= found.agreement <= 1.0
     low, high = found.agreement_interval

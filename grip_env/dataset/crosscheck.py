@@ -127,6 +127,18 @@ def _object_figures(own: pd.DataFrame, other: pd.DataFrame) -> dict[str, float]:
             "both": int((a & b).sum()), "spearman": spearman, "top": top / 2}
 
 
+def _reproduced(own: pd.DataFrame, check: _ObjectCheck) -> int:
+    """Grips whose mean robustness in the own engine is the recorded one, bit for bit (summed
+    as the dataset sums it: ``trial_summary``)."""
+    from grip_env.sim.execution import trial_summary
+
+    n = len(check.recorded)
+    ordered = own.sort_values(["grip", "trial"], kind="stable")
+    mean = trial_summary(ordered["robustness"].to_numpy(float).reshape(n, -1),
+                         ordered["success"].to_numpy(bool).reshape(n, -1))["robustness_mean"]
+    return int((mean == check.recorded["robustness_mean"].to_numpy()).sum())
+
+
 def _kappa(rows: list[dict[str, float]]) -> tuple[float, float]:
     """Per-trial agreement and Cohen's kappa over the objects ``rows``."""
     n = sum(r["trials"] for r in rows)
@@ -167,8 +179,7 @@ def _figures(checks: list[_ObjectCheck], runs: list[tuple[pd.DataFrame, pd.DataF
     pooled = (float(stats.spearmanr(own_means, other_means).statistic)
               if len(own_means) and np.ptp(own_means) > 0 and np.ptp(other_means) > 0
               else float("nan"))
-    reproduced = sum(int((np.asarray(a.sort_index()) == check.recorded["robustness_mean"]
-                          .to_numpy()).sum()) for (a, _), check in zip(means, checks, strict=True))
+    reproduced = sum(_reproduced(own, check) for (own, _), check in zip(runs, checks, strict=True))
     families: dict[str, list[dict[str, float]]] = {}
     for check, row in zip(checks, rows, strict=True):
         families.setdefault(object_family(check.task.obj), []).append(row)
