@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import difflib
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, get_args
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
@@ -145,9 +145,19 @@ class SynthesisConfig(_Section):
 DEFAULT_SYNTHESIS = SynthesisConfig()
 
 
-class SimConfig(_Section):
-    """PyBullet execution of one grip (figures and their sources: BENCHMARKS.md, "Simulator")."""
+#: The physics engines a trial may run in (``grip_env.sim.engine``); the first is the default.
+EngineName = Literal["pybullet", "mujoco"]
+ENGINES: tuple[str, ...] = get_args(EngineName)
+DEFAULT_ENGINE = ENGINES[0]
 
+
+class SimConfig(_Section):
+    """Simulated execution of one grip (figures and their sources: BENCHMARKS.md, "Simulator")."""
+
+    engine: EngineName = Field(
+        DEFAULT_ENGINE,
+        description="physics engine of the trials (mujoco: pip install \"grip-env[mujoco]\")",
+    )
     timestep: float = Field(1.0 / 240.0, ge=1e-4, le=0.02, description="physics step (s)")
     solver_iterations: int = Field(
         150, ge=1, le=1000, description="constraint solver iterations (chosen by convergence)"

@@ -16,7 +16,7 @@ want="$(cat pyproject.toml scripts/setup.sh | sha256sum | cut -d' ' -f1)"
 if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
     .venv/bin/python -m pip install --quiet --upgrade pip
     .venv/bin/python -m pip install --quiet torch==2.13.0
-    .venv/bin/python -m pip install --quiet -e ".[dev,cluster,docs]"
+    .venv/bin/python -m pip install --quiet -e ".[dev,cluster,docs,mujoco]"
     echo "$want" > "$stamp"
 fi
 )

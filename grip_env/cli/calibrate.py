@@ -44,11 +44,15 @@ def calibrate(
     ICC(1) of robustness; with `--data`, Spearman of Q_C (and Q_G) decile with mean robustness.
     """
     with stop_on_signals(f"rerun the same command to redo {out}"), user_errors(), shown():
+        from grip_env.config import load_config
+        from grip_env.sim.engine import require_engine
+
+        cfg = load_config(config)
+        require_engine(cfg.sim.engine)
         output_dir(out)
         from classifiers.report.calibration import write_calibration
         from grip_env.calibration import CalibrationSettings
         from grip_env.calibration import calibrate as run
-        from grip_env.config import load_config
 
         dataset = None
         if data is not None:
@@ -60,7 +64,7 @@ def calibrate(
         sizes = {k: v for k, v in (("cone_objects", cone_objects), ("cone_trials", cone_trials))
                  if v is not None}  # fmt: skip
         settings = replace(settings, **sizes)
-        result, trials = run(load_config(config), settings, dataset, log=typer.echo)
+        result, trials = run(cfg, settings, dataset, log=typer.echo)
         md = write_calibration(out, result, trials)
         for name, check in result["checks"].items():
             verdict = {True: "pass", False: "FAIL", None: "-"}[check["passed"]]

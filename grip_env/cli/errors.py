@@ -7,7 +7,7 @@ pyarrow, YAML, pydantic) raises, and the operating system's refusals to open a p
 exit code 2.
 
 Anything else is a bug, not the user's input: a ``ValueError`` raised inside numpy, SciPy, torch,
-PyBullet, scikit-learn, Stable-Baselines3 or Gymnasium, or raised by an expression of ours
+PyBullet, MuJoCo, scikit-learn, Stable-Baselines3 or Gymnasium, or raised by an expression of ours
 rather than a ``raise`` (numpy's "operands could not be broadcast"), and every other exception.
 It prints its traceback, then ``internal error: ...`` with a hint to report it, and exits with 1.
 """
@@ -32,7 +32,7 @@ T = TypeVar("T")
 INPUT_ERROR_CODE = 2
 INTERNAL_ERROR_CODE = 1
 #: Libraries whose own ValueErrors are bugs of ours when they reach the command line.
-INTERNAL_LIBRARIES = ("numpy", "scipy", "torch", "pybullet", "pybullet_utils", "sklearn",
+INTERNAL_LIBRARIES = ("numpy", "scipy", "torch", "pybullet", "pybullet_utils", "mujoco", "sklearn",
                       "stable_baselines3", "sb3_contrib", "gymnasium")  # fmt: skip
 REPORT_HINT = ("this is a bug in grip-env, not in your input: please report it with the command, "
                "the traceback above and the output of `grip-env --version`")  # fmt: skip

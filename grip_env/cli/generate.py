@@ -75,8 +75,10 @@ def generate(
         from grip_env.dataset import WorkerLost, dataset_manifest
         from grip_env.dataset import generate as generate_dataset
         from grip_env.dataset.jobs import plans_on_render
+        from grip_env.sim.engine import require_engine
 
         cfg = load_config(config)
+        require_engine(cfg.sim.engine)
         _check_flags(objects, trials, seed, workers)
         chosen_objects = _objects(objects, mm_per_px)
         chosen = backend or cfg.dataset.backend

@@ -28,6 +28,10 @@ def validate(
         min=1, help="also simulate every grip of this many seeded objects under new draws and "
                     "report the within-object test-retest of the labels")
     ] = None,
+    crosscheck: Annotated[int | None, typer.Option(
+        min=1, help="also simulate every grip of this many seeded objects in the other engine "
+                    "(same grips, draws and protocol) and report how far the engines agree")
+    ] = None,
     seed: Annotated[int, typer.Option(min=0, help="seed of the samples")] = 0,
     workers: Annotated[int, typer.Option(min=1, help="worker processes for the samples")] = 2,
     report: Annotated[Path | None, typer.Option(
@@ -41,6 +45,8 @@ def validate(
     descriptors, and outcome consistency, and names the dataset's label model (a warning, not a
     problem, when it is not this grip-env's). `--resimulate N` re-plans a seeded sample of
     objects and re-simulates N of their grips, and counts what is identical bit for bit.
+    `--crosscheck N` simulates every grip of N seeded objects in the other engine (PyBullet or
+    MuJoCo) and reports the agreement (per-trial success and kappa, within-object Spearman).
     Exit code 0 when clean, 1 when a problem (or a difference) is found.
     """
     with user_errors():
@@ -49,6 +55,10 @@ def validate(
         from grip_env.label_model import label_model_of
 
         manifest = read_manifest(directory)
+        if crosscheck is not None:
+            from grip_env.dataset.crosscheck import check_crosscheckable
+
+            check_crosscheckable(directory)
         problems = validate_dataset(directory)
     warn_label_model(directory)
     label_model = f"label model {label_model_of(manifest)}"
@@ -67,6 +77,8 @@ def validate(
         found["retest"] = _retest(directory, retest, seed, workers)
     if resimulate is not None:
         found["resimulation"] = _resimulate(directory, resimulate, seed, workers)
+    if crosscheck is not None:
+        found["crosscheck"] = _crosscheck(directory, crosscheck, seed, workers)
     if report is not None:
         report.write_text(json.dumps(found, indent=1), encoding="utf-8")
     if resimulate is not None and found["resimulation"]["differences"]:
@@ -97,6 +109,18 @@ def _resimulate(directory: Path, grips: int, seed: int, workers: int) -> dict[st
     for difference in found.differences:
         typer.echo(f"  - {difference}")
     return {"grips": grips, "seed": seed, "summary": found.summary(), **asdict(found)}
+
+
+def _crosscheck(directory: Path, objects: int, seed: int, workers: int) -> dict[str, object]:
+    """Report the agreement between engines."""
+    with user_errors():
+        from grip_env.dataset.crosscheck import crosscheck
+
+        found = crosscheck(directory, objects, seed=seed, workers=workers)
+    typer.echo(found.summary())
+    for family, figures in found.families.items():
+        typer.echo(f"  {family}: " + ", ".join(f"{k} {v:.3g}" for k, v in figures.items()))
+    return {"seed": seed, "summary": found.summary(), **asdict(found)}
 
 
 def _retest(directory: Path, objects: int, seed: int, workers: int) -> dict[str, object]:

@@ -17,12 +17,12 @@ from pathlib import Path
 from typing import Any
 
 import grip_env
-from grip_env.config import Config
+from grip_env.config import DEFAULT_ENGINE, Config
 from grip_env.dataset.catalog import OBJECTS_FILE, DatasetObject
 from grip_env.dataset.files import write_text_atomically
 from grip_env.dataset.sampling import sampling_record
 from grip_env.dataset.shards import GRIPS_DIR, SHARD_FILE, ShardRecord
-from grip_env.label_model import LABEL_MODEL
+from grip_env.label_model import LABEL_MODEL, label_model_for
 from grip_env.objects.family import object_family
 
 FORMAT = "grip-env-dataset"
@@ -35,7 +35,8 @@ EXECUTION_FIELDS = ("workers", "backend")
 LEARNING_SECTIONS = ("learning", "selector")
 #: Settings added after datasets were made without them, with the value that reproduces those
 #: datasets: a run identity leaves them out at that value, so such a dataset stays this code's run.
-LATER_SETTINGS: dict[str, dict[str, Any]] = {"synthesis": {"frictional_closure": False}}
+LATER_SETTINGS: dict[str, dict[str, Any]] = {"synthesis": {"frictional_closure": False},
+                                              "sim": {"engine": DEFAULT_ENGINE}}
 _VERSIONED_PACKAGES = ("numpy", "pandas", "pyarrow", "pybullet", "scipy", "shapely", "pydantic")
 
 Manifest = dict[str, Any]
@@ -86,7 +87,8 @@ def run_identity(
 ) -> dict[str, Any]:
     """Everything that determines a dataset's rows: config (minus execution fields, the learning
     sections and :data:`LATER_SETTINGS` at their reproducing value), objects and the label model
-    (a new one never resumes an old run).
+    (a new one never resumes an old run). ``sim.engine`` is one of those later settings, so a
+    PyBullet run keeps the identity it had before engines could be chosen.
 
     Named and procedural objects are fixed by their ids and the config; a caller's own objects
     (``own_objects``) also by the SHA-256 of their contours, so an edited file is a new run.
@@ -99,7 +101,7 @@ def run_identity(
             if settings[section].get(name) == value:
                 del settings[section][name]
     identity = {"config": settings, "object_ids": [entry.object_id for entry in entries],
-                "label_model": LABEL_MODEL}
+                "label_model": label_model_for(config.sim.engine)}
     if own_objects:
         identity["object_contours_sha256"] = contours_sha256(entries)
     return without_learning(identity)
@@ -138,7 +140,8 @@ def new_manifest(
         "git_commit": _git_commit(),
         "created": datetime.now(UTC).isoformat(timespec="seconds"),
         "versions": _versions(),
-        "label_model": LABEL_MODEL,
+        "label_model": label_model_for(config.sim.engine),
+        "engine": _engine(config.sim.engine),
         "seed": config.dataset.seed,
         "trials": config.dataset.trials,
         "sampling": sampling_record(config.dataset),
@@ -262,6 +265,15 @@ def _machine() -> str:
     except OSError:
         pass
     return f"{model} x {os.cpu_count()}"
+
+
+def _engine(name: str) -> dict[str, str | None]:
+    """The physics engine that made the labels and its installed version."""
+    try:
+        version: str | None = metadata.version(name)
+    except metadata.PackageNotFoundError:
+        version = None
+    return {"name": name, "version": version}
 
 
 def _versions() -> dict[str, str]:

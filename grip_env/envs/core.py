@@ -59,8 +59,14 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         candidate_order: str = "q_c",
         render_mode: str | None = None,
         render_style: str | None = None,
+        engine: str | None = None,
     ) -> None:
         self.config = config if config is not None else load_config()
+        if engine is not None:  # live trials in this engine (sim.engine), checked now
+            from grip_env.sim.engine import require_engine
+
+            require_engine(engine)
+            self.config = self.config.override(sim={"engine": engine})
         selector = self.config.selector
         self.max_candidates = _at_least(
             "max_candidates", selector.max_candidates if max_candidates is None else max_candidates
@@ -112,7 +118,8 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         self, data: str | Path | pd.DataFrame | None, objects: ObjectsArg,
         backend: OutcomeBackend | None,
     ) -> OutcomeBackend:
-        """``backend`` as given, else replay of ``data``, else live PyBullet on ``objects``."""
+        """``backend`` as given, else replay of ``data``, else live trials on ``objects`` (in
+        ``sim.engine``)."""
         if backend is None:
             return LiveBackend(objects, self.config) if data is None else ReplayBackend(data,
                                                                                         objects)

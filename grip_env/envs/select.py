@@ -57,11 +57,13 @@ class GripSelectEnv(GripEnvBase):
     ## Arguments
 
     - ``data``: a dataset path or DataFrame, a shortcut for ``backend=ReplayBackend(data,
-      objects)``; with neither ``data`` nor ``backend``, grips run live in PyBullet.
+      objects)``; with neither ``data`` nor ``backend``, grips run live (in ``engine``).
     - ``objects``: object set name, or names / ``PlanarObject`` list (live: the objects; replay:
       a filter on the dataset's object ids). None: ``config.objects.set`` live, all replayed.
     - ``backend``: any :class:`~grip_env.envs.backends.OutcomeBackend` (instead of ``data``).
     - ``config``: grip-env :class:`~grip_env.config.Config` (default: ``load_config()``).
+    - ``engine``: the physics engine of live trials, ``"pybullet"`` or ``"mujoco"`` (default: the
+      config's ``sim.engine``); an unknown or uninstalled engine raises ``ValueError``.
     - ``max_candidates``, ``max_attempts``: K and executions per episode (default
       ``config.selector``).
     - ``success_reward``, ``failure_reward``, ``invalid_action_reward``: reward values.

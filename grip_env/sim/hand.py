@@ -1,4 +1,5 @@
-"""``Hand``: the Barrett BH8-280 URDF in a ``World``, held by its palm, driven like the real hand.
+"""``Hand``: the Barrett BH8-280 URDF in a world (any ``Engine``), held by its palm, driven like
+the real hand.
 
 The palm is carried by an idealised arm in the same articulation (``grip_env.sim.gantry``):
 prismatic x, y, z and a yaw wrist, each position-controlled to its target within one step and
@@ -60,8 +61,9 @@ from grip_env.planning.finger import (
     PROXIMAL_MM,
     fingertip_in_plane,
 )
+from grip_env.sim.body import MM
+from grip_env.sim.engine import Engine
 from grip_env.sim.gantry import ARM_JOINTS, MOUNT_JOINTS, PALM_LINK
-from grip_env.sim.world import MM, World
 
 #: The hand's URDF, package data (a file on disk in a wheel or an editable install alike).
 HAND_URDF = Path(str(files("grip_env") / "assets" / "barrett_bh8_280.urdf"))
@@ -134,7 +136,7 @@ class Hand:
     ``max_palm_force_n`` bounds each of the arm's prismatic joints (and, at ``ARM_LEVER_M``, the
     wrist's torque)."""
 
-    world: World
+    world: Engine
     config: SimConfig = field(default_factory=SimConfig)
     max_palm_force_n: float = 400.0
 

@@ -1,6 +1,7 @@
-"""One grip execution in PyBullet: place, pre-shape, lower, close, lift, hold, judge, disturb.
+"""One grip execution in the simulator: place, pre-shape, lower, close, lift, hold, judge, disturb.
 
-A ``TrialScene`` builds a fresh ``World`` (its own PyBullet client) with the table, the object
+A ``TrialScene`` builds a fresh world of ``sim.engine`` (``grip_env.sim.engine``; PyBullet's
+``World`` by default, its own client) with the table, the object
 and the hand for every trial, so that no trial can reach the state another left: PyBullet's
 ``restoreState`` does not restore everything the solver carries from step to step, and restored
 scenes made 23 % of trials depend on the trials run before them (BENCHMARKS.md, "A clean trial").
@@ -37,9 +38,9 @@ from grip_env.planning.finger import (
 )
 from grip_env.sim import pose
 from grip_env.sim.disturbance import RampProbe, reaches, robustness
+from grip_env.sim.engine import Engine, make_world
 from grip_env.sim.hand import Hand, palm_to_world
 from grip_env.sim.uncertainty import TrialNoise, object_mass_kg
-from grip_env.sim.world import World
 
 PLAN_COLUMNS = ("hand_x", "hand_y", "hand_yaw", "spread", "p1_x", "p1_y", "p2_x", "p2_y",
                 "p3_x", "p3_y")
@@ -136,7 +137,7 @@ class TrialScene:
     def _build(self) -> None:
         """A new world holding the table, the object at rest and the hand high above it."""
         sim, objects = self.config.sim, self.config.objects
-        self.world = World(timestep=sim.timestep, solver_iterations=sim.solver_iterations)
+        self.world = make_world(sim)
         self.world.add_table()
         if executes_on_mesh(self.obj, objects):  # the mesh itself, at rest
             mesh = self.obj.mesh
@@ -324,7 +325,7 @@ class TrialScene:
 class _StepCounter:
     """Steps the world with the hand's controller updated before each step, and counts."""
 
-    def __init__(self, world: World, hand: Hand) -> None:
+    def __init__(self, world: Engine, hand: Hand) -> None:
         self.world, self.hand, self.steps = world, hand, 0
 
     def step(self, n: int = 1) -> None:

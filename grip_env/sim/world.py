@@ -1,6 +1,7 @@
 """``World``: one PyBullet client (headless) and the bodies every scene shares.
 
-This package is the only place that calls pybullet. Geometry arrives in millimetres and leaves in
+This module is the only place that calls pybullet (the PyBullet side of
+``grip_env.sim.engine``). Geometry arrives in millimetres and leaves in
 millimetres; metres exist only inside this layer.
 """
 
@@ -10,7 +11,6 @@ import contextlib
 import os
 import sys
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -20,6 +20,7 @@ from grip_env.objects import PlanarObject
 from grip_env.objects.decomposition import MAX_PIECES
 from grip_env.objects.simulated import DEFAULT_TOLERANCE_MM
 from grip_env.shutdown import deferred_signals
+from grip_env.sim.body import MM, Body
 from grip_env.sim.gantry import mounted_urdf
 
 
@@ -49,26 +50,11 @@ with _quiet_native(1, 2):
     import pybullet
     from pybullet_utils.bullet_client import BulletClient
 
-MM = 1e-3  # metres per millimetre
 COLLISION_MARGIN_MM = 1.0
 """Bullet's margin around a convex mesh (PyBullet 3.2.7's default, measured: exact prisms touched a
 probe 1 mm away; ``changeDynamics(collisionMargin=)`` changes the base only, not links). Object
 prisms are built eroded by it (``SimulatedShape.collision_pieces``) so that they collide as the
 shape itself."""
-
-
-@dataclass(frozen=True)
-class Body:
-    """A body in a ``World``: its PyBullet id, the height of its top face (mm), its link count.
-
-    ``inertia_per_kg`` is the principal inertia of the whole body per kilogram (m²), so a new
-    mass rescales it exactly; ``links`` lists every link id of the body (-1 is the base).
-    """
-
-    uid: int
-    top_mm: float
-    links: tuple[int, ...] = (-1,)
-    inertia_per_kg: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
 
 class World:
@@ -379,6 +365,16 @@ class World:
     def touching_links(self, body: int, other: int) -> set[int]:
         """The links of ``body`` in contact with ``other``."""
         return {point[3] for point in self.client.getContactPoints(bodyA=body, bodyB=other)}
+
+    def contact_normal_force_n(self, body: int, other: int) -> float:
+        """The sum of the normal forces (N) of ``body``'s contacts with ``other`` in the last
+        step."""
+        points = self.client.getContactPoints(bodyA=body, bodyB=other)
+        return float(sum(point[9] for point in points))
+
+    def set_gravity(self, gravity: tuple[float, float, float]) -> None:
+        """Gravity (m/s², world frame); ``reset`` restores 9.81 down."""
+        self.client.setGravity(*gravity)
 
     # ------------------------------------------------------------------ states and loads
     def save(self) -> int:

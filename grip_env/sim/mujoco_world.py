@@ -1,0 +1,538 @@
+"""``MujocoWorld``: the MuJoCo side of ``grip_env.sim.engine``, the only module that imports mujoco.
+
+It builds the scene ``World`` builds, from the same sources: the same table, the object as one
+free body of the same convex pieces (prisms of its simulated shape; MuJoCo collides each as its
+convex hull, with no margin to erode), and the same mounted URDF through MuJoCo's URDF compiler
+(static links kept apart, as PyBullet keeps them). What the import lacks is added in code:
+
+* **Ids as PyBullet gives them.** Bodies are numbered in the order they are added; a robot's link
+  ``i`` is the child link of the URDF's ``i``-th joint (-1 its root), so ``Hand`` addresses both
+  engines alike. Self-collision excludes every ancestor, as ``URDF_USE_SELF_COLLISION_EXCLUDE_ALL
+  _PARENTS`` does.
+* **Friction as Bullet combines it.** MuJoCo mixes two geoms' frictions by their maximum; Bullet
+  multiplies lateral frictions and combines torsional ones as ``s0 mu1 + s1 mu0``. Every contact
+  of a free body is therefore an explicit contact pair carrying Bullet's product (condim 4 where
+  it has torsion), rewritten whenever a friction changes (``set_dynamics``, ``set_pad_friction``).
+* **Motors as Bullet's.** A velocity motor drives a joint to its target speed within its torque;
+  a position motor to ``gain (target - q) / dt``. Each is one actuator with a velocity gain of
+  ``MOTOR_STIFFNESS`` times the joint's inertia per timestep (integrated implicitly:
+  ``implicitfast``) and a force range of its torque.
+* **The worm gear's stop** is the joint's lower limit (``joint_floors``) with a reference time of
+  two timesteps, the stiffest MuJoCo recommends. MuJoCo limits have no force cap: the stop holds
+  whatever load (Bullet's holds ``holds`` N·m).
+* **Compliant pads.** A link made compliant (``set_contact_compliance``) contacts through a
+  spring-damper of the given stiffness and damping per ``PAD_REFERENCE_MASS_KG`` (MuJoCo's
+  direct ``solref`` is per unit mass).
+* **Rotor inertia** (``add_axis_inertia``) is added to the link's inertia tensor about its own
+  axis, as the PyBullet world does.
+
+Solver: Newton with elliptic friction cones, ``IMPRATIO`` and ``NOSLIP_ITERATIONS`` (the creep
+controls; sources: ``/work/shared/notes/mujoco-grasping.md``), ``sim.solver_iterations`` at most.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from pathlib import Path
+
+import mujoco
+import numpy as np
+from numpy.typing import NDArray
+
+from grip_env.objects import PlanarObject
+from grip_env.objects.simulated import DEFAULT_TOLERANCE_MM
+from grip_env.sim.body import MM, Body
+from grip_env.sim.gantry import mounted_urdf
+
+#: Elliptic cones' ratio of frictional to normal impedance: 10 as in DexGraspBench and MuJoCo's
+#: docs' advice against slow slip (mujoco #3328 measured creep 10-30x lower than at 1).
+IMPRATIO = 10.0
+#: NoSlip post-iterations: 2 as in DexGraspBench (mujoco #3328: 10 cut creep about 110-fold).
+NOSLIP_ITERATIONS = 2
+#: A motor's velocity gain, in joint inertias per timestep: 10 reaches 91 % of a target speed in
+#: one implicit step (Bullet's motor constraint reaches it in one step within its torque).
+MOTOR_STIFFNESS = 10.0
+#: The largest phase (rad) a pad's spring may turn in one physics step: MuJoCo integrates a
+#: contact's spring semi-implicitly, and the pad against its 80 g object (85 Hz) at the
+#: protocol's 240 Hz turns 2.2 rad a step and diverges (measured: the object flew off at the first
+#: touch). The world steps the physics in substeps short enough to resolve the pad.
+PAD_PHASE_PER_STEP = 0.5
+#: The mass a pad's spring-damper is normalised by: the 80 g object its damping was derived for
+#: (``sim.pad_damping_n_s_per_m``).
+PAD_REFERENCE_MASS_KG = 0.08
+#: Bullet's default position gain of a position motor when none is given.
+DEFAULT_POSITION_GAIN = 0.1
+GRAVITY = (0.0, 0.0, -9.81)
+
+
+class MujocoWorld:
+    """A headless MuJoCo world; use as a context manager or ``close()``.
+
+    Bodies are added first (``add_table``, ``add_object``, ``load_robot``); the model is compiled
+    at the first call that needs it, after which no body can be added.
+    """
+
+    def __init__(self, timestep: float = 1.0 / 240.0, solver_iterations: int = 50) -> None:
+        self.timestep = timestep
+        self.solver_iterations = solver_iterations
+        self._spec = mujoco.MjSpec()
+        self._spec.option.timestep = timestep
+        self._spec.option.gravity = GRAVITY
+        self._spec.option.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+        self._spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+        self._spec.option.impratio = IMPRATIO
+        self._spec.option.noslip_iterations = NOSLIP_ITERATIONS
+        self._spec.option.iterations = solver_iterations
+        self._bodies: list[list[str]] = []  # per uid: body name of link -1, 0, 1, ...
+        self._joints: list[list[str | None]] = []  # per uid: joint of link 0, 1, ... (None: fixed)
+        self._free: list[bool] = []
+        self.substeps = 1
+        self._model: mujoco.MjModel | None = None
+        self._saved: dict[int, mujoco.MjData] = {}
+        self._stale = False
+
+    # ------------------------------------------------------------------ lifecycle
+    def close(self) -> None:
+        """Release the model and its data (idempotent)."""
+        self._model = None
+        self._saved.clear()
+
+    def __enter__(self) -> MujocoWorld:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def step(self, steps: int = 1) -> None:
+        """Advance the simulation ``steps`` fixed steps; pushes and twists last one step."""
+        m, d = self._compiled()
+        for _ in range(steps):
+            for _ in range(self.substeps):
+                mujoco.mj_step(m, d)
+            d.xfrc_applied[:] = 0.0
+        self._stale = True
+
+    # ------------------------------------------------------------------ bodies
+    def add_table(self, friction: float = 0.5, half_size_mm: float = 500.0) -> Body:
+        """A static table whose top face is at z = 0."""
+        name = self._new_body([f"table{len(self._bodies)}"], [], free=False)
+        body = self._spec.worldbody.add_body(name=name, pos=[0, 0, -0.01])
+        self._geom(body, type=mujoco.mjtGeom.mjGEOM_BOX,
+                   size=[half_size_mm * MM, half_size_mm * MM, 0.01], friction=friction)
+        return Body(len(self._bodies) - 1, 0.0)
+
+    def add_object(
+        self, obj: PlanarObject, thickness_mm: float = 30.0, mass_kg: float = 0.3,
+        friction: float = 0.5, rgba: tuple[float, float, float, float] = (0.15, 0.15, 0.15, 1.0),
+        tolerance_mm: float = DEFAULT_TOLERANCE_MM,
+    ) -> Body:
+        """The object extruded to ``thickness_mm`` on z = 0, one convex prism per piece of its
+        simulated shape, as a free body (``World.add_object``).
+
+        Raises:
+            ValueError: bad thickness or mass, or a shape that cannot be simulated whole.
+        """
+        from grip_env.sim.world import prism_inertia
+
+        if thickness_mm <= 0 or mass_kg <= 0:
+            raise ValueError(f"thickness and mass must be positive, got {thickness_mm}, {mass_kg}")
+        shape = obj.simulated_shape(tolerance_mm)
+        uid = len(self._bodies)
+        name = self._new_body([f"object{uid}"], [], free=True)
+        inertia, axes = prism_inertia(obj, thickness_mm)
+        body = self._spec.worldbody.add_body(name=name)
+        body.add_freejoint()
+        body.explicitinertial = True
+        body.mass = mass_kg
+        body.ipos = [obj.centroid[0] * MM, obj.centroid[1] * MM, thickness_mm * MM / 2]
+        body.iquat = [axes[3], axes[0], axes[1], axes[2]]
+        body.inertia = [i * mass_kg for i in inertia]
+        for k, piece in enumerate(shape.pieces):
+            mesh = self._spec.add_mesh(name=f"{name}_piece{k}")
+            mesh.uservert = np.asarray(_prism(piece, thickness_mm)).ravel().tolist()
+            self._geom(body, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh.name,
+                       friction=friction, rgba=rgba)
+        return Body(uid, thickness_mm, (-1,), inertia)
+
+    def add_mesh(self, *args: object, **kwargs: object) -> Body:
+        """Not built yet for MuJoCo: trials on meshes (``objects.execute_on: mesh``) need
+        PyBullet's per-group convex hulls of the OBJ file."""
+        raise ValueError("objects.execute_on: mesh runs on sim.engine pybullet only; "
+                         "the mujoco engine simulates the extrusion")
+
+    def set_dynamics(self, body: Body, mass_kg: float, friction: float,
+                     spinning_friction: float = 0.0) -> None:
+        """Mass (with the whole body's inertia) and friction on every piece of ``body``
+        (``World.set_dynamics``; pairs take Bullet's combination)."""
+        m, _ = self._compiled()
+        base = self._body_id(body.uid, -1)
+        m.body_mass[base] = mass_kg
+        m.body_inertia[base] = [i * mass_kg for i in body.inertia_per_kg]
+        for link in body.links:
+            self._set_friction(body.uid, link, friction, spinning_friction)
+
+    def pose_mm(self, body: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Position (mm) and quaternion (x, y, z, w) of a body's centre of mass frame."""
+        position, orientation = self.pose_floats_mm(body)
+        return np.asarray(position), np.asarray(orientation)
+
+    def pose_floats_mm(
+        self, body: int
+    ) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
+        """``pose_mm`` as plain tuples."""
+        _, d = self._current()
+        index = self._body_id(body, -1)
+        x, y, z = d.xipos[index]
+        quat = np.empty(4)
+        mujoco.mju_mat2Quat(quat, d.ximat[index])
+        return (x / MM, y / MM, z / MM), (quat[1], quat[2], quat[3], quat[0])
+
+    # ------------------------------------------------------------------ robots
+    def load_robot(self, urdf: str | Path) -> int:
+        """A URDF mounted on the gantry arm, fixed to the world, with its own inertia and
+        self-collision between links that are not ancestors (``World.load_robot``)."""
+        path = mounted_urdf(urdf)
+        robot = mujoco.MjSpec.from_file(str(path))
+        robot.compiler.fusestatic = False
+        uid = len(self._bodies)
+        prefix = f"robot{uid}/"
+        joints, parents = _urdf_joints(path)
+        root = ET.parse(path).getroot().find("link").get("name")  # type: ignore[union-attr]
+        links = [root] + [child for _, _, child in joints]
+        self._new_body([prefix + name for name in links],
+                       [None if kind == "fixed" else prefix + name for name, kind, _ in joints],
+                       free=False)
+        frame = self._spec.worldbody.add_frame()
+        frame.attach_body(robot.body(root), prefix, "")
+        for child, parent in parents.items():  # every ancestor, not only the parent
+            ancestor = parent
+            while ancestor is not None:
+                self._spec.add_exclude(bodyname1=prefix + ancestor, bodyname2=prefix + child)
+                ancestor = parents.get(ancestor)
+        for name, kind, _ in joints:
+            if kind != "fixed":
+                self._spec.add_actuator(name=prefix + name, target=prefix + name,
+                                        trntype=mujoco.mjtTrn.mjTRN_JOINT,
+                                        gaintype=mujoco.mjtGain.mjGAIN_FIXED,
+                                        biastype=mujoco.mjtBias.mjBIAS_AFFINE,
+                                        forcelimited=True, forcerange=[-1.0, 1.0])
+        return uid
+
+    def link_count(self, body: int) -> int:
+        """Number of links (= joints) of ``body``, the base not counted."""
+        return len(self._joints[body])
+
+    def link_pose_floats_mm(
+        self, body: int, link: int
+    ) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
+        """Position (mm) and quaternion of a link's frame (its URDF frame)."""
+        _, d = self._current()
+        index = self._body_id(body, link)
+        x, y, z = d.xpos[index]
+        w, qx, qy, qz = d.xquat[index]
+        return (x / MM, y / MM, z / MM), (qx, qy, qz, w)
+
+    def add_axis_inertia(self, body: int, link: int, axis: int, inertia_kg_m2: float) -> None:
+        """Add ``inertia_kg_m2`` to a link's inertia about its local ``axis`` (0, 1, 2)."""
+        m, _ = self._compiled()
+        index = self._body_id(body, link)
+        rotation = np.empty(9)
+        mujoco.mju_quat2Mat(rotation, m.body_iquat[index])
+        rotation = rotation.reshape(3, 3)  # principal axes in the link frame, as columns
+        tensor = rotation @ np.diag(m.body_inertia[index]) @ rotation.T
+        tensor[axis, axis] += inertia_kg_m2
+        values, vectors = np.linalg.eigh(tensor)
+        if np.linalg.det(vectors) < 0:
+            vectors[:, 0] = -vectors[:, 0]
+        quat = np.empty(4)
+        mujoco.mju_mat2Quat(quat, vectors.ravel())
+        m.body_inertia[index] = values
+        m.body_iquat[index] = quat
+
+    def set_pad_friction(self, body: int, link: int, lateral: float, torsion_mm: float) -> None:
+        """Friction of one link: lateral coefficient and torsional arm (mm)."""
+        self._set_friction(body, link, lateral, torsion_mm * MM)
+
+    def set_contact_compliance(self, body: int, link: int, stiffness_n_per_m: float,
+                               damping_n_s_per_m: float) -> None:
+        """Make one link's contacts a spring-damper of ``stiffness_n_per_m`` and
+        ``damping_n_s_per_m`` (per ``PAD_REFERENCE_MASS_KG``)."""
+        m, _ = self._compiled()
+        solref = (-stiffness_n_per_m / PAD_REFERENCE_MASS_KG,
+                  -damping_n_s_per_m / PAD_REFERENCE_MASS_KG)
+        omega = math.sqrt(stiffness_n_per_m / PAD_REFERENCE_MASS_KG)
+        self.substeps = max(self.substeps, math.ceil(omega * self.timestep / PAD_PHASE_PER_STEP))
+        m.opt.timestep = self.timestep / self.substeps
+        geoms = self._link_geoms(body, link)
+        m.geom_solref[geoms] = solref
+        touched = np.isin(self._pair_geoms, geoms).any(axis=1)
+        m.pair_solref[touched] = solref
+
+    def set_joint(self, body: int, joint: int, position: float) -> None:
+        """Teleport one joint (rad or m), at rest."""
+        m, d = self._compiled()
+        index = self._joint_id(body, joint)
+        d.qpos[m.jnt_qposadr[index]] = float(position)
+        d.qvel[m.jnt_dofadr[index]] = 0.0
+        self._stale = True
+
+    def velocity_motors(self, body: int, joints: list[int], speeds: list[float],
+                        torques: list[float]) -> None:
+        """Velocity-controlled joint motors of limited torque (N·m)."""
+        m, d = self._compiled()
+        for joint, speed, torque in zip(joints, speeds, torques, strict=True):
+            act, gain = self._motor(body, joint)
+            m.actuator_gainprm[act, 0] = gain
+            m.actuator_biasprm[act, :3] = (0.0, 0.0, -gain)
+            m.actuator_forcerange[act] = (-torque, torque)
+            d.ctrl[act] = speed
+
+    def position_motors(self, body: int, joints: list[int], targets: list[float],
+                        torques: list[float], gain: float | None = None) -> None:
+        """Position-controlled joint motors of limited torque (N·m): each drives its joint at
+        ``gain (target - q) / dt`` (Bullet's default gain if None)."""
+        m, d = self._compiled()
+        position_gain = DEFAULT_POSITION_GAIN if gain is None else gain
+        for joint, target, torque in zip(joints, targets, torques, strict=True):
+            act, velocity_gain = self._motor(body, joint)
+            stiffness = velocity_gain * position_gain / self.timestep
+            m.actuator_gainprm[act, 0] = stiffness
+            m.actuator_biasprm[act, :3] = (0.0, -stiffness, -velocity_gain)
+            m.actuator_forcerange[act] = (-torque, torque)
+            d.ctrl[act] = target
+
+    def joint_floors(self, body: int, joints: list[int], lowers: list[float],
+                     uppers: list[float], holds: list[float]) -> None:
+        """Set joints' lower and upper limits (stops; MuJoCo's hold any load, ``holds`` aside)."""
+        m, _ = self._compiled()
+        for joint, low, high in zip(joints, lowers, uppers, strict=True):
+            index = self._joint_id(body, joint)
+            m.jnt_range[index] = (low, high)
+            m.jnt_solref[index] = (2.0 * m.opt.timestep, 1.0)
+
+    def joint_limits(self, body: int, joint: int) -> tuple[float, float]:
+        """A joint's lower and upper limits (rad) as loaded (the URDF's)."""
+        self._compiled()
+        low, high = self._loaded_ranges[self._joint_id(body, joint)]
+        return float(low), float(high)
+
+    def joint_states(
+        self, body: int, joints: list[int]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """Positions, velocities and applied motor torques of ``joints``."""
+        m, d = self._compiled()
+        ids = [self._joint_id(body, j) for j in joints]
+        acts = [self._actuator[i] for i in ids]
+        return (d.qpos[m.jnt_qposadr[ids]].copy(), d.qvel[m.jnt_dofadr[ids]].copy(),
+                d.actuator_force[acts].copy())
+
+    def joint_positions_velocities(self, body: int,
+                                   joints: list[int]) -> tuple[list[float], list[float]]:
+        """Positions and velocities of ``joints``, as lists."""
+        m, d = self._compiled()
+        ids = [self._joint_id(body, j) for j in joints]
+        return d.qpos[m.jnt_qposadr[ids]].tolist(), d.qvel[m.jnt_dofadr[ids]].tolist()
+
+    def touching_links(self, body: int, other: int) -> set[int]:
+        """The links of ``body`` in contact with ``other`` (in the last step)."""
+        m, d = self._compiled()
+        links: set[int] = set()
+        uids, link_of = self._body_uid, self._body_link
+        for contact in d.contact[: d.ncon]:
+            a, b = m.geom_bodyid[contact.geom1], m.geom_bodyid[contact.geom2]
+            if uids[a] == body and uids[b] == other:
+                links.add(int(link_of[a]))
+            elif uids[b] == body and uids[a] == other:
+                links.add(int(link_of[b]))
+        return links
+
+    def contact_normal_force_n(self, body: int, other: int) -> float:
+        """The sum of the normal forces (N) of ``body``'s contacts with ``other`` in the last
+        step."""
+        m, d = self._compiled()
+        uids, total, wrench = self._body_uid, 0.0, np.empty(6)
+        for i, contact in enumerate(d.contact[: d.ncon]):
+            pair = {uids[m.geom_bodyid[contact.geom1]], uids[m.geom_bodyid[contact.geom2]]}
+            if pair == {body, other}:
+                mujoco.mj_contactForce(m, d, i, wrench)
+                total += wrench[0]
+        return float(total)
+
+    # ------------------------------------------------------------------ states and loads
+    def save(self) -> int:
+        """Save the whole simulation state in memory; returns a state id."""
+        m, d = self._compiled()
+        state = mujoco.MjData(m)
+        mujoco.mj_copyData(state, m, d)
+        key = max(self._saved, default=-1) + 1
+        self._saved[key] = state
+        return key
+
+    def restore(self, state: int) -> None:
+        """Return the world to a saved state (model parameters, such as limits, stay)."""
+        m, d = self._compiled()
+        mujoco.mj_copyData(d, m, self._saved[state])
+        self._stale = True
+
+    def forget(self, state: int) -> None:
+        """Free a saved state."""
+        self._saved.pop(state, None)
+
+    def push(self, body: int, force_n: NDArray) -> None:
+        """A world-frame force (N) through ``body``'s centre of mass, for the next step."""
+        _, d = self._compiled()
+        d.xfrc_applied[self._body_id(body, -1), :3] = np.asarray(force_n, float)
+
+    def twist(self, body: int, torque_nm: NDArray) -> None:
+        """A world-frame torque (N·m) on ``body``, for the next step."""
+        _, d = self._compiled()
+        d.xfrc_applied[self._body_id(body, -1), 3:] = np.asarray(torque_nm, float)
+
+    def set_gravity(self, gravity: tuple[float, float, float]) -> None:
+        """Gravity (m/s², world frame)."""
+        m, _ = self._compiled()
+        m.opt.gravity[:] = gravity
+
+    def set_colour(self, body: Body, rgba: tuple[float, float, float, float]) -> None:
+        """Paint every geom of ``body`` in ``rgba`` (its look only)."""
+        m, _ = self._compiled()
+        for link in body.links:
+            m.geom_rgba[self._link_geoms(body.uid, link)] = rgba
+
+    def render(self, eye_mm: NDArray[np.float64], target_mm: NDArray[np.float64],
+               width: int = 320, height: int = 240, fov_deg: float = 50.0) -> NDArray[np.uint8]:
+        """Not built for MuJoCo (it needs an OpenGL context): pictures use PyBullet."""
+        raise ValueError("pictures of trials are rendered by sim.engine pybullet only")
+
+    # ------------------------------------------------------------------ internals
+    def _new_body(self, bodies: list[str], joints: list[str | None], free: bool) -> str:
+        if self._model is not None:
+            raise ValueError("bodies must be added before the world is first simulated")
+        self._bodies.append(bodies)
+        self._joints.append(joints)
+        self._free.append(free)
+        return bodies[0]
+
+    def _geom(self, body: mujoco.MjsBody, friction: float, **attributes: object) -> None:
+        geom = body.add_geom(**attributes)
+        geom.friction = [friction, 0.0, 0.0]
+
+    def _compiled(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
+        if self._model is None:
+            self._compile()
+        return self._model, self._data  # type: ignore[return-value]
+
+    def _current(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
+        """Model and data with positions computed from the current joint values."""
+        m, d = self._compiled()
+        if self._stale:
+            mujoco.mj_kinematics(m, d)
+            self._stale = False
+        return m, d
+
+    def _compile(self) -> None:
+        spec = self._spec
+        for k, geom in enumerate(spec.geoms):
+            geom.name = geom.name or f"geom{k}"
+        body_of = {geom.name: geom.parent.name for geom in spec.geoms}
+        free = [g.name for uid, is_free in enumerate(self._free) if is_free
+                for body in self._bodies[uid] for g in spec.body(body).geoms]
+        for name in free:  # contacts of free bodies come from pairs only
+            spec.geom(name).contype, spec.geom(name).conaffinity = 0, 0
+        rank = {name: k for k, name in enumerate(free)}
+        pairs = [(name, other) for name in free for other in body_of
+                 if body_of[other] != body_of[name] and rank.get(other, len(free)) > rank[name]]
+        for k, (a, b) in enumerate(pairs):
+            spec.add_pair(name=f"pair{k}", geomname1=a, geomname2=b, condim=4)
+        self._model = m = spec.compile()
+        self._data = mujoco.MjData(m)
+        self._pair_geoms = np.stack([m.pair_geom1, m.pair_geom2], axis=1) if m.npair else (
+            np.zeros((0, 2), int))
+        self._friction = m.geom_friction[:, :2].copy()  # lateral, torsional arm (m), per geom
+        self._index_bodies(m)
+        self._loaded_ranges = m.jnt_range.copy()
+        self._actuator = {int(m.actuator_trnid[a, 0]): a for a in range(m.nu)}
+        mujoco.mj_forward(m, self._data)
+        full = np.zeros((m.nv, m.nv))
+        mujoco.mj_fullM(m, self._data, full)
+        inertia = np.diag(full)[m.jnt_dofadr[list(self._actuator)]]
+        self._inertia = dict(zip(self._actuator, inertia, strict=True))
+        self._update_pairs()
+
+    def _index_bodies(self, m: mujoco.MjModel) -> None:
+        self._body_ids: list[list[int]] = []
+        self._joint_ids: list[list[int]] = []
+        self._body_uid = np.full(m.nbody, -1)
+        self._body_link = np.full(m.nbody, -2)
+        for uid, (bodies, joints) in enumerate(zip(self._bodies, self._joints, strict=True)):
+            ids = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, name) for name in bodies]
+            self._body_ids.append(ids)
+            self._body_uid[ids] = uid
+            self._body_link[ids] = np.arange(-1, len(ids) - 1)
+            self._joint_ids.append([-1 if name is None else
+                                    mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name)
+                                    for name in joints])
+
+    def _body_id(self, body: int, link: int) -> int:
+        self._compiled()
+        return self._body_ids[body][link + 1]
+
+    def _joint_id(self, body: int, joint: int) -> int:
+        self._compiled()
+        index = self._joint_ids[body][joint]
+        if index < 0:
+            raise ValueError(f"joint {joint} of body {body} is fixed")
+        return index
+
+    def _motor(self, body: int, joint: int) -> tuple[int, float]:
+        index = self._joint_id(body, joint)
+        gain = MOTOR_STIFFNESS * self._inertia[index] / self._model.opt.timestep
+        return self._actuator[index], float(gain)
+
+    def _link_geoms(self, body: int, link: int) -> NDArray[np.int64]:
+        m, _ = self._compiled()
+        return np.flatnonzero(m.geom_bodyid == self._body_id(body, link))
+
+    def _set_friction(self, body: int, link: int, lateral: float, torsion_m: float) -> None:
+        m, _ = self._compiled()
+        geoms = self._link_geoms(body, link)
+        self._friction[geoms] = (lateral, torsion_m)
+        m.geom_friction[geoms, 0] = lateral
+        m.geom_friction[geoms, 1] = torsion_m
+        self._update_pairs()
+
+    def _update_pairs(self) -> None:
+        """Every pair's friction as Bullet combines its two geoms' (product; torsion
+        ``s0 mu1 + s1 mu0``), no rolling friction."""
+        m = self._model
+        if not m.npair:
+            return
+        a, b = self._friction[self._pair_geoms[:, 0]], self._friction[self._pair_geoms[:, 1]]
+        lateral = a[:, 0] * b[:, 0]
+        torsion = a[:, 1] * b[:, 0] + b[:, 1] * a[:, 0]
+        m.pair_friction[:, 0] = lateral
+        m.pair_friction[:, 1] = lateral
+        m.pair_friction[:, 2] = np.maximum(torsion, mujoco.mjMINMU)
+        m.pair_friction[:, 3:] = mujoco.mjMINMU
+
+
+def _prism(piece: NDArray[np.float64], thickness_mm: float) -> list[list[float]]:
+    """Vertices (m) of the prism of a convex piece from z = 0 to the top."""
+    top = thickness_mm * MM
+    return ([[x * MM, y * MM, 0.0] for x, y in piece]
+            + [[x * MM, y * MM, top] for x, y in piece])
+
+
+def _urdf_joints(path: Path) -> tuple[list[tuple[str, str, str]], dict[str, str]]:
+    """The URDF's joints in file order (PyBullet's joint indices here): name, type, child link;
+    and each link's parent link."""
+    joints, parents = [], {}
+    for joint in ET.parse(path).getroot().iter("joint"):
+        child = joint.find("child").get("link")  # type: ignore[union-attr]
+        parents[child] = joint.find("parent").get("link")  # type: ignore[union-attr]
+        joints.append((joint.get("name"), joint.get("type"), child))
+    return joints, parents  # type: ignore[return-value]
+
+
+__all__ = ["IMPRATIO", "MOTOR_STIFFNESS", "NOSLIP_ITERATIONS", "MujocoWorld"]

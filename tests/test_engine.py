@@ -1,0 +1,116 @@
+"""The engine seam: ``sim.engine`` picks the physics engine, PyBullet by default; bad choices are
+refused in one line before anything is written."""
+
+from __future__ import annotations
+
+import pytest
+from cli_runs import assert_refused
+from cli_runs import cli as run
+
+from grip_env.config import Config
+from grip_env.dataset.manifest import fingerprint, run_identity
+from grip_env.sim import engine
+from grip_env.sim.engine import EngineUnavailable, make_world, require_engine
+from grip_env.sim.world import World
+
+
+def test_pybullet_is_the_default_engine_and_builds_today_s_world():
+    config = Config()
+    assert config.sim.engine == "pybullet"
+    with make_world(config.sim) as world:
+        assert type(world) is World
+        assert world.timestep == config.sim.timestep
+        assert world.solver_iterations == config.sim.solver_iterations
+
+
+def test_an_unknown_engine_is_refused_by_name():
+    with pytest.raises(ValueError, match=r"sim\.engine"):
+        Config.model_validate({"sim": {"engine": "physx"}})
+    with pytest.raises(ValueError, match="unknown engine 'physx'"):
+        require_engine("physx")
+
+
+def test_an_engine_not_installed_says_how_to_install_it(monkeypatch):
+    monkeypatch.setitem(engine._PACKAGES, "mujoco", "grip_env_no_such_package")
+    with pytest.raises(EngineUnavailable, match='pip install "grip-env\\[mujoco\\]"'):
+        make_world(Config().override(sim={"engine": "mujoco"}).sim)
+
+
+@pytest.mark.parametrize("command", ["generate", "calibrate"])
+def test_the_cli_refuses_an_unknown_engine_and_writes_nothing(tmp_path, command):
+    config = tmp_path / "physx.yaml"
+    config.write_text("sim:\n  engine: physx\n")
+    out = tmp_path / "out"
+    assert_refused(*run(command, "--config", config, "--out", out), "sim.engine")
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("command", ["generate", "calibrate"])
+def test_the_cli_refuses_a_missing_engine_in_one_line(tmp_path, monkeypatch, command):
+    monkeypatch.setitem(engine._PACKAGES, "mujoco", "grip_env_no_such_package")
+    config = tmp_path / "mujoco.yaml"
+    config.write_text("sim:\n  engine: mujoco\n")
+    out = tmp_path / "out"
+    assert_refused(*run(command, "--config", config, "--out", out),
+                   'pip install "grip-env[mujoco]"')
+    assert not out.exists()
+
+
+def test_a_pybullet_run_keeps_its_identity_and_a_mujoco_run_is_another():
+    default = run_identity(Config(), [])
+    assert "engine" not in default["config"]["sim"]  # as every run before the seam
+    mujoco = run_identity(Config().override(sim={"engine": "mujoco"}), [])
+    assert mujoco["config"]["sim"]["engine"] == "mujoco"
+    assert fingerprint(mujoco) != fingerprint(default)
+
+
+def test_only_the_mujoco_world_imports_mujoco():
+    import ast
+    from pathlib import Path
+
+    root = Path(engine.__file__).resolve().parents[1]
+    importers = set()
+    for path in root.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = ([a.name for a in node.names] if isinstance(node, ast.Import)
+                     else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            if any(name.split(".")[0] == "mujoco" for name in names):
+                importers.add(path.relative_to(root).as_posix())
+    assert importers == {"sim/mujoco_world.py"}
+
+
+def test_a_manifest_records_the_engine_its_version_and_its_label_model():
+    from grip_env.dataset.manifest import new_manifest
+    from grip_env.label_model import LABEL_MODEL, MUJOCO_LABEL_MODEL
+
+    default = new_manifest(Config(), [], [], "0" * 64)
+    assert default["label_model"] == LABEL_MODEL
+    assert default["engine"]["name"] == "pybullet" and default["engine"]["version"]
+    mujoco = new_manifest(Config().override(sim={"engine": "mujoco"}), [], [], "0" * 64)
+    assert mujoco["label_model"] == mujoco["identity"]["label_model"] == MUJOCO_LABEL_MODEL
+    assert mujoco["engine"]["name"] == "mujoco"
+
+
+def test_an_environment_refuses_an_unknown_engine():
+    import gymnasium
+
+    import grip_env.envs  # noqa: F401  (registers the environments)
+
+    with pytest.raises(ValueError, match="unknown engine 'physx'"):
+        gymnasium.make("GripSelect-v0", objects=["rectangle"], engine="physx")
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(__import__("importlib").util.find_spec("mujoco") is None,
+                    reason="mujoco not installed")
+def test_an_environment_runs_live_in_mujoco():
+    import gymnasium
+
+    import grip_env.envs  # noqa: F401
+
+    env = gymnasium.make("GripSelect-v0", objects=["rectangle"], engine="mujoco")
+    assert env.unwrapped.config.sim.engine == "mujoco"
+    env.reset(seed=0)
+    _, reward, _, _, info = env.step(0)
+    assert reward in (0.0, 1.0) and "success" in info
+    env.close()

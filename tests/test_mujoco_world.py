@@ -1,0 +1,128 @@
+"""MuJoCo's world is PyBullet's model: the same URDF gives the same masses, inertias, joint limits
+and link frames; the same object the same mass, inertia and outline; a trial runs and repeats."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+
+pytest.importorskip("mujoco")
+
+from grip_env.config import Config
+from grip_env.objects import load_object_set
+from grip_env.sim.gantry import MOUNT_JOINTS
+from grip_env.sim.hand import HAND_URDF, Hand
+from grip_env.sim.mujoco_world import MujocoWorld
+from grip_env.sim.world import World
+
+
+@pytest.fixture(scope="module")
+def robots():
+    bullet, mujoco_world = World(), MujocoWorld()
+    yield (bullet, bullet.load_robot(HAND_URDF)), (mujoco_world, mujoco_world.load_robot(HAND_URDF))
+    bullet.close()
+    mujoco_world.close()
+
+
+def test_joint_order_and_limits_are_pybullets(robots):
+    (bullet, b), (mj, m) = robots
+    assert mj.link_count(m) == bullet.link_count(b)
+    for joint in range(bullet.link_count(b)):
+        name = bullet.client.getJointInfo(b, joint)[1].decode()
+        assert mj._joints[m][joint] in (None, f"robot{m}/{name}")
+        if mj._joints[m][joint] is not None and joint >= MOUNT_JOINTS:
+            assert mj.joint_limits(m, joint) == pytest.approx(bullet.joint_limits(b, joint))
+
+
+def test_masses_and_principal_inertias_are_pybullets(robots):
+    (bullet, b), (mj, m) = robots
+    model, _ = mj._compiled()
+    for link in range(bullet.link_count(b)):  # the base is fixed to the world: no mass in Bullet
+        mass, _, diagonal, *_ = bullet.client.getDynamicsInfo(b, link)
+        index = mj._body_id(m, link)
+        assert model.body_mass[index] == pytest.approx(mass, rel=1e-12)
+        assert sorted(model.body_inertia[index]) == pytest.approx(sorted(diagonal), rel=1e-9)
+
+
+def test_link_frames_match_in_a_posture(robots):
+    """Dimensions: every link frame in the same place for the same joint values."""
+    (bullet, b), (mj, m) = robots
+    rng = np.random.default_rng(0)
+    for joint in range(bullet.link_count(b)):
+        if mj._joints[m][joint] is None:
+            continue
+        value = float(rng.uniform(0.1, 0.8))
+        bullet.set_joint(b, joint, value)
+        mj.set_joint(m, joint, value)
+    for link in range(bullet.link_count(b)):
+        position, orientation = bullet.link_pose_floats_mm(b, link)
+        mj_position, mj_orientation = mj.link_pose_floats_mm(m, link)
+        assert mj_position == pytest.approx(position, abs=1e-4)  # mm; Bullet rounds to float32
+        turn = abs(float(np.dot(orientation, mj_orientation)))
+        assert turn == pytest.approx(1.0, abs=1e-7)
+
+
+def test_an_object_has_pybullets_mass_inertia_and_pose():
+    obj = next(o for o in load_object_set("default") if o.name == "bean")
+    with World() as bullet, MujocoWorld() as mj:
+        ours, theirs = mj.add_object(obj, 30.0, 0.2, 0.5), bullet.add_object(obj, 30.0, 0.2, 0.5)
+        assert ours.inertia_per_kg == theirs.inertia_per_kg
+        model, _ = mj._compiled()
+        base = mj._body_id(ours.uid, -1)
+        assert model.body_mass[base] == pytest.approx(0.2)
+        position, orientation = mj.pose_mm(ours.uid)
+        expected, expected_orientation = bullet.pose_mm(theirs.uid)
+        assert position == pytest.approx(expected, abs=1e-9)
+        assert abs(np.dot(orientation, expected_orientation)) == pytest.approx(1.0, abs=1e-9)
+        pieces = len(obj.simulated_shape(Config().objects.sim_tolerance_mm).pieces)
+        assert model.npair == 0 or model.npair % pieces == 0
+        assert (model.geom_bodyid == base).sum() == pieces
+
+
+def test_friction_pairs_combine_as_bullet_does():
+    """MuJoCo mixes geom frictions by their maximum; pairs carry Bullet's product instead."""
+    obj = next(o for o in load_object_set("default") if o.name == "rectangle")
+    with MujocoWorld() as mj:
+        table = mj.add_table(friction=0.5)
+        body = mj.add_object(obj, 30.0, 0.2, 0.3)
+        hand = Hand(mj, Config().sim)
+        model, _ = mj._compiled()
+        table_geom = mj._link_geoms(table.uid, -1)[0]
+        with_table = (model.pair_geom2 == table_geom) | (model.pair_geom1 == table_geom)
+        assert model.pair_friction[with_table, 0] == pytest.approx(0.5 * 0.3)
+        mj.set_dynamics(body, 0.2, 0.8)
+        assert model.pair_friction[with_table, 0] == pytest.approx(0.5 * 0.8)
+        pad = mj._link_geoms(hand.uid, hand.fingers[0].links[-1])
+        with_pad = np.isin(model.pair_geom2, pad) | np.isin(model.pair_geom1, pad)
+        assert model.pair_friction[with_pad, 0] == pytest.approx(0.8 * 1.0)
+        torsion = Config().sim.pad_torsion_mm * 1e-3 * 0.8
+        assert model.pair_friction[with_pad, 2] == pytest.approx(torsion)
+
+
+@pytest.mark.slow
+def test_a_mujoco_trial_runs_and_repeats_bit_for_bit():
+    from grip_env.planning.pipeline import candidates
+    from grip_env.sim import run_trial_outcomes
+
+    obj = next(o for o in load_object_set("default") if o.name == "hexagon")
+    grips = candidates(obj).sort_values("Q_C", kind="stable").head(1)
+    config = Config().override(sim={"engine": "mujoco"})
+    first = run_trial_outcomes(obj, grips, config, trials=1, seed=3)
+    second = run_trial_outcomes(obj, grips, config, trials=1, seed=3)
+    assert first.equals(second)
+    assert int(first["steps"].iloc[0]) > 100
+
+
+@pytest.mark.slow
+def test_a_mujoco_outcome_does_not_depend_on_the_order_of_the_grips():
+    from grip_env.planning.pipeline import candidates
+    from grip_env.sim import run_trial_outcomes
+
+    obj = next(o for o in load_object_set("default") if o.name == "pentagon")
+    grips = candidates(obj).sort_values("Q_C", kind="stable").head(2)
+    config = Config().override(sim={"engine": "mujoco"})
+    forward = run_trial_outcomes(obj, grips, config, trials=1, seed=5)
+    backward = run_trial_outcomes(obj, grips.iloc[::-1], config, trials=1, seed=5)
+    pd.testing.assert_frame_equal(forward.set_index("grip").sort_index(),
+                                  backward.set_index("grip").sort_index())
