@@ -11,10 +11,10 @@ import pandas as pd
 import pytest
 from PIL import Image
 
+from classifiers.evaluation.verdicts import relation
 from classifiers.experiments.answers import pick_differences, study_answers
 from classifiers.experiments.benchmark.leaderboard import build_leaderboard
 from classifiers.report.answers import answer_sentences
-from classifiers.report.judge import relation
 
 
 def _board(seed: int = 3) -> dict:

@@ -10,7 +10,7 @@
 
 Colours are Okabe and Ito's colour-blind-safe palette, and every verdict has its own marker too,
 so no reading rests on hue alone. The marker of an interval is its
-:func:`~classifiers.report.judge.relation` to zero, the rule of the leaderboard's verdicts.
+:func:`~classifiers.evaluation.verdicts.relation` to zero, the rule of the leaderboard's verdicts.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from classifiers.report.judge import RELATIONS, relation
+from classifiers.evaluation.verdicts import RELATIONS, relation
 from grip_env.drawing import save_figure
 
 #: Okabe & Ito (2008), "Color Universal Design": distinct in every common colour-vision deficiency.

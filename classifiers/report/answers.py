@@ -1,7 +1,7 @@
 """The study's questions and their answers, one sentence each, worded from ``answers.json``
 (:mod:`classifiers.experiments.answers`).
 
-The verb of every answer is :func:`classifiers.report.judge.relation` of the interval of the
+The verb of every answer is :func:`classifiers.evaluation.verdicts.relation` of the interval of the
 paired difference, the rule of the leaderboard's verdicts; a difference that cannot carry a
 verdict (:func:`~classifiers.report.judge.unjudgeable`, or too few ranked objects) is shown with
 the reason instead.
@@ -13,7 +13,8 @@ import json
 from pathlib import Path
 from typing import Any
 
-from classifiers.report.judge import FEW_OBJECTS, relation, unjudgeable
+from classifiers.evaluation.verdicts import relation
+from classifiers.report.judge import FEW_OBJECTS, unjudgeable
 
 ANSWERS_FILE = "answers.json"
 _QC, _QG = "best-Q_C", "best-Q_G"

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from classifiers.evaluation.verdicts import relation
 from classifiers.experiments.benchmark.aggregate import (
     estimate,
     iqm,
@@ -28,7 +29,6 @@ from classifiers.experiments.benchmark.aggregate import (
     probability_of_improvement,
 )
 from classifiers.experiments.benchmark.selection import MAX_ATTEMPTS
-from classifiers.report.judge import relation
 
 REFERENCE = "best_qc"
 JSON_FILE = "leaderboard.json"
