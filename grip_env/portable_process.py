@@ -210,7 +210,7 @@ def serve(descriptor: int) -> None:
             except OSError:  # the caller is gone
                 return
             except Exception as exc:  # a result that does not pickle
-                connection.send((("error", _picklable(exc), traceback.format_exc()), []))
+                connection.send((("error", picklable(exc), traceback.format_exc()), []))
 
 
 def _reply(function: Callable[..., Any], args: tuple, kwargs: dict) -> tuple:
@@ -219,12 +219,14 @@ def _reply(function: Callable[..., Any], args: tuple, kwargs: dict) -> tuple:
         try:
             reply: tuple = ("result", function(*args, **kwargs), "")
         except Exception as exc:  # raised again in the caller
-            reply = ("error", _picklable(exc), traceback.format_exc())
+            reply = ("error", picklable(exc), traceback.format_exc())
     notes = [(str(w.message), w.category, w.filename, w.lineno) for w in caught]
     return reply, notes
 
 
-def _picklable(exc: Exception) -> Exception:
+def picklable(exc: Exception) -> Exception:
+    """``exc`` if it survives pickling (to be raised again in another process), else a
+    RuntimeError with its type and message."""
     import pickle
 
     try:

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import multiprocessing
 import os
-import pickle
 import signal
 import threading
 from collections import Counter, deque
@@ -24,6 +23,7 @@ from types import TracebackType
 import pandas as pd
 
 from grip_env.dataset.jobs import ObjectJob, ObjectTask
+from grip_env.portable_process import picklable
 
 #: Attempts per object: a worker lost on one is followed by one retry on a fresh worker.
 MAX_ATTEMPTS = 2
@@ -202,7 +202,7 @@ def _serve(conn: Connection, watch: Connection) -> None:
         try:
             reply = ("ok", call_single_threaded(job, task))
         except Exception as exc:  # the parent re-raises it
-            reply = ("error", _portable(exc))
+            reply = ("error", picklable(exc))
         conn.send(reply)
 
 
@@ -213,10 +213,3 @@ def _exit_when_orphaned(watch: Connection) -> None:
     os._exit(1)
 
 
-def _portable(exc: Exception) -> Exception:
-    """``exc`` if it survives pickling, else a RuntimeError with its type and message."""
-    try:
-        pickle.loads(pickle.dumps(exc))
-    except Exception:
-        return RuntimeError(f"{type(exc).__name__}: {exc}")
-    return exc
