@@ -4,6 +4,7 @@
     python -m tests.benchmarks.mujoco_lift --phase approach     # the same hand, in free air
     python -m tests.benchmarks.mujoco_lift --arm-stiffness 0.3  # a diagnostic arm drive
     python -m tests.benchmarks.mujoco_lift --arm-stiffness 0.3 --grips 20  # ... on 20 grips
+    python -m tests.benchmarks.mujoco_lift --arm-constraint 0.02 --grips 20  # arm as constraints
 
 Runs the held box's trial (``tests.benchmarks.engines.held_box_grip``: the default rectangle's
 best grip by Q_C, no execution error) in MuJoCo and, from the named phase on, prints for each
@@ -14,8 +15,11 @@ penetration, and the finger joints.
 
 ``--arm-stiffness S`` is a diagnostic, not a model: it gives the arm's (gantry's) prismatic drives
 a velocity gain of S joint inertias per physics substep instead of ``MOTOR_STIFFNESS`` (h kv / I
-= S), the fingers' drives unchanged. ``--grips N`` then runs ``tests.benchmarks.engines --grips N``
-under it instead of the trace.
+= S), the fingers' drives unchanged. ``--arm-constraint T`` is another: the arm's four joints (the
+gantry's three and the wrist) are held at their targets by joint equality constraints of time
+constant T s (damping ratio 1), which MuJoCo solves together with the contacts, instead of by
+drives (no force limit). ``--grips N`` then runs ``tests.benchmarks.engines --grips N`` under
+either instead of the trace.
 """
 
 from __future__ import annotations
@@ -47,6 +51,41 @@ def set_arm_stiffness(stiffness: float) -> None:
         return world._actuator[index], float(gain)
 
     mujoco_world.MujocoWorld._motor = motor
+
+
+def set_arm_constraint(time_constant_s: float) -> None:
+    """Hold the arm's joints of every ``MujocoWorld`` at their position targets by joint equality
+    constraints of ``time_constant_s`` instead of by drives (a diagnostic patch)."""
+    import grip_env.sim.mujoco_world as mujoco_world
+    from grip_env.sim.gantry import ARM_JOINTS
+
+    world_class = mujoco_world.MujocoWorld
+    compile_model, drive = world_class._compile, world_class.position_motors
+
+    def compile_with_constraints(world) -> None:
+        for joint in world._spec.joints:
+            if joint.name.split("/")[-1] in ARM_JOINTS:
+                equality = world._spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=joint.name)
+                equality.solref = [time_constant_s, 1.0]
+        compile_model(world)
+        world._arm_equality = {int(j): k for k, j in enumerate(world._model.eq_obj1id)}
+
+    def position_motors(world, body, joints, targets, torques, gain=None) -> None:
+        m, _ = world._compiled()
+        driven = [k for k, j in enumerate(joints)
+                  if world._joint_id(body, j) not in world._arm_equality]
+        for joint, target in zip(joints, targets, strict=True):
+            index = world._joint_id(body, joint)
+            if index in world._arm_equality:
+                m.eq_data[world._arm_equality[index], 0] = target
+                act = world._actuator[index]
+                m.actuator_gainprm[act, 0], m.actuator_biasprm[act, :3] = 0.0, 0.0
+        if driven:
+            drive(world, body, [joints[k] for k in driven], [targets[k] for k in driven],
+                  [torques[k] for k in driven], gain)
+
+    world_class._compile = compile_with_constraints
+    world_class.position_motors = position_motors
 
 
 def vertical_contact_force_n(world, uid: int) -> tuple[float, list[float]]:
@@ -115,11 +154,16 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=8, help="protocol steps to print")
     parser.add_argument("--arm-stiffness", type=float, default=None,
                         help="diagnostic: the arm drives' h kv / I (the model's: MOTOR_STIFFNESS)")
+    parser.add_argument("--arm-constraint", type=float, default=None,
+                        help="diagnostic: hold the arm's joints by equality constraints of this "
+                        "time constant (s)")
     parser.add_argument("--grips", type=int, default=0,
                         help="run tests.benchmarks.engines --grips N --seed 0 instead")
     args = parser.parse_args()
     if args.arm_stiffness is not None:
         set_arm_stiffness(args.arm_stiffness)
+    if args.arm_constraint is not None:
+        set_arm_constraint(args.arm_constraint)
     if args.grips:
         cost(args.grips, 0)
     else:
