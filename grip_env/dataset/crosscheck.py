@@ -94,7 +94,7 @@ def crosscheck(path: str | Path, objects: int, seed: int = 0, workers: int = 1) 
     directory = Path(path)
     engine = check_crosscheckable(directory)
     checks = _retest_sample(directory, objects, seed)
-    runs = _map(_both_engines, checks, workers)
+    runs = _map(_both_engines, checks, workers, "crosscheck")
     return _figures(checks, runs, engine, seed)
 
 
