@@ -36,7 +36,7 @@ from typing import Any, TypeVar
 
 from grip_env.portable_math import math_is_portable
 
-__all__ = ["in_this_process", "portable", "stop_worker"]
+__all__ = ["in_place", "portable", "stop_worker"]
 
 _Function = TypeVar("_Function", bound=Callable[..., Any])
 _STOP_SECONDS = 5.0
@@ -71,7 +71,7 @@ def portable(
 
 
 @contextlib.contextmanager
-def in_this_process() -> Iterator[None]:
+def in_place() -> Iterator[None]:
     """Run :func:`portable` functions in this process within the block, whatever its kernels
     (for measuring what the non-portable kernels would give)."""
     token = _forced_here.set(True)

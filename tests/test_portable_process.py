@@ -38,7 +38,7 @@ def _worker_pid() -> int:
 @pytest.mark.slow
 def test_plans_perception_trials_and_errors_in_the_worker_are_those_made_here(delegating):
     box = make_shape("rectangle")
-    with portable_process.in_this_process():
+    with portable_process.in_place():
         here = candidates(box)
         seen_here = perceive(box)
         trials_here = run_trials(box, here.head(2), trials=2, seed=5)

@@ -173,7 +173,7 @@ def _unwrapped_path(objects: int, planned: dict) -> dict[str, str]:
         from grip_env import portable_process
     except ImportError:  # before the portable worker existed
         return _path(objects, planned)[0]
-    with portable_process.in_this_process():
+    with portable_process.in_place():
         return _path(objects, planned)[0]
 
 

@@ -5,7 +5,7 @@
 
 In a fresh process whose numpy came first, each call is timed twice, back to back: as it runs
 (in :mod:`grip_env.portable_process`'s worker) and in place
-(:func:`~grip_env.portable_process.in_this_process`, the same work on this process's kernels).
+(:func:`~grip_env.portable_process.in_place`, the same work on this process's kernels).
 The overhead is the median of the paired differences, so that the load of a shared machine
 cancels as far as it can. The first call, which starts the worker, is timed on its own.
 """
@@ -25,7 +25,7 @@ import grip_env
 from grip_env.objects import load_object_set
 from grip_env.pipeline import candidates
 from grip_env.portable_math import math_is_portable
-from grip_env.portable_process import in_this_process
+from grip_env.portable_process import in_place
 
 def timed(call):
     start = time.perf_counter()
@@ -34,7 +34,7 @@ def timed(call):
 
 def paired(call):
     there = timed(call)
-    with in_this_process():
+    with in_place():
         here = timed(call)
     return there, here
 
@@ -50,7 +50,7 @@ for seed in range({repeats}):
         if where == "worker":
             there = timed(step)
         else:
-            with in_this_process():
+            with in_place():
                 steps.append((there, timed(step)))
 env.close()
 median = lambda pairs, i: statistics.median(p[i] for p in pairs)
