@@ -4,6 +4,7 @@ channels at the contacts, the cache, bad input, scikit-learn composition, and oc
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -299,3 +300,41 @@ def test_occlusion_reads_predict_proba_and_checks_its_input():
         occlusion_maps(_region_model, images, patch_px=40)
     with pytest.raises(ValueError, match=r"\(n, C, H, W\)"):
         occlusion_maps(_region_model, images[0])
+
+
+def test_copies_of_a_contour_are_drawn_as_one_object():
+    contour = star(5, 50, 20)
+    table = pd.DataFrame([_grip(yaw=0.1 * k) for k in range(4)]).assign(
+        **{CONTOUR_COLUMN: [contour.copy() for _ in range(4)]})
+    clear_image_cache()
+    copies = GripImages().transform(table)
+    assert len(gi._CACHE.entries) == 1
+    shared = _table([_grip(yaw=0.1 * k) for k in range(4)], {"box": contour})
+    assert GripImages().transform(shared).tobytes() == copies.tobytes()
+
+
+# ----------------------------------------------------------------------------- figures
+def test_the_figures_show_each_grip_with_its_label(tmp_path):
+    import json
+
+    from classifiers.report.grip_images import choose_grips, grip_images_figure, occlusion_figure
+    from classifiers.report.study_report import _grip_images
+    from grip_env.dataset import load
+
+    grips = load_with_contours(STANDARD)
+    chosen = choose_grips(grips, count=6, seed=3)
+    assert chosen["success"].tolist() == [True] * 3 + [False] * 3
+    assert chosen["object_id"].is_unique
+    fig = grip_images_figure(chosen)
+    titles = [ax.get_title() for ax in fig.axes]
+    assert len(titles) == 6 and titles[0].startswith(chosen["object_id"].iloc[0] + "\nsuccess")
+    assert "failure: held in" in titles[-1] and titles[-1].endswith(" g")
+    images = GripImages().transform(chosen.head(2))
+    maps = occlusion_maps(lambda x: x[:, 0].mean(axis=(1, 2)), images)
+    assert len(occlusion_figure(images, maps, ["a", "b"]).axes) == 5  # 2 x 2 and a colour bar
+    # the study report draws it from the dataset its data.json names, and skips it without one
+    (tmp_path / "data.json").write_text(json.dumps({"dataset": str(Path(STANDARD).resolve())}))
+    table = load(STANDARD)
+    path = _grip_images(table, tmp_path / "figures" / "grip_images.png", tmp_path)
+    assert path is not None and path.stat().st_size > 10_000
+    assert _grip_images(table, tmp_path / "x.png", tmp_path / "elsewhere") is None

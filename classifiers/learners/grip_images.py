@@ -9,8 +9,8 @@ image, so fingers 1 and 2 close from the top and the thumb from the bottom; hand
 The scale is fixed in millimetres per pixel and must show the hand's whole reach
 (:data:`HAND_REACH_MM` from the centre), so the hand's own size is in the picture.
 
-Channels (:data:`CHANNELS`), each the covered fraction of a pixel (``SUPERSAMPLE``² samples a
-pixel, so a value is a multiple of 1/``SUPERSAMPLE``²):
+Channels (:data:`CHANNELS`), each the covered fraction of a pixel (``SUPERSAMPLE ** 2`` samples
+a pixel, so a value is a multiple of ``1 / SUPERSAMPLE ** 2``):
 
 - ``silhouette``: the object;
 - ``contacts``: discs of ``CONTACT_RADIUS_PX`` pixels at the three planned contacts P1..P3;
@@ -189,7 +189,9 @@ def grip_images(grips: pd.DataFrame, size_px: int = 48, mm_per_px: float = 5.0,
             cached = _draw(values[rows], contour, size_px, mm_per_px, channels)
             _CACHE.put(key, cached)
         counts[rows] = cached
-    return counts.astype(np.float32) / np.float32(SUPERSAMPLE**2)
+    images = counts.astype(np.float32)
+    images *= np.float32(1.0 / SUPERSAMPLE**2)  # a power of two: exact
+    return images
 
 
 # ------------------------------------------------------------------------------- the table
@@ -220,15 +222,23 @@ def _contour_groups(grips: pd.DataFrame, channels: tuple[str, ...]
     if "silhouette" not in channels:
         return np.zeros(len(grips), dtype=np.intp), [None]
     cells = grips[CONTOUR_COLUMN].to_numpy(dtype=object)
-    addresses = np.fromiter(map(id, cells), dtype=np.int64, count=len(cells))
-    groups, _ = pd.factorize(addresses)
-    first_rows = np.unique(groups, return_index=True)[1]
-    return groups.astype(np.intp), [_checked_contour(cells[row], row) for row in first_rows]
+    # rows sharing one array share a group at once; equal copies are merged by their bytes
+    shared, first_rows = _groups_of(np.fromiter(map(id, cells), dtype=np.int64, count=len(cells)))
+    contours = [_checked_contour(cells[row], row) for row in first_rows]
+    merged, first = _groups_of(np.array([hashlib.sha256(c.tobytes()).hexdigest() + str(c.shape)
+                                         for c in contours]))
+    return merged[shared], [contours[k] for k in first]
+
+
+def _groups_of(keys: NDArray[Any]) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """Each key's group (numbered in order of first appearance) and each group's first index."""
+    groups, _ = pd.factorize(keys)
+    return groups.astype(np.intp), np.unique(groups, return_index=True)[1]
 
 
 def _checked_contour(cell: Any, row: int) -> NDArray[np.float64]:
     try:
-        contour = np.asarray(cell, dtype=np.float64)
+        contour = np.ascontiguousarray(cell, dtype=np.float64)
     except (TypeError, ValueError):
         contour = np.empty((0,))
     if contour.ndim != 2 or contour.shape[1] != 2 or len(contour) < 3 \
@@ -412,6 +422,7 @@ class SilhouetteRaster:
         """Whether points (world mm, any shape) fall in a filled cell."""
         return self._lookup(self._cells(x, 0), self._cells(y, 1))
 
+
     def contains_grid(self, hand: _HandFrames, u: NDArray[np.float64], v: NDArray[np.float64]
                       ) -> NDArray[np.bool_]:
         """(n, H*s, W*s): whether each grip's samples fall in a filled cell."""
@@ -425,18 +436,22 @@ class SilhouetteRaster:
     def _cells(self, coordinate: NDArray[np.float64], axis: int) -> NDArray[np.float64]:
         return np.floor((np.asarray(coordinate, float) - self.origin[axis]) / self.cell_mm)
 
-    def _lookup(self, col: NDArray[np.float64], row: NDArray[np.float64]) -> NDArray[np.bool_]:
+    def _lookup(self, col: NDArray[np.floating], row: NDArray[np.floating]) -> NDArray[np.bool_]:
         # the border cells are empty, so a point off the grid reads the nearest border cell
         rows, cols = self.mask.shape
-        col = np.clip(col, 0, cols - 1).astype(np.intp)
-        row = np.clip(row, 0, rows - 1).astype(np.intp)
-        return self.mask.ravel()[row * cols + col]
+        np.clip(col, 0, cols - 1, out=col)
+        np.clip(row, 0, rows - 1, out=row)
+        row *= cols
+        row += col  # a whole number below 2**24: exact in float32
+        return np.take(self.mask.ravel(), row.astype(np.int32))
 
 
 def silhouette_raster(contour: NDArray[np.float64], cell_mm: float = RASTER_MM
                       ) -> SilhouetteRaster:
     """Fill ``contour`` (a closed polygon, (V, 2) mm) on a grid of ``cell_mm`` cells covering it
-    with an empty cell to spare all round: a scanline fill, vectorised over rows and edges."""
+    with an empty cell to spare all round: a scanline fill, vectorised over rows and edges.
+    Cells are coarsened for a contour more than a metre across, to at most 4,000 a side."""
+    cell_mm = max(cell_mm, float(np.ptp(contour, axis=0).max()) / 4000.0)
     low = np.floor(contour.min(axis=0) / cell_mm) - 1
     high = np.ceil(contour.max(axis=0) / cell_mm) + 1
     cols, rows = (high - low).astype(int)
@@ -449,6 +464,7 @@ def silhouette_raster(contour: NDArray[np.float64], cell_mm: float = RASTER_MM
     x = a[:, 0] + (y[row] - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
     # a cell is inside when an odd number of crossings lie left of its centre
     first_col = np.clip(np.ceil((x - origin[0]) / cell_mm - 0.5), 0, cols).astype(np.intp)
-    toggles = np.bincount(row * (cols + 1) + first_col, minlength=rows * (cols + 1))
-    mask = (np.cumsum(toggles.reshape(rows, cols + 1), axis=1)[:, :cols] % 2).astype(bool)
+    toggles = np.bincount(row * (cols + 1) + first_col, minlength=rows * (cols + 1)) % 2
+    parity = np.bitwise_xor.accumulate(toggles.astype(np.uint8).reshape(rows, cols + 1), axis=1)
+    mask = parity[:, :cols].astype(bool)
     return SilhouetteRaster(mask, origin, cell_mm)

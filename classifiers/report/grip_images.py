@@ -35,7 +35,7 @@ def choose_grips(grips: pd.DataFrame, count: int = 8, seed: int = 0) -> pd.DataF
     """A seeded choice of ``count`` grips from distinct objects, half held and half slipped
     (``success``), held first."""
     rng = np.random.default_rng(seed)
-    one_per_object = grips.loc[rng.permutation(len(grips))].drop_duplicates("object_id")
+    one_per_object = grips.iloc[rng.permutation(len(grips))].drop_duplicates("object_id")
     held = one_per_object[one_per_object["success"].astype(bool)]
     slipped = one_per_object[~one_per_object["success"].astype(bool)]
     half = count // 2
@@ -59,6 +59,8 @@ def grip_images_figure(grips: pd.DataFrame, transformer: GripImages | None = Non
     fig.suptitle(f"What the image evaluator sees: {transformer.size_px} px at "
                  f"{transformer.mm_per_px:g} mm/px, palm centre at (0, 0), thumb force up; "
                  "grey object, blue fingers' approach, red contacts", fontsize=8)
+    fig.supxlabel("hand x (mm)", fontsize=8)
+    fig.supylabel("hand y: the thumb's force (mm)", fontsize=8)
     fig.tight_layout()
     return fig
 
@@ -99,9 +101,10 @@ def _panels(count: int, columns: int) -> Figure:
 
 
 def _label(grip: pd.Series) -> str:
-    outcome = "held" if bool(grip["success"]) else "slipped"
-    rate = (f" {grip['success_rate']:.0%}" if "success_rate" in grip
+    """Object, label and how the label came about: "success: held in 80% of trials, 96 g"."""
+    outcome = "success" if bool(grip["success"]) else "failure"
+    rate = (f": held in {grip['success_rate']:.0%} of trials" if "success_rate" in grip
             and pd.notna(grip["success_rate"]) else "")
-    robust = (f", {grip['robustness_mean']:.2f} g" if "robustness_mean" in grip
+    robust = (f", {grip['robustness_mean']:.0f} g" if "robustness_mean" in grip
               and pd.notna(grip["robustness_mean"]) else "")
     return f"{grip['object_id']}\n{outcome}{rate}{robust}"
