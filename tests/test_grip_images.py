@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from sklearn.base import clone
+from sklearn.base import BaseEstimator, clone
 from sklearn.linear_model import LogisticRegression
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import FunctionTransformer
@@ -296,6 +296,12 @@ def test_occlusion_reads_predict_proba_and_checks_its_input():
     images = np.ones((2, 1, 32, 32), dtype=np.float32)
     np.testing.assert_allclose(occlusion_maps(Model(), images, fill=0.0),
                                occlusion_maps(_region_model, images, fill=0.0))
+    np.testing.assert_array_equal(occlusion_maps(_region_model, images, fill=[0.0]),
+                                  occlusion_maps(_region_model, images, fill=0.0))
+    # the default grey is each channel's mean: on uniform images hiding changes nothing
+    assert not occlusion_maps(_region_model, images).any()
+    with pytest.raises(ValueError, match="fill"):
+        occlusion_maps(_region_model, images, fill="grey")
     with pytest.raises(ValueError, match="patch_px"):
         occlusion_maps(_region_model, images, patch_px=40)
     with pytest.raises(ValueError, match=r"\(n, C, H, W\)"):
@@ -338,3 +344,60 @@ def test_the_figures_show_each_grip_with_its_label(tmp_path):
     path = _grip_images(table, tmp_path / "figures" / "grip_images.png", tmp_path)
     assert path is not None and path.stat().st_size > 10_000
     assert _grip_images(table, tmp_path / "x.png", tmp_path / "elsewhere") is None
+
+
+def test_the_command_line_reports_them_as_bad_input():
+    """Each is a ``raise`` of ours, so a command ends with one ``error:`` line and exit 2, also
+    when scikit-learn's pipeline calls the transformer."""
+    from grip_env.cli.errors import is_input_error
+
+    table = _table([_grip()], {"box": rectangle(40, 20)})
+    bare = pd.DataFrame([_grip()])
+    pipeline = Pipeline([("images", GripImages()), ("flat", FunctionTransformer())])
+    for call in (lambda: GripImages(mm_per_px=4.0).fit(table), lambda: pipeline.fit(bare),
+                 lambda: attach_contours(bare, pd.DataFrame({"object_id": ["box"]}))):
+        with pytest.raises(ValueError) as caught:
+            call()
+        assert is_input_error(caught.value), caught.value
+
+
+def test_occlusion_of_a_grip_pipeline_and_where_its_maps_lie():
+    """A pipeline whose model reads only the contacts channel: hiding the contacts is all that
+    lowers its prediction, so every map's positive part lies on or next to them."""
+    from classifiers.learners.occlusion import grip_occlusion_maps, map_shares
+
+    def contacts_only(images):
+        p = images[:, 1].mean(axis=(1, 2)) * 50
+        return np.stack([1 - p, p], axis=1)
+
+    contours = {"box": rectangle(40, 25), "star": star(5, 50, 20)}
+    table = _table([_grip(yaw=0.4 * k, object_id=name) for k in range(2) for name in contours],
+                   contours)
+    model = Pipeline([("images", GripImages()), ("model", _Proba(contacts_only))]).fit(table)
+    images, maps = grip_occlusion_maps(model, table, patch_px=4, stride_px=2)
+    assert images.shape == (4, 3, 48, 48) and maps.shape == (4, 48, 48)
+    shares = map_shares(maps, images)
+    np.testing.assert_allclose(shares.sum(axis=1), 1.0)
+    # a square spreads its drop over the pixels it hid: within 3 pixels of a contact's disc
+    near = images[:, 1] > 0
+    for _ in range(3):
+        near = near | np.roll(near, 1, 1) | np.roll(near, -1, 1)
+        near = near | np.roll(near, 1, 2) | np.roll(near, -1, 2)
+    assert (maps > 0).any(axis=(1, 2)).all() and not (maps[~near] > 0).any()
+    assert (shares.idxmax(axis=1) == "contacts").all()
+    with pytest.raises(ValueError, match="GripImages step"):
+        grip_occlusion_maps(Pipeline([("model", _Proba(contacts_only))]), table)
+
+
+class _Proba(BaseEstimator):
+    """A stand-in model of images with ``predict_proba``."""
+
+    def __init__(self, function=None):
+        self.function = function
+
+    def fit(self, X, y=None):
+        self.fitted_ = True
+        return self
+
+    def predict_proba(self, images):
+        return self.function(images)
