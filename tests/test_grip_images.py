@@ -387,6 +387,12 @@ def test_occlusion_of_a_grip_pipeline_and_where_its_maps_lie():
     assert (shares.idxmax(axis=1) == "contacts").all()
     with pytest.raises(ValueError, match="GripImages step"):
         grip_occlusion_maps(Pipeline([("model", _Proba(contacts_only))]), table)
+    from classifiers.report.grip_images import grip_occlusion_figure
+
+    figure = grip_occlusion_figure(model, table.assign(success=[True, False] * 2), patch_px=4)
+    expected = contacts_only(images[:1])[0, 1]
+    assert len(figure.axes) == 9  # 2 x 4 and a colour bar
+    assert figure.axes[0].get_title() == f"box\nsuccess\npredicted {expected:.2f}"
 
 
 class _Proba(BaseEstimator):

@@ -9,8 +9,10 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
+from sklearn.pipeline import Pipeline
 
 from classifiers.learners.grip_images import CHANNELS, GripImages
+from classifiers.learners.occlusion import grip_occlusion_maps
 from grip_env.drawing import save_figure
 
 #: Each channel's colour in a composite (RGB, added over a white ground).
@@ -89,6 +91,18 @@ def occlusion_figure(images: NDArray[np.floating], maps: NDArray[np.floating],
             ax.set_yticks([])
     fig.colorbar(shown, ax=axes[1, :].tolist(), shrink=0.8, label="drop in P(success)")
     return fig
+
+
+def grip_occlusion_figure(pipeline: Pipeline, grips: pd.DataFrame, **options: object) -> Figure:
+    """:func:`occlusion_figure` of ``grips`` under a fitted ``pipeline`` that starts by drawing
+    them (:func:`~classifiers.learners.occlusion.grip_occlusion_maps`, with ``options``), each
+    titled with its label and the pipeline's predicted success."""
+    images, maps = grip_occlusion_maps(pipeline, grips, **options)
+    predicted = np.asarray(pipeline.predict_proba(grips))[:, 1]
+    titles = [f"{_label(grip)}\npredicted {p:.2f}"
+              for (_, grip), p in zip(grips.iterrows(), predicted, strict=True)]
+    drawer = next(step for _, step in pipeline.steps if isinstance(step, GripImages))
+    return occlusion_figure(images, maps, titles, tuple(drawer.channels))
 
 
 def _panels(count: int, columns: int) -> Figure:
