@@ -242,8 +242,14 @@ def test_it_clones_and_composes_in_a_pipeline():
 
 
 # --------------------------------------------------------------------- the real dataset
-def test_the_standard_dataset_s_grips_have_images():
-    grips = load_with_contours(STANDARD).groupby("object_id").head(2)
+@pytest.fixture(scope="module")
+def standard_grips() -> pd.DataFrame:
+    """The standard dataset's grips with their contours."""
+    return load_with_contours(STANDARD)
+
+
+def test_the_standard_dataset_s_grips_have_images(standard_grips):
+    grips = standard_grips.groupby("object_id").head(2)
     cells = grips[CONTOUR_COLUMN].to_numpy()
     assert len({id(c) for c in cells}) == grips["object_id"].nunique() == 510
     images = GripImages().transform(grips)
@@ -252,6 +258,17 @@ def test_the_standard_dataset_s_grips_have_images():
     assert (dots.sum(axis=(1, 2)) >= 3).all() and (approach.sum(axis=(1, 2)) > 30).all()
     # the contacts lie on the outline: partly on the silhouette
     assert ((silhouette * dots).sum(axis=(1, 2)) > 0).all()
+    # the planner kept every finger's approach clear of the planned contour (sampled on its
+    # centre line and edges): away from the contacts the strips and the silhouette meet in a
+    # few partial pixels at most; drawn with the fingers on the wrong side, they cross it
+    near = dots > 0
+    for _ in range(2):
+        near = near | np.roll(near, 1, 1) | np.roll(near, -1, 1)
+        near = near | np.roll(near, 1, 2) | np.roll(near, -1, 2)
+    crossing = (silhouette * approach * ~near).sum(axis=(1, 2))
+    assert np.quantile(crossing, 0.99) <= 1.0 and crossing.max() <= 3.0
+    wrong_side = (silhouette[:, ::-1] * approach * ~near).sum(axis=(1, 2))
+    assert np.quantile(wrong_side, 0.9) > 10.0
 
 
 @pytest.mark.slow
@@ -320,15 +337,13 @@ def test_copies_of_a_contour_are_drawn_as_one_object():
 
 
 # ----------------------------------------------------------------------------- figures
-def test_the_figures_show_each_grip_with_its_label(tmp_path):
+def test_the_figures_show_each_grip_with_its_label(tmp_path, standard_grips):
     import json
 
     from classifiers.report.grip_images import choose_grips, grip_images_figure, occlusion_figure
     from classifiers.report.study_report import _grip_images
-    from grip_env.dataset import load
 
-    grips = load_with_contours(STANDARD)
-    chosen = choose_grips(grips, count=6, seed=3)
+    chosen = choose_grips(standard_grips, count=6, seed=3)
     assert chosen["success"].tolist() == [True] * 3 + [False] * 3
     assert chosen["object_id"].is_unique
     fig = grip_images_figure(chosen)
@@ -340,7 +355,7 @@ def test_the_figures_show_each_grip_with_its_label(tmp_path):
     assert len(occlusion_figure(images, maps, ["a", "b"]).axes) == 5  # 2 x 2 and a colour bar
     # the study report draws it from the dataset its data.json names, and skips it without one
     (tmp_path / "data.json").write_text(json.dumps({"dataset": str(Path(STANDARD).resolve())}))
-    table = load(STANDARD)
+    table = standard_grips.drop(columns=CONTOUR_COLUMN)
     path = _grip_images(table, tmp_path / "figures" / "grip_images.png", tmp_path)
     assert path is not None and path.stat().st_size > 10_000
     assert _grip_images(table, tmp_path / "x.png", tmp_path / "elsewhere") is None
