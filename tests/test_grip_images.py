@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from sklearn.base import BaseEstimator, clone
@@ -28,6 +29,7 @@ from classifiers.learners.grip_images import (
 )
 from classifiers.learners.occlusion import occlusion_maps, patch_masks
 from grip_env.columns import CONTACTS, FORCES
+from grip_env.objects import PlanarObject
 from grip_env.objects.shapes import ellipse, rectangle, star
 
 STANDARD = "grip_env/data/standard"
@@ -118,6 +120,12 @@ def test_the_raster_fills_the_polygon_s_area():
         filled = raster.mask.sum() * raster.cell_mm**2
         assert abs(filled - area) <= perimeter * raster.cell_mm
         assert not raster.mask[[0, -1]].any() and not raster.mask[:, [0, -1]].any()
+        # points agree with the exact polygon (shapely) but within a cell's diagonal of its edge
+        points = np.random.default_rng(0).uniform(-80, 80, size=(20_000, 2))
+        exact = PlanarObject(contour).contains(points)
+        edge = shapely.distance(shapely.LinearRing(contour), shapely.points(points))
+        far = edge > raster.cell_mm * math.sqrt(2)
+        np.testing.assert_array_equal(raster.contains(*points.T)[far], exact[far])
 
 
 # ------------------------------------------------------------------------- invariance
@@ -203,7 +211,7 @@ def test_missing_contours_are_named():
     with pytest.raises(ValueError, match=r"planned_contour.*attach_contours"):
         GripImages().fit(grips)
     assert GripImages(channels=("contacts",)).transform(grips).shape == (1, 1, 48, 48)
-    with pytest.raises(ValueError, match="no contour column"):
+    with pytest.raises(ValueError, match=r"no contour column \(perceived_contour or contour\)"):
         attach_contours(grips, pd.DataFrame({"object_id": ["box"], "area": [1.0]}))
     with pytest.raises(ValueError, match=r"1 objects .*\['box'\]"):
         attach_contours(grips, pd.DataFrame({"object_id": ["other"],
@@ -214,6 +222,19 @@ def test_missing_contours_are_named():
     broken = pd.DataFrame([_grip()]).assign(hand_yaw=np.nan)
     with pytest.raises(ValueError, match=r"\['hand_yaw'\]"):
         GripImages(channels=("contacts",)).transform(broken)
+
+
+def test_a_run_on_the_render_needs_every_perceived_contour():
+    objects = pd.DataFrame({"object_id": ["box", "unused"],
+                            "contour": [rectangle(40, 20).tolist(), None],
+                            "perceived_contour": [None, None]})
+    grips = pd.DataFrame([_grip()])
+    # an object without grips needs no contour; the true one serves a run on the true objects
+    assert attach_contours(grips, objects)[CONTOUR_COLUMN].iloc[0].shape == (4, 2)
+    with pytest.raises(ValueError, match="object 'box' has no perceived contour"):
+        attach_contours(grips, objects, on_render=True)
+    with pytest.raises(ValueError, match=r"no contour column \(perceived_contour\)"):
+        attach_contours(grips, objects.drop(columns="perceived_contour"), on_render=True)
 
 
 def test_the_perceived_contour_is_preferred_where_stored():

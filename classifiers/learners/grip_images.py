@@ -60,46 +60,52 @@ CACHE_BYTES = 256 * 2**20  #: the in-memory cache's bound (least recently used o
 _CHUNK = 256  #: grips drawn at once (bounds the sample arrays to a few tens of MB)
 
 
-def attach_contours(grips: pd.DataFrame, objects: pd.DataFrame) -> pd.DataFrame:
+def attach_contours(grips: pd.DataFrame, objects: pd.DataFrame,
+                    on_render: bool | None = None) -> pd.DataFrame:
     """``grips`` with :data:`CONTOUR_COLUMN`: each grip's planned contour, one read-only (V, 2)
     float64 array per object shared by all its grips (11,202 references, 510 arrays).
 
     The contour is the objects table's ``perceived_contour`` where it is stored (the grips were
     planned on the render), else its ``contour`` (they were planned on the true one).
+    ``on_render=True`` (the run planned on the render, as its manifest says) requires the
+    perceived contour of every object; None takes what is stored.
 
     Raises:
-        ValueError: the objects table has neither contour column or no ``object_id``, or an
-            object of ``grips`` is not in it.
+        ValueError: naming what is missing: the ``object_id`` column, the objects table's contour
+            columns, an object of ``grips`` in it, or an object's (perceived) contour.
     """
-    contours = object_contours(objects)
-    ids = grips["object_id"].astype(str) if "object_id" in grips else None
-    if ids is None:
-        raise ValueError("the grip table has no object_id column to attach contours by")
+    if "object_id" not in grips or "object_id" not in objects:
+        raise ValueError("grip images attach contours by object_id: the grip table or the "
+                         "objects table has no object_id column")
+    ids = grips["object_id"].astype(str)
+    wanted = objects[objects["object_id"].astype(str).isin(set(ids))]
+    contours = object_contours(wanted, on_render)
     missing = sorted(set(ids) - set(contours))
     if missing:
         raise ValueError(f"no contour for {len(missing)} objects of the grip table in the objects "
                          f"table (first: {missing[:3]})")
     names = list(contours)
     shared = np.empty(len(names), dtype=object)
-    for k, name in enumerate(names):
+    for k, name in enumerate(names):  # one cell per object, not per grip
         shared[k] = contours[name]
-    column = shared[pd.Index(names).get_indexer(ids)]
-    return grips.assign(**{CONTOUR_COLUMN: column})
+    return grips.assign(**{CONTOUR_COLUMN: shared[pd.Index(names).get_indexer(ids)]})
 
 
-def object_contours(objects: pd.DataFrame) -> dict[str, NDArray[np.float64]]:
-    """Object id -> the contour its grips were planned on (read-only (V, 2) mm)."""
-    if "object_id" not in objects:
-        raise ValueError("the objects table has no object_id column")
-    columns = [name for name in ("perceived_contour", "contour") if name in objects]
+def object_contours(objects: pd.DataFrame, on_render: bool | None = None
+                    ) -> dict[str, NDArray[np.float64]]:
+    """Object id -> the contour its grips were planned on (read-only (V, 2) mm); see
+    :func:`attach_contours`."""
+    accepted = ["perceived_contour"] if on_render else ["perceived_contour", "contour"]
+    columns = [name for name in accepted if name in objects]
     if not columns:
-        raise ValueError("the objects table has no contour column (perceived_contour or contour): "
+        raise ValueError(f"the objects table has no contour column ({' or '.join(accepted)}): "
                          "grip images need the contour each grip was planned on")
     found = {}
     for row in objects[["object_id", *columns]].itertuples(index=False):
         stored = [c for c in row[1:] if c is not None and len(c) >= 3]
         if not stored:
-            raise ValueError(f"object {row[0]!r} has no contour in the objects table")
+            which = "perceived contour" if on_render else "contour"
+            raise ValueError(f"object {row[0]!r} has no {which} in the objects table")
         contour = np.array([list(point) for point in stored[0]], dtype=np.float64)
         contour.flags.writeable = False
         found[str(row[0])] = contour
@@ -107,11 +113,15 @@ def object_contours(objects: pd.DataFrame) -> dict[str, NDArray[np.float64]]:
 
 
 def load_with_contours(path: str | Path, **load_options: Any) -> pd.DataFrame:
-    """A dataset's grip table (:func:`grip_env.dataset.load`) with :data:`CONTOUR_COLUMN`."""
+    """A dataset's grip table (:func:`grip_env.dataset.load`) with :data:`CONTOUR_COLUMN`, the
+    perceived contours required when the manifest says the run planned on the render."""
     from grip_env.dataset import load, read_objects
 
     grips = load(path, **load_options)
-    return attach_contours(grips, read_objects(Path(path)))
+    config = grips.attrs["manifest"].get("config", {})
+    on_render = (config.get("perception", {}).get("source") == "render"
+                 or bool(config.get("uncertainty", {}).get("perceived_contour")))
+    return attach_contours(grips, read_objects(Path(path)), on_render)
 
 
 class GripImages(TransformerMixin, BaseEstimator):
