@@ -32,7 +32,7 @@ from grip_env.columns import CONTACTS, FORCES
 from grip_env.objects import PlanarObject
 from grip_env.objects.shapes import ellipse, rectangle, star
 
-STANDARD = "grip_env/data/standard"
+STANDARD = str(Path(__file__).resolve().parents[1] / "grip_env" / "data" / "standard")
 
 
 def _grip(hand=(0.0, 0.0), yaw=math.pi / 2, contacts=None, forces=None, object_id="box"):
@@ -375,7 +375,7 @@ def test_the_figures_show_each_grip_with_its_label(tmp_path, standard_grips):
     maps = occlusion_maps(lambda x: x[:, 0].mean(axis=(1, 2)), images)
     assert len(occlusion_figure(images, maps, ["a", "b"]).axes) == 5  # 2 x 2 and a colour bar
     # the study report draws it from the dataset its data.json names, and skips it without one
-    (tmp_path / "data.json").write_text(json.dumps({"dataset": str(Path(STANDARD).resolve())}))
+    (tmp_path / "data.json").write_text(json.dumps({"dataset": STANDARD}))
     table = standard_grips.drop(columns=CONTOUR_COLUMN)
     path = _grip_images(table, tmp_path / "figures" / "grip_images.png", tmp_path)
     assert path is not None and path.stat().st_size > 10_000
@@ -443,3 +443,35 @@ class _Proba(BaseEstimator):
 
     def predict_proba(self, images):
         return self.function(images)
+
+
+def test_the_cache_keeps_within_its_bound():
+    cache = gi._ImageCache(max_bytes=250)
+    for k in range(5):
+        cache.put(bytes([k]), np.full(100, k, dtype=np.uint8))
+    assert list(cache.entries) == [bytes([3]), bytes([4])] and cache.bytes == 200
+    assert cache.get(bytes([3]))[0] == 3 and cache.get(bytes([0])) is None
+    cache.put(bytes([5]), np.zeros(100, dtype=np.uint8))  # 4 was used least recently
+    assert list(cache.entries) == [bytes([3]), bytes([5])]
+
+
+_DRAW_IN_ANOTHER_PROCESS = """
+import hashlib, sys
+from classifiers.learners.grip_images import GripImages, load_with_contours
+grips = load_with_contours(sys.argv[1]).iloc[::97]
+print(hashlib.sha256(GripImages().transform(grips).tobytes()).hexdigest())
+"""
+
+
+def test_another_process_draws_the_same_bits(standard_grips):
+    import hashlib
+    import os
+    import subprocess
+    import sys
+
+    clear_image_cache()
+    here = hashlib.sha256(GripImages().transform(standard_grips.iloc[::97]).tobytes()).hexdigest()
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    there = subprocess.run([sys.executable, "-c", _DRAW_IN_ANOTHER_PROCESS, STANDARD], env=env,
+                           capture_output=True, text=True, check=True).stdout.strip()
+    assert there == here

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import threading
 from collections import OrderedDict
 from collections.abc import Sequence
 from pathlib import Path
@@ -260,30 +261,37 @@ def _checked_contour(cell: Any, row: int) -> NDArray[np.float64]:
 
 # ------------------------------------------------------------------------------ the cache
 class _ImageCache:
-    """Least-recently-used images of object groups, bounded by :data:`CACHE_BYTES`."""
+    """Least-recently-used images of object groups, bounded by :data:`CACHE_BYTES`; safe to
+    share between threads."""
 
     def __init__(self, max_bytes: int) -> None:
         self.max_bytes = max_bytes
         self.entries: OrderedDict[bytes, NDArray[np.uint8]] = OrderedDict()
         self.bytes = 0
+        self.lock = threading.Lock()
 
     def get(self, key: bytes) -> NDArray[np.uint8] | None:
-        found = self.entries.get(key)
-        if found is not None:
-            self.entries.move_to_end(key)
-        return found
+        with self.lock:
+            found = self.entries.get(key)
+            if found is not None:
+                self.entries.move_to_end(key)
+            return found
 
     def put(self, key: bytes, counts: NDArray[np.uint8]) -> None:
         counts.flags.writeable = False
-        self.entries[key] = counts
-        self.bytes += counts.nbytes
-        while self.bytes > self.max_bytes and len(self.entries) > 1:
-            _, dropped = self.entries.popitem(last=False)
-            self.bytes -= dropped.nbytes
+        with self.lock:
+            if key in self.entries:
+                return
+            self.entries[key] = counts
+            self.bytes += counts.nbytes
+            while self.bytes > self.max_bytes and len(self.entries) > 1:
+                _, dropped = self.entries.popitem(last=False)
+                self.bytes -= dropped.nbytes
 
     def clear(self) -> None:
-        self.entries.clear()
-        self.bytes = 0
+        with self.lock:
+            self.entries.clear()
+            self.bytes = 0
 
 
 _CACHE = _ImageCache(CACHE_BYTES)
