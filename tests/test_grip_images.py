@@ -336,8 +336,12 @@ def test_occlusion_reads_predict_proba_and_checks_its_input():
                                occlusion_maps(_region_model, images, fill=0.0))
     np.testing.assert_array_equal(occlusion_maps(_region_model, images, fill=[0.0]),
                                   occlusion_maps(_region_model, images, fill=0.0))
-    # the default grey is each channel's mean: on uniform images hiding changes nothing
+    # the default grey is each channel's mean over its image: on a uniform image hiding changes
+    # nothing, and an image's map is the same alone as among others
     assert not occlusion_maps(_region_model, images).any()
+    mixed = np.random.default_rng(1).uniform(size=(3, 1, 32, 32)).astype(np.float32)
+    np.testing.assert_array_equal(occlusion_maps(_region_model, mixed)[1:2],
+                                  occlusion_maps(_region_model, mixed[1:2]))
     with pytest.raises(ValueError, match="fill"):
         occlusion_maps(_region_model, images, fill="grey")
     with pytest.raises(ValueError, match="patch_px"):

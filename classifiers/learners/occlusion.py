@@ -27,8 +27,9 @@ def occlusion_maps(model: ImageModel, images: NDArray[np.floating], patch_px: in
     (n, H, W); positive where hiding the pixels lowers the score.
 
     The grey is ``fill``: one value for every channel, one per channel, or ``"mean"``, each
-    channel's mean over ``images``. On these sparse pictures a mid grey of 0.5 would add half a
-    contact wherever it lands; the mean adds as much as an average pixel holds.
+    channel's mean over the image itself (so an image's map does not depend on the others). On
+    these sparse pictures a mid grey of 0.5 would add half a contact wherever it lands; the mean
+    adds as much as the image's average pixel holds.
 
     Squares start every ``stride_px`` pixels, and a last one at each far edge, so every pixel is
     hidden by at least one. The model sees at most ``batch_size`` images a call.
@@ -53,7 +54,8 @@ def occlusion_maps(model: ImageModel, images: NDArray[np.floating], patch_px: in
     drops = np.empty((len(images), len(hidden)))
     for start in range(0, len(images), per_image):
         part = images[start:start + per_image]
-        occluded = np.where(hidden[None, :, None], grey[:, None, None], part[:, None])
+        shade = grey[start:start + len(part), None, :, None, None]
+        occluded = np.where(hidden[None, :, None], shade, part[:, None])
         scores = _batched(score, occluded.reshape(-1, *images.shape[1:]), batch_size)
         drops[start:start + len(part)] = base[start:start + len(part), None] - scores.reshape(
             len(part), len(hidden))
@@ -115,13 +117,13 @@ def patch_masks(height: int, width: int, patch_px: int, stride_px: int) -> NDArr
 
 
 def _grey(fill: float | Sequence[float] | str, images: NDArray[np.float32]) -> NDArray[np.float32]:
-    """(C,) the grey of each channel."""
+    """(n, C) the grey of each image's channels."""
     if isinstance(fill, str):
         if fill != "mean":
             raise ValueError(f"fill must be a number, one per channel or 'mean', got {fill!r}")
-        return images.mean(axis=(0, 2, 3), dtype=np.float64).astype(np.float32)
+        return images.mean(axis=(2, 3), dtype=np.float64).astype(np.float32)
     grey = np.broadcast_to(np.asarray(fill, dtype=np.float32), images.shape[1:2])
-    return np.ascontiguousarray(grey)
+    return np.ascontiguousarray(np.broadcast_to(grey, images.shape[:2]))
 
 
 def _starts(size: int, patch_px: int, stride_px: int) -> NDArray[np.intp]:
