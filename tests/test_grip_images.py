@@ -350,6 +350,19 @@ def test_occlusion_reads_predict_proba_and_checks_its_input():
         occlusion_maps(_region_model, images[0])
 
 
+def test_a_contour_column_read_from_parquet_draws_the_same(tmp_path):
+    """A table written with its contours and read back (cells: object arrays of points)."""
+    table = _table([_grip(yaw=0.2), _grip(yaw=1.0)], {"box": star(5, 50, 20)})
+    as_lists = table.assign(**{CONTOUR_COLUMN: [c.tolist() for c in table[CONTOUR_COLUMN]]})
+    as_lists.to_parquet(tmp_path / "grips.parquet")  # Arrow writes lists, not 2-D arrays
+    read = pd.read_parquet(tmp_path / "grips.parquet")
+    assert read[CONTOUR_COLUMN].iloc[0].dtype == object
+    assert GripImages().transform(read).tobytes() == GripImages().transform(table).tobytes()
+    broken = read.assign(**{CONTOUR_COLUMN: [[[0.0, 0.0]], [[1.0, 2.0, 3.0]]]})
+    with pytest.raises(ValueError, match="planned_contour of row 0 is not a contour"):
+        GripImages().transform(broken)
+
+
 def test_copies_of_a_contour_are_drawn_as_one_object():
     contour = star(5, 50, 20)
     table = pd.DataFrame([_grip(yaw=0.1 * k) for k in range(4)]).assign(

@@ -69,7 +69,9 @@ def attach_contours(grips: pd.DataFrame, objects: pd.DataFrame,
     The contour is the objects table's ``perceived_contour`` where it is stored (the grips were
     planned on the render), else its ``contour`` (they were planned on the true one).
     ``on_render=True`` (the run planned on the render, as its manifest says) requires the
-    perceived contour of every object; None takes what is stored.
+    perceived contour of every object; None takes what is stored. The column is for memory:
+    Arrow writes its cells as lists (``[c.tolist() for c in column]``), not as 2-D arrays, and
+    such a table read back draws the same images.
 
     Raises:
         ValueError: naming what is missing: the ``object_id`` column, the objects table's contour
@@ -248,8 +250,11 @@ def _groups_of(keys: NDArray[Any]) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
 
 
 def _checked_contour(cell: Any, row: int) -> NDArray[np.float64]:
+    """A cell as a (V, 2) float64 contour: an array, a list of [x, y] or, as pandas reads
+    Parquet, an object array of points; ValueError naming the row otherwise."""
     try:
-        contour = np.ascontiguousarray(cell, dtype=np.float64)
+        points = list(cell) if isinstance(cell, np.ndarray) and cell.dtype == object else cell
+        contour = np.ascontiguousarray(points, dtype=np.float64)
     except (TypeError, ValueError):
         contour = np.empty((0,))
     if contour.ndim != 2 or contour.shape[1] != 2 or len(contour) < 3 \
