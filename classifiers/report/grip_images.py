@@ -77,18 +77,20 @@ def occlusion_figure(images: NDArray[np.floating], maps: NDArray[np.floating],
                      titles: Sequence[str], channels: Sequence[str] = CHANNELS) -> Figure:
     """Each image beside its occlusion map (drop in predicted success when a patch is greyed):
     red where hiding the pixels lowers the prediction, blue where it raises it."""
-    fig = Figure(figsize=(2.2 * len(images), 4.6))
+    fig = Figure(figsize=(2.6 * len(images) + 0.8, 5.4), layout="constrained")
     axes = fig.subplots(2, len(images), squeeze=False)
     limit = float(np.max(np.abs(maps))) or 1.0
     for k, (image, drop, title) in enumerate(zip(images, maps, titles, strict=True)):
         axes[0, k].imshow(composite(image, channels), interpolation="nearest")
-        axes[0, k].set_title(title, fontsize=7)
+        axes[0, k].set_title(title, fontsize=6.5)
         shown = axes[1, k].imshow(drop, cmap="RdBu_r", vmin=-limit, vmax=limit)
         axes[1, k].imshow(image[list(channels).index("silhouette")] if "silhouette" in channels
                           else np.zeros(drop.shape), cmap="Greys", alpha=0.15)
         for ax in axes[:, k]:
             ax.set_xticks([])
             ax.set_yticks([])
+    axes[0, 0].set_ylabel("the grip's image", fontsize=8)
+    axes[1, 0].set_ylabel("occlusion map", fontsize=8)
     fig.colorbar(shown, ax=axes[1, :].tolist(), shrink=0.8, label="drop in P(success)")
     return fig
 
