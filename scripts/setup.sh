@@ -17,6 +17,11 @@ if [ ! -f "$stamp" ] || [ "$(cat "$stamp")" != "$want" ]; then
     .venv/bin/python -m pip install --quiet --upgrade pip
     .venv/bin/python -m pip install --quiet torch==2.13.0
     .venv/bin/python -m pip install --quiet -e ".[dev,cluster,docs,mujoco]"
+    # the offline extra (pyproject) without d3rlpy's pins of gymnasium==1.0.0 and gym: its
+    # other requirements, then d3rlpy itself with --no-deps (it runs on gymnasium 1.4)
+    .venv/bin/python -m pip install --quiet "minari[hdf5]>=0.5.4" "gym==0.26.2" structlog \
+        colorama dataclasses-json
+    .venv/bin/python -m pip install --quiet --no-deps "d3rlpy>=2.8.1"
     echo "$want" > "$stamp"
 fi
 )
