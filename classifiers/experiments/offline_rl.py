@@ -16,6 +16,7 @@ only). Beside ``NAME.d3`` it writes ``NAME.json``: the objects of the export it 
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -116,32 +117,42 @@ def train_offline(
 ) -> Path:
     """Train ``algorithm`` on the Minari export ``dataset_id`` for ``steps`` gradient steps
     (seeded, CPU); write ``out`` (a ``.d3`` file) and its record ``out.json``; return ``out``."""
-    out = Path(out)
-    if out.suffix != SUFFIX:
-        raise ValueError(f"the policy file must end in {SUFFIX}, got {out}")
+    return train_offline_runs(dataset_id, [Path(out)], [seed], algorithm=algorithm, steps=steps,
+                              batch_size=batch_size, learning_rate=learning_rate)[0]
+
+
+def train_offline_runs(
+    dataset_id: str, outs: Sequence[str | Path], seeds: Sequence[int], *, algorithm: str = "cql",
+    steps: int = 5000, batch_size: int = 256, learning_rate: float = 3e-4,
+) -> list[Path]:
+    """:func:`train_offline` once per seed (``outs[i]`` for ``seeds[i]``), the export read once."""
+    paths = [Path(out) for out in outs]
+    if len(paths) != len(seeds) or not paths:
+        raise ValueError(f"give one policy file per seed, got {len(paths)} for {len(seeds)}")
+    for path in paths:
+        if path.suffix != SUFFIX:
+            raise ValueError(f"the policy file must end in {SUFFIX}, got {path}")
     if steps < 1:
         raise ValueError(f"steps must be >= 1, got {steps}")
+    make_algorithm(algorithm, batch_size, learning_rate)  # checks the name before the long read
     d3rlpy = require_d3rlpy()
     dataset, record = load_export(dataset_id)
     data = transitions(dataset)
-    space = dataset.storage.metadata["action_space"]
-    d3rlpy.seed(seed)
-    import torch
-
-    torch.manual_seed(seed)
-    mdp = d3rlpy.dataset.MDPDataset(data.observations, data.actions[:, None], data.rewards,
-                                    data.terminals, data.timeouts,
-                                    action_space=d3rlpy.ActionSpace.DISCRETE,
-                                    action_size=int(space.n))  # fmt: skip
-    algo = make_algorithm(algorithm, batch_size, learning_rate)
-    algo.fit(mdp, n_steps=steps, n_steps_per_epoch=steps, show_progress=False,
-             logger_adapter=d3rlpy.logging.NoopAdapterFactory(), save_interval=steps + 1)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    algo.save(str(out))
-    out.with_suffix(".json").write_text(json.dumps(
-        _record(dataset_id, dataset, record, data, algorithm, steps, seed, batch_size,
-                learning_rate), indent=2))  # fmt: skip
-    return out
+    for path, seed in zip(paths, seeds, strict=True):
+        d3rlpy.seed(seed)
+        mdp = d3rlpy.dataset.MDPDataset(
+            data.observations, data.actions[:, None], data.rewards, data.terminals, data.timeouts,
+            action_space=d3rlpy.ActionSpace.DISCRETE,
+            action_size=int(dataset.storage.metadata["action_space"].n))  # fmt: skip
+        algo = make_algorithm(algorithm, batch_size, learning_rate)
+        algo.fit(mdp, n_steps=steps, n_steps_per_epoch=steps, show_progress=False,
+                 logger_adapter=d3rlpy.logging.NoopAdapterFactory(), save_interval=steps + 1)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        algo.save(str(path))
+        path.with_suffix(".json").write_text(json.dumps(
+            _record(dataset_id, dataset, record, data, algorithm, steps, seed, batch_size,
+                    learning_rate), indent=2))  # fmt: skip
+    return paths
 
 
 def _record(dataset_id: str, dataset: Any, record: dict[str, Any], data: Transitions,
@@ -165,3 +176,28 @@ def _record(dataset_id: str, dataset: Any, record: dict[str, Any], data: Transit
                    "seed": record.get("seed"), "dataset_sha256": record.get("dataset_sha256"),
                    "total_steps": int(dataset.total_steps)},
     }  # fmt: skip
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    """``python -m classifiers.experiments.offline_rl ID OUT_DIR --seeds 0 1 2``: one policy
+    ``OUT_DIR/<algorithm>_s<seed>.d3`` (and its ``.json``) per seed."""
+    import argparse
+
+    parser = argparse.ArgumentParser(description=main.__doc__)
+    parser.add_argument("dataset_id", help="the Minari export (grip-env export minari --id)")
+    parser.add_argument("out_dir", type=Path)
+    parser.add_argument("--algorithm", choices=ALGORITHMS, default="cql")
+    parser.add_argument("--steps", type=int, default=5000, help="gradient steps")
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0])
+    parser.add_argument("--batch-size", type=int, default=256)
+    parser.add_argument("--learning-rate", type=float, default=3e-4)
+    args = parser.parse_args(argv)
+    outs = [args.out_dir / f"{args.algorithm}_s{seed}{SUFFIX}" for seed in args.seeds]
+    for path in train_offline_runs(args.dataset_id, outs, args.seeds, algorithm=args.algorithm,
+                                   steps=args.steps, batch_size=args.batch_size,
+                                   learning_rate=args.learning_rate):  # fmt: skip
+        print(f"wrote {path} and {path.with_suffix('.json')}")
+
+
+if __name__ == "__main__":
+    main()

@@ -66,8 +66,9 @@ def benchmark(
     A method trained on a held-out object (by its record: a saved model's trained_on, NAME.json
     beside an agent's NAME.zip or a d3rlpy NAME.d3, an RL Zoo run's args.yml, a function's
     trained_on) is refused; one without a record is scored and marked. The leaderboard lists
-    the method's training budget (environment steps, or the dataset's transitions). Writes OUT/leaderboard.json, OUT/leaderboard.md
-    and the performance-profile and attempts figures; bad input writes nothing (exit 2).
+    the method's training budget (environment steps, or the dataset's transitions). Writes
+    OUT/leaderboard.json, OUT/leaderboard.md and the performance-profile and attempts figures;
+    bad input writes nothing (exit 2).
     """
     with stop_on_signals(f"rerun the same command to redo {out}"), user_errors():
         from grip_env.config import load_config

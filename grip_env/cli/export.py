@@ -59,7 +59,8 @@ def export(
     ] = None,
     author: Annotated[str, typer.Option(help="the dataset's author (Minari metadata)")] = (
         "The grip-env authors"),
-    overwrite: Annotated[bool, typer.Option(help="replace a Minari dataset of the same id")] = False,
+    overwrite: Annotated[bool, typer.Option(
+        help="replace a Minari dataset of the same id")] = False,
 ) -> None:
     """Log EPISODES episodes of every object of DATA's split in GripSelect-v0 (replay) with a
     seeded behaviour policy and write them as the Minari dataset ID: observations are the

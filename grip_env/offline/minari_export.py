@@ -113,7 +113,8 @@ def check_dataset_id(dataset_id: str, overwrite: bool) -> None:
                          f"more), e.g. grip-env/standard-uniform-v0")
     if dataset_exists(dataset_id) and not overwrite:
         raise ValueError(f"Minari dataset {dataset_id!r} already exists under "
-                         f"{_datasets_root()}: give --overwrite to replace it, or another id")  # fmt: skip
+                         f"{_datasets_root()}: give --overwrite to replace it, or another "
+                         f"id")  # fmt: skip
 
 
 def export_minari(
@@ -169,7 +170,7 @@ def collect_episodes(env: Any, plan: ExportPlan, objects: Sequence[str]) -> list
     for _ in range(plan.episodes_per_object):
         for object_id in objects:
             seed = plan.seed if first else None
-            observation, info = env.reset(seed=seed, options={"object_id": object_id})
+            observation, _ = env.reset(seed=seed, options={"object_id": object_id})
             first = False
             steps = _run_episode(env, plan.policy, rng, observation, index[object_id])
             buffers.append(EpisodeBuffer(id=len(buffers), seed=seed,

@@ -5,9 +5,9 @@
 
 Modules: ``split`` (the fixed, versioned standard split, or a seeded split of a dataset's own
 objects), ``methods`` (baselines and loaders of SB3 zips, d3rlpy policies, saved models and
-``module:function`` entry points, observation policies among them, as score tables), ``outputs`` (what a method returns, as scores),
-``provenance`` (what a method was trained on: a run that saw a held-out object is refused;
-its training budget),
+``module:function`` entry points, observation policies among them, as score tables),
+``outputs`` (what a method returns, as scores), ``provenance`` (what a method was trained on: a
+run that saw a held-out object is refused; its training budget),
 ``selection`` (exact per-object metrics), ``aggregate`` (rliable's IQM, stratified bootstrap,
 probability of improvement, performance profiles), ``leaderboard`` (tables, verdicts, files),
 ``plots``.
