@@ -161,7 +161,7 @@ def _record(dataset_id: str, dataset: Any, record: dict[str, Any], data: Transit
     from classifiers.experiments.benchmark.provenance import RECORD_KEY, training_record
 
     d3rlpy = require_d3rlpy()
-    budget = {"transitions": int(len(data.actions)), "episodes": data.episodes,
+    budget = {"transitions": len(data.actions), "episodes": data.episodes,
               "gradient_steps": steps, "batch_size": batch_size,
               "source": f"Minari dataset {dataset_id}"}  # fmt: skip
     return {
