@@ -50,8 +50,14 @@ def flat_observation(features: NDArray[Any], mask: NDArray[Any]) -> NDArray[np.f
 
 def require_d3rlpy() -> Any:
     """The ``d3rlpy`` module, or ValueError naming the extra to install."""
+    import contextlib
+    import io
+
     try:
-        import d3rlpy
+        # d3rlpy 2.8.1 imports the old gym, which prints a banner urging Gymnasium (d3rlpy uses
+        # Gymnasium here), and logs its Shimmy registration: kept off the command's output
+        with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
+            import d3rlpy
     except ImportError as exc:
         raise ValueError(f"the offline baseline needs {EXTRA_HINT} ({exc})") from None
     return d3rlpy
