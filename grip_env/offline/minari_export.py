@@ -136,9 +136,10 @@ def export_minari(
     eval_env = gymnasium.make(ENV_ID, **plan.env_kwargs("test" if plan.split == "train"
                                                         else plan.split))  # fmt: skip
     try:
-        objects = tuple(o for o, s in zip(*_objects_and_sets(env), strict=True) if s.count)
+        ids, sets = _objects_and_sets(env)
+        objects = tuple(o for o, found in zip(ids, sets, strict=True) if found.count)
         episodes = collect_episodes(env, plan, objects)
-        train_refs = reference_returns(_objects_and_sets(env)[1], env.unwrapped.max_attempts)
+        train_refs = reference_returns(sets, env.unwrapped.max_attempts)
         low, high = reference_returns(_objects_and_sets(eval_env)[1],
                                       eval_env.unwrapped.max_attempts)  # fmt: skip
         record = _record(plan, objects, train_refs, dataset_sha256, code_version)
