@@ -54,8 +54,8 @@ def require_d3rlpy() -> Any:
     import io
 
     try:
-        # d3rlpy 2.8.1 imports the old gym, which prints a banner urging Gymnasium (d3rlpy uses
-        # Gymnasium here), and logs its Shimmy registration: kept off the command's output
+        # d3rlpy logs its Shimmy registration on import (and the old gym it imports prints a
+        # banner when gym_notices is installed): kept off the command's output
         with contextlib.redirect_stderr(io.StringIO()), contextlib.redirect_stdout(io.StringIO()):
             import d3rlpy
     except ImportError as exc:

@@ -1,7 +1,7 @@
 """Episodes of ``GripSelect-v0`` (replay) written as a Minari dataset, for offline RL.
 
->>> from grip_env.offline import export_minari
->>> dataset = export_minari("grip-env/standard-uniform-v0", episodes_per_object=10)
+>>> from grip_env.offline import ExportPlan, export_minari
+>>> dataset = export_minari(ExportPlan("grip-env/standard-uniform-v0", episodes_per_object=10))
 
 Every episode is one object of the dataset's ``split`` (``"train"`` by default: the training
 objects of the benchmark's standard split, so that an offline learner never sees a held-out
