@@ -164,7 +164,7 @@ def test_cql_trained_on_an_export_is_benchmarked_with_its_budget(
 def test_a_policy_trained_on_held_out_objects_is_refused(
     generated_dataset_dir: Path, minari_root: Path, tmp_path: Path
 ):
-    from classifiers.experiments.offline_rl import train_offline
+    from classifiers.experiments.offline_rl import main, train_offline
 
     _export(generated_dataset_dir, "grip-test/all-v0", "--split", "all")
     path = train_offline("grip-test/all-v0", tmp_path / "leaky.d3", steps=5, batch_size=16)
@@ -174,7 +174,10 @@ def test_a_policy_trained_on_held_out_objects_is_refused(
     assert not out.exists()
     # a split of 32 candidates: the policy's 64 actions do not fit
     (tmp_path / "k32.yaml").write_text("selector:\n  max_candidates: 32\n")
-    path = train_offline("grip-test/all-v0", tmp_path / "fits.d3", steps=5, batch_size=16)
+    main(["grip-test/all-v0", str(tmp_path / "cli"), "--steps", "5", "--batch-size", "16",
+          "--seeds", "1"])  # the module's command line
+    path = tmp_path / "cli" / "cql_s1.d3"
+    assert json.loads(path.with_suffix(".json").read_text())["seed"] == 1
     path.with_suffix(".json").unlink()  # no record: scored and marked, but it does not fit
     assert_refused(*cli("benchmark", path, "--data", generated_dataset_dir, "--out", out,
                         "--config", tmp_path / "k32.yaml"), "do not match")  # fmt: skip
