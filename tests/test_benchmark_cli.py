@@ -224,6 +224,9 @@ def test_skops_model_and_sb3_zips(data: Path, tmp_path: Path) -> None:
                        "--reps", 200)  # fmt: skip
     assert code == 0, output
     assert board(tmp_path / "ppo")["methods"]["ppo"]["runs"] == 1
+    # the training budget: an SB3 zip's environment steps (untrained: 0); a bare skops: none
+    assert board(tmp_path / "ppo")["methods"]["ppo"]["budget"]["environment_steps"] == 0
+    assert board(tmp_path / "sk")["methods"]["logreg"]["budget"]["text"] == "not recorded"
 
 
 def _ppo_zip(folder: Path) -> Path:

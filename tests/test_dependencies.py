@@ -19,7 +19,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("grip_env", "classifiers")
 #: Imports allowed from an optional extra only (the code imports them lazily and says which
 #: extra to install when they are missing).
-OPTIONAL_IMPORTS = {"ray": "cluster", "mujoco": "mujoco"}
+OPTIONAL_IMPORTS = {"ray": "cluster", "mujoco": "mujoco", "minari": "offline", "d3rlpy": "offline"}
 
 
 def _normalised(name: str) -> str:

@@ -47,9 +47,11 @@ def verdict_sentence(board: Mapping[str, Any]) -> str:
 def leaderboard_frames(board: Mapping[str, Any]) -> tuple[pd.DataFrame, pd.DataFrame]:
     """(main table, attempts table) as shown in leaderboard.md and the report."""
     main, attempts = [], []
+    budgets = any(isinstance(row.get("budget"), Mapping) for row in board["methods"].values())
     for name, row in board["methods"].items():
+        budget = {"training budget": _budget(name, row)} if budgets else {}
         main.append({
-            "method": name, "runs": row["runs"],
+            "method": name, "runs": row["runs"], **budget,
             "top-1 success": _ci({"estimate": row["success"], "ci": row["success_ci"]}),
             "success - best_qc": _ci(row["success_difference_vs_reference"]),
             "top-1 robustness (g)": _f(row["robustness"], 1), "regret": _f(row["regret"]),
@@ -63,6 +65,13 @@ def leaderboard_frames(board: Mapping[str, Any]) -> tuple[pd.DataFrame, pd.DataF
                          _f(row[f"success_at_{k}"]) for k in range(1, _attempts(board) + 1)},
                          "expected attempts (budget 5)": _f(row["attempts"])})  # fmt: skip
     return pd.DataFrame(main), pd.DataFrame(attempts)
+
+
+def _budget(name: str, row: Mapping[str, Any]) -> str:
+    """A method's training budget in words (a baseline: none; the oracle reads the outcomes)."""
+    if isinstance(row.get("budget"), Mapping):
+        return str(row["budget"]["text"])
+    return "none (reads the outcomes)" if name == "oracle" else "none (analytic)"
 
 
 def leaderboard_markdown(board: Mapping[str, Any]) -> str:

@@ -59,7 +59,7 @@ def _root(
 
 _COMMAND_MODULES = (
     "show", "candidates", "study", "generate", "validate", "train", "ablate", "select",
-    "calibrate", "predict", "benchmark", "power",
+    "calibrate", "predict", "benchmark", "power", "export",
 )
 
 

@@ -27,9 +27,11 @@ def benchmark(
     methods: Annotated[
         list[str],
         typer.Argument(help="the method: an SB3 .zip (MaskablePPO or PPO on GripSelect-v0), a "
+                            "d3rlpy .d3 (an offline policy trained on a Minari export), a "
                             "model grip-env train saved (NAME.json or its .skops, .pt, .txt), a "
-                            ".skops model, or module:function (or module:Class); several = runs "
-                            "(seeds) of one method", show_default=False),
+                            ".skops model, or module:function (or module:Class, or module:obj "
+                            "with predict(observation)); several = runs (seeds) of one method",
+                            show_default=False),
     ],
     out: OutputDir,
     data: DatasetDir = STANDARD_DATA,
@@ -59,10 +61,14 @@ def benchmark(
     A function method takes one object's candidate table (outcomes removed, rows in slot order)
     and returns a score per row (higher = pick first) or one row index; with a `seed` argument it
     is called once per training seed 0..4; `module` is imported from the current folder first.
+    An object with predict(observation) (an SB3-style policy) gets each object's GripSelect-v0
+    observation and returns a slot; a declared action_space other than the split's is refused.
     A method trained on a held-out object (by its record: a saved model's trained_on, NAME.json
-    beside an agent's NAME.zip, an RL Zoo run's args.yml, a function's trained_on) is refused;
-    one without a record is scored and marked. Writes OUT/leaderboard.json, OUT/leaderboard.md
-    and the performance-profile and attempts figures; bad input writes nothing (exit 2).
+    beside an agent's NAME.zip or a d3rlpy NAME.d3, an RL Zoo run's args.yml, a function's
+    trained_on) is refused; one without a record is scored and marked. The leaderboard lists
+    the method's training budget (environment steps, or the dataset's transitions). Writes
+    OUT/leaderboard.json, OUT/leaderboard.md and the performance-profile and attempts figures;
+    bad input writes nothing (exit 2).
     """
     with stop_on_signals(f"rerun the same command to redo {out}"), user_errors():
         from grip_env.config import load_config
@@ -99,6 +105,8 @@ def benchmark(
         typer.echo(f"caution: {caution}")
     if row.get("training"):
         typer.echo(f"{label}: {row['training']['note']}")
+    if row.get("budget"):
+        typer.echo(f"{label}: training budget {row['budget']['text']}")
     typer.echo(f"wrote {written[0]} and {written[-1]}")
 
 
@@ -106,7 +114,7 @@ def _default_name(spec: str) -> str:
     from classifiers.experiments.benchmark import MODEL_SUFFIXES
 
     path = Path(spec)
-    if path.suffix.lower() in (".zip", *MODEL_SUFFIXES):
+    if path.suffix.lower() in (".zip", ".d3", *MODEL_SUFFIXES):
         return path.stem
     if path.name and path.with_name(f"{path.name}.json").is_file():  # a saved model's bare name
         return path.name

@@ -4,9 +4,10 @@
 >>> board = benchmark_method(table, ["mine.zip"], "mine", config)   # leaderboard dict
 
 Modules: ``split`` (the fixed, versioned standard split, or a seeded split of a dataset's own
-objects), ``methods`` (baselines and loaders of SB3 zips, saved models and ``module:function``
-entry points, as score tables), ``outputs`` (what a method returns, as scores),
-``provenance`` (what a method was trained on: a run that saw a held-out object is refused),
+objects), ``methods`` (baselines and loaders of SB3 zips, d3rlpy policies, saved models and
+``module:function`` entry points, observation policies among them, as score tables),
+``outputs`` (what a method returns, as scores), ``provenance`` (what a method was trained on: a
+run that saw a held-out object is refused; its training budget),
 ``selection`` (exact per-object metrics), ``aggregate`` (rliable's IQM, stratified bootstrap,
 probability of improvement, performance profiles), ``leaderboard`` (tables, verdicts, files),
 ``plots``.
@@ -23,7 +24,10 @@ import pandas as pd
 
 from grip_env.config import Config
 
-METHOD_KINDS = ("sb3 zip", "saved model", "module:function")
+METHOD_KINDS = ("sb3 zip", "saved model", "module:function", "d3rlpy policy")
+#: A d3rlpy algorithm's file (``save``), e.g. the offline baseline of
+#: :mod:`classifiers.experiments.offline_rl`.
+D3RLPY_SUFFIX = ".d3"
 #: The files of a saved model (``grip-env train``'s ``NAME.json`` and what it names, or a bare
 #: ``.skops``): the suffixes ``grip-env predict`` takes.
 MODEL_SUFFIXES = (".skops", ".json", ".pt", ".txt")
@@ -36,16 +40,17 @@ def method_kind(spec: str) -> str:
     (:data:`MODEL_SUFFIXES`, or its name without one) or an entry point ``module:function``."""
     path = Path(spec)
     suffix = path.suffix.lower()
-    if suffix == ".zip" or suffix in MODEL_SUFFIXES:
+    if suffix in (".zip", D3RLPY_SUFFIX, *MODEL_SUFFIXES):
         if not path.is_file():
             raise ValueError(f"method file not found: {spec}")
-        return METHOD_KINDS[0] if suffix == ".zip" else METHOD_KINDS[1]
+        return {".zip": METHOD_KINDS[0], D3RLPY_SUFFIX: METHOD_KINDS[3]}.get(suffix,
+                                                                             METHOD_KINDS[1])
     if path.name and path.with_name(f"{path.name}.json").is_file():  # a bare name, as predict
         return METHOD_KINDS[1]
     if ":" in spec and not path.exists():
         return METHOD_KINDS[2]
-    raise ValueError(f"a method is an SB3 .zip, a saved model (NAME.json or its .skops, .pt, "
-                     f".txt) or 'module:function', got {spec!r}")  # fmt: skip
+    raise ValueError(f"a method is an SB3 .zip, a d3rlpy .d3, a saved model (NAME.json or its "
+                     f".skops, .pt, .txt) or 'module:function', got {spec!r}")  # fmt: skip
 
 
 def benchmark_method(
@@ -101,7 +106,20 @@ def benchmark_method(
                                f"seed {seed}): try another --seed or a dataset with more "
                                f"objects") from None  # fmt: skip
     board["methods"][name]["training"] = training
+    board["methods"][name]["budget"] = _budget(kind, specs)
     return board
+
+
+def _budget(kind: str, specs: Sequence[str]) -> dict[str, Any]:
+    """The method's training budget as its runs record it (the first run's when all agree)."""
+    from classifiers.experiments.benchmark.methods import load_entry_point
+    from classifiers.experiments.benchmark.provenance import function_budget, recorded_budget
+
+    found = [function_budget(load_entry_point(s)) if kind == METHOD_KINDS[2]
+             else recorded_budget(Path(s)) for s in specs]  # fmt: skip
+    texts = list(dict.fromkeys(b["text"] for b in found))
+    return {**found[0], "text": texts[0] if len(texts) == 1 else "; ".join(texts),
+            "runs": found}  # fmt: skip
 
 
 def _training(kind: str, specs: Sequence[str], held_out: Sequence[str], checksum: str,
@@ -125,6 +143,7 @@ def _run_scores(kind: str, spec: str, run: int, sets: Sequence[Any], seeds: Sequ
                 name: str) -> pd.DataFrame:  # fmt: skip
     """The score table of one run (one file, or one entry point's seeds offset by the run)."""
     from classifiers.experiments.benchmark.methods import (
+        d3rlpy_scores,
         entry_point_scores,
         saved_model_scores,
         sb3_scores,
@@ -132,6 +151,8 @@ def _run_scores(kind: str, spec: str, run: int, sets: Sequence[Any], seeds: Sequ
 
     if kind == METHOD_KINDS[0]:
         return sb3_scores(Path(spec), sets, run, name)
+    if kind == METHOD_KINDS[3]:
+        return d3rlpy_scores(Path(spec), sets, name).assign(seed=run)
     if kind == METHOD_KINDS[1]:
         return saved_model_scores(Path(spec), sets, name).assign(seed=run)
     offset = len(seeds) * run

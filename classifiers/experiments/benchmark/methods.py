@@ -102,9 +102,16 @@ def load_entry_point(spec: str) -> Callable[..., Any]:
         raise ValueError(f"importing {module_name!r} for {spec!r} failed: "
                          f"{type(exc).__name__}: {exc}") from None  # fmt: skip
     function = getattr(module, attribute, None)
-    if not callable(function):
-        raise ValueError(f"{spec!r}: {module_name} has no function {attribute!r}")
+    if not callable(function) and not is_policy(function):
+        raise ValueError(f"{spec!r}: {module_name} has no function {attribute!r} (nor a policy "
+                         f"object with predict(observation))")  # fmt: skip
     return function
+
+
+def is_policy(selector: Any) -> bool:
+    """Whether ``selector`` is an observation policy: an object (not a class) with a
+    ``predict(observation)`` method, as SB3's and d3rlpy's policies have."""
+    return not inspect.isclass(selector) and callable(getattr(selector, "predict", None))
 
 
 def _no_module(spec: str, module_name: str, folder: str) -> str:
@@ -125,10 +132,13 @@ def entry_point_scores(spec: str, sets: Sequence[CandidateSet], seeds: Sequence[
     ``seed`` argument). A class is a selector too: made once per run (``Class(seed=...)`` when
     its ``__init__`` takes ``seed``, else ``Class()``), its instance called on each object."""
     function = load_entry_point(spec)
-    seeded = "seed" in inspect.signature(function).parameters
+    seeded = callable(function) and "seed" in inspect.signature(function).parameters
     frames = []
     for seed in (seeds if seeded else (0,)):
         pick = _selector(function, spec, int(seed) if seeded else None)
+        if is_policy(pick):
+            frames.append(policy_scores(pick, sets, int(seed), name, spec))
+            continue
         for found in sets:
             rows = public_rows(found)
             where = f"{spec} on object {found.object_id!r}"
@@ -151,10 +161,101 @@ def _selector(function: Callable[..., Any], spec: str, seed: int | None) -> Call
     except Exception as exc:  # the user's class failing as it is made: bad input, in one line
         raise ValueError(f"{spec}: making the selector failed: {type(exc).__name__}: "
                          f"{exc}") from None  # fmt: skip
-    if not callable(instance):
+    if not callable(instance) and not is_policy(instance):
         raise ValueError(f"{spec} is a class whose instances are not callable: give it a "
-                         f"__call__(self, table) returning scores or one row index")  # fmt: skip
+                         f"__call__(self, table) returning scores or one row index, or a "
+                         f"predict(self, observation) returning a slot")  # fmt: skip
     return instance
+
+
+# ------------------------------------------------------------------ observation policies
+def check_policy_spaces(policy: Any, sets: Sequence[CandidateSet], spec: str) -> None:
+    """ValueError when a policy declares an ``action_space`` (or ``observation_space``) that is
+    not ``GripSelect-v0``'s on this split (one without them is taken as it is)."""
+    from gymnasium import spaces
+
+    k, width = sets[0].features.shape
+    action = getattr(policy, "action_space", None)
+    if action is not None and not (isinstance(action, spaces.Discrete) and int(action.n) == k):
+        raise ValueError(f"{spec}: action space {action} does not match the split's "
+                         f"GripSelect-v0 action space Discrete({k})")  # fmt: skip
+    observation = getattr(policy, "observation_space", None)
+    if observation is not None and not (
+            isinstance(observation, spaces.Dict) and set(observation.spaces) == {"features", "mask"}
+            and tuple(observation["features"].shape) == (k, width)
+            and tuple(observation["mask"].shape) == (k,)):  # fmt: skip
+        raise ValueError(f"{spec}: observation space {observation} does not match the split's "
+                         f"GripSelect-v0 Dict(features=({k}, {width}), mask=({k},))")  # fmt: skip
+
+
+def policy_scores(policy: Any, sets: Sequence[CandidateSet], seed: int, name: str,
+                  spec: str) -> pd.DataFrame:  # fmt: skip
+    """Score table of an observation policy: ``policy.predict(observation)`` on each object's
+    first ``GripSelect-v0`` observation returns a slot (or SB3's ``(action, state)``), scored 1
+    for that slot and 0 for the rest; a padded slot is refused."""
+    check_policy_spaces(policy, sets, spec)
+    frames = []
+    for found in sets:
+        observation = {"features": found.features.copy(), "mask": found.mask.copy()}
+        where = f"{spec}.predict on object {found.object_id!r}"
+        try:
+            action = policy.predict(observation)
+        except Exception as exc:  # the user's code: its failure is bad input, in one line
+            raise ValueError(f"{where} failed: {type(exc).__name__}: {exc}") from None
+        if isinstance(action, tuple):  # SB3's (action, state)
+            action = action[0]
+        action = np.asarray(action).reshape(-1)[0] if np.size(action) == 1 else action
+        scores = choice_scores(action, found.count, where)
+        frames.append(score_frame(name, seed, _slots(found), scores))
+    return pd.concat(frames, ignore_index=True)
+
+
+# ------------------------------------------------------------------ d3rlpy policies
+def load_d3rlpy(path: Path) -> Any:
+    """A d3rlpy algorithm saved with ``save`` (a ``.d3`` file), on the CPU."""
+    from classifiers.experiments.offline_rl import require_d3rlpy
+
+    d3rlpy = require_d3rlpy()
+    try:
+        return d3rlpy.load_learnable(str(path), device="cpu:0")
+    except (zipfile.BadZipFile, ValueError, KeyError, OSError, RuntimeError, TypeError,
+            EOFError) as exc:  # fmt: skip
+        reason = " ".join(str(exc).split())[:300]
+        raise ValueError(f"{path} is not a d3rlpy policy file ({type(exc).__name__}: "
+                         f"{reason})") from None  # fmt: skip
+
+
+def check_d3rlpy_spaces(algo: Any, sets: Sequence[CandidateSet], path: Path) -> None:
+    """ValueError unless the policy's observation and action sizes are this split's
+    (flat observation ``K * F + K``, ``K`` discrete actions)."""
+    k, width = sets[0].features.shape
+    shape = tuple(getattr(algo.impl, "observation_shape", ()) or ())
+    size = getattr(algo.impl, "action_size", None)
+    if shape != (k * width + k,) or size != k:
+        raise ValueError(f"{path}: observation shape {shape} / {size} actions do not match the "
+                         f"split's GripSelect-v0 ({k * width + k},) flat observation "
+                         f"(features {k}x{width} and mask {k}) and Discrete({k})")  # fmt: skip
+
+
+def d3rlpy_scores(path: Path, sets: Sequence[CandidateSet], name: str) -> pd.DataFrame:
+    """Score table of a d3rlpy policy: each real slot's Q-value on the object's observation
+    (a Q-learning algorithm), or 1 for the slot it picks (behaviour cloning)."""
+    from classifiers.experiments.offline_rl import flat_observation
+
+    algo = load_d3rlpy(path)
+    check_d3rlpy_spaces(algo, sets, path)
+    counts = np.array([found.count for found in sets])
+    flat = np.stack([flat_observation(found.features, found.mask) for found in sets])
+    slots = np.concatenate([np.arange(c) for c in counts])
+    try:
+        values = algo.predict_value(np.repeat(flat, counts, axis=0), slots)
+        per_object = np.split(np.asarray(values, dtype=float), np.cumsum(counts)[:-1])
+    except NotImplementedError:  # behaviour cloning has no value function: its pick
+        per_object = [int(a) for a in algo.predict(flat)]
+    frames = [score_frame(name, 0, _slots(found), choice_scores(
+        out, found.count, f"{path.name} on object {found.object_id!r}"))
+        for found, out in zip(sets, per_object, strict=True)]  # fmt: skip
+    return pd.concat(frames, ignore_index=True)
 
 
 # ------------------------------------------------------------------ saved models

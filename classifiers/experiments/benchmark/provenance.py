@@ -11,8 +11,16 @@ method carries its record of training objects (:data:`RECORD_KEY`, a list of obj
   recorded in its ``GripSelect-v0/args.yml`` (``--env-kwargs``), whose objects are re-derived;
 - a function or class: an attribute ``trained_on`` (object ids; empty when it learns nothing).
 
+- a d3rlpy policy (``NAME.d3``): ``NAME.json`` beside it, which
+  :func:`classifiers.experiments.offline_rl.train_offline` writes from the Minari export's own
+  record of its objects.
+
 A method without a record is scored and marked: its leaderboard row and line say that the
 benchmark could not check what it learnt from.
+
+The training budget (:func:`recorded_budget`, :func:`function_budget`) is read the same way:
+an SB3 zip's environment steps (``num_timesteps``), the ``budget`` entry of ``NAME.json`` (a
+d3rlpy policy: the export's transitions and episodes), a function's ``training_budget``.
 """
 
 from __future__ import annotations
@@ -141,6 +149,61 @@ def recorded_function(function: Any, spec: str) -> Recorded:
     if isinstance(objects, str | bytes) or not isinstance(objects, Iterable):
         raise ValueError(f"{spec}.{RECORD_KEY} must be a list of object ids, got {objects!r}")
     return Recorded(tuple(map(str, objects)), f"{spec}.{RECORD_KEY}")
+
+
+# ------------------------------------------------------------------ the training budget
+BUDGET_KEY = "budget"
+NOT_RECORDED = "not recorded"
+
+
+def recorded_budget(path: Path) -> dict[str, Any]:
+    """A method file's training budget: ``NAME.json``'s ``budget`` entry, else an SB3 zip's
+    environment steps, else not recorded. ``text`` says it in words."""
+    info = _json(path.with_suffix(".json")) if path.with_suffix(".json").is_file() else None
+    budget = info.get(BUDGET_KEY) if isinstance(info, dict) else None
+    if isinstance(budget, dict):
+        return {**budget, "text": budget_text(budget)}
+    if path.suffix.lower() == ".zip":
+        steps = _sb3_steps(path)
+        if steps is not None:
+            return {"environment_steps": steps, "text": budget_text({"environment_steps": steps})}
+    return {"text": NOT_RECORDED}
+
+
+def function_budget(function: Any) -> dict[str, Any]:
+    """A function's or class's ``training_budget`` attribute (a dict with ``environment_steps``
+    or ``transitions``/``episodes``, or a sentence), else not recorded."""
+    budget = getattr(function, "training_budget", None)
+    if isinstance(budget, dict):
+        return {**budget, "text": budget_text(budget)}
+    return {"text": str(budget) if budget is not None else NOT_RECORDED}
+
+
+def budget_text(budget: dict[str, Any]) -> str:
+    """``20,000 environment steps`` or ``7,640 transitions (7,640 episodes) of SOURCE``."""
+    parts = []
+    if budget.get("environment_steps") is not None:
+        parts.append(f"{int(budget['environment_steps']):,} environment steps")
+    if budget.get("transitions") is not None:
+        extra = [f"{int(budget[k]):,} {k.replace('_', ' ')}"
+                 for k in ("episodes", "gradient_steps") if budget.get(k) is not None]
+        parts.append(f"{int(budget['transitions']):,} transitions"
+                     + (f" ({', '.join(extra)})" if extra else "")
+                     + (f" of {budget['source']}" if budget.get("source") else ""))  # fmt: skip
+    return "; ".join(parts) or NOT_RECORDED
+
+
+def _sb3_steps(path: Path) -> int | None:
+    """The environment steps an SB3 zip was trained for (its saved ``num_timesteps``)."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as archive:
+            data = json.loads(archive.read("data"))
+    except (OSError, KeyError, ValueError, zipfile.BadZipFile):
+        return None
+    steps = data.get("num_timesteps") if isinstance(data, dict) else None
+    return int(steps) if isinstance(steps, int) else None
 
 
 # ------------------------------------------------------------------ the check
