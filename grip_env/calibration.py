@@ -615,7 +615,8 @@ def calibrate(
     if dataset is not None:
         checks += dataset_checks(dataset, settings)
     result = {"label_model": label_model_for(config.sim.engine),
-              "reference_level_g": reference, "mu": float(config.grasp.mu), "settings": asdict(settings), "trials": len(trials),
+              "reference_level_g": reference, "mu": float(config.grasp.mu),
+              "settings": asdict(settings), "trials": len(trials),
               "checks": {c["name"]: c for c in checks},
               "config": config.model_dump(mode="json")}  # fmt: skip
     return result, trials

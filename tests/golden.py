@@ -1,7 +1,7 @@
 """The golden trials: a fixed set of planned grips whose outcomes pin each engine's label model.
 
-    python -m tests.golden                         # compare with the recording (tests/test_golden.py)
-    python -m tests.golden --record                # renew it, after bumping LABEL_MODEL
+    python -m tests.golden                           # compare with the recording (the test does)
+    python -m tests.golden --record                  # renew it, after bumping LABEL_MODEL
     python -m tests.golden --engine mujoco --record  # MuJoCo's, after bumping MUJOCO_LABEL_MODEL
 
 Each default object of ``OBJECTS`` gives its ``GRIPS`` best grips by Q_C and its worst (so that
@@ -22,9 +22,9 @@ from pathlib import Path
 import pandas as pd
 
 from grip_env.config import Config
-from grip_env.objects import PlanarObject, load_object_set
 from grip_env.dataset.manifest import engine_record
-from grip_env.label_model import LABEL_MODEL, label_model_for
+from grip_env.label_model import label_model_for
+from grip_env.objects import PlanarObject, load_object_set
 from grip_env.sim import run_trial_outcomes
 from grip_env.sim.trial import PLAN_COLUMNS
 

@@ -24,10 +24,10 @@ import pytest
 
 pytest.importorskip("mujoco")
 
-from grip_env.config import Config  # noqa: E402
-from grip_env.dataset.backends import worker_context  # noqa: E402
-from grip_env.objects import load_object_set  # noqa: E402
-from grip_env.sim import OUTCOME_COLUMNS, run_trial_outcomes  # noqa: E402
+from grip_env.config import Config
+from grip_env.dataset.backends import worker_context
+from grip_env.objects import load_object_set
+from grip_env.sim import OUTCOME_COLUMNS, run_trial_outcomes
 
 HERE = Path(__file__).parent
 OBJECTS = ("rectangle", "hexagon")
