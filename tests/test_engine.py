@@ -30,10 +30,36 @@ def test_an_unknown_engine_is_refused_by_name():
         require_engine("physx")
 
 
+def without_mujoco(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Make ``import mujoco`` fail as it does where it is not installed (``None`` in
+    ``sys.modules`` is Python's own "not importable"; the world's module is imported anew)."""
+    import sys
+
+    monkeypatch.setitem(sys.modules, "mujoco", None)
+    monkeypatch.delitem(sys.modules, "grip_env.sim.mujoco_world", raising=False)
+
+
 def test_an_engine_not_installed_says_how_to_install_it(monkeypatch):
-    monkeypatch.setitem(engine._PACKAGES, "mujoco", "grip_env_no_such_package")
+    without_mujoco(monkeypatch)
     with pytest.raises(EngineUnavailable, match='pip install "grip-env\\[mujoco\\]"'):
         make_world(Config().override(sim={"engine": "mujoco"}).sim)
+    with pytest.raises(ImportError):  # the simulation is real: the module cannot be imported
+        import grip_env.sim.mujoco_world  # noqa: F401
+
+
+def test_an_engine_that_cannot_be_loaded_says_so_and_how_to_reinstall(monkeypatch):
+    import importlib
+
+    real = importlib.import_module
+
+    def broken(name: str, *args: object):
+        if name == "grip_env.sim.mujoco_world":
+            raise ImportError("libmujoco.so.4.0.1: cannot open shared object file")
+        return real(name, *args)
+
+    monkeypatch.setattr(importlib, "import_module", broken)
+    with pytest.raises(EngineUnavailable, match="cannot be loaded .*libmujoco.*reinstall"):
+        require_engine("mujoco")
 
 
 @pytest.mark.parametrize("command", ["generate", "calibrate"])
@@ -45,9 +71,9 @@ def test_the_cli_refuses_an_unknown_engine_and_writes_nothing(tmp_path, command)
     assert not out.exists()
 
 
-@pytest.mark.parametrize("command", ["generate", "calibrate"])
+@pytest.mark.parametrize("command", ["generate", "calibrate", "study"])
 def test_the_cli_refuses_a_missing_engine_in_one_line(tmp_path, monkeypatch, command):
-    monkeypatch.setitem(engine._PACKAGES, "mujoco", "grip_env_no_such_package")
+    without_mujoco(monkeypatch)
     config = tmp_path / "mujoco.yaml"
     config.write_text("sim:\n  engine: mujoco\n")
     out = tmp_path / "out"

@@ -26,7 +26,7 @@ import pandas as pd
 from grip_env.config import ENGINES
 from grip_env.dataset.manifest import read_manifest
 from grip_env.dataset.resimulation import BOOTSTRAP, _map, _ObjectCheck, _retest_sample
-from grip_env.label_model import label_model_for, label_model_of
+from grip_env.label_model import engine_of, label_model_for, label_model_of
 from grip_env.objects.family import object_family
 
 
@@ -73,7 +73,7 @@ def check_crosscheckable(directory: Path) -> str:
     from grip_env.sim.engine import require_engine
 
     manifest = read_manifest(directory)
-    engine = manifest.get("config", {}).get("sim", {}).get("engine", ENGINES[0])
+    engine = engine_of(manifest)
     found, expected = label_model_of(manifest), label_model_for(engine)
     if found != expected:
         raise ValueError(f"dataset {directory} was labelled by label model {found!r}; this code "
