@@ -57,7 +57,6 @@ def study(
     with stop_on_signals(f"rerun the same command to finish {out}"), user_errors(), shown():
         check_output_dir(out)
         from grip_env.config import load_config
-
         from grip_env.sim.engine import require_engine
 
         settings = load_config(config)
