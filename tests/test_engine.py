@@ -58,7 +58,7 @@ def test_an_engine_that_cannot_be_loaded_says_so_and_how_to_reinstall(monkeypatc
         return real(name, *args)
 
     monkeypatch.setattr(importlib, "import_module", broken)
-    with pytest.raises(EngineUnavailable, match="cannot be loaded .*libmujoco.*reinstall"):
+    with pytest.raises(EngineUnavailable, match=r"cannot be loaded .*libmujoco.*reinstall"):
         require_engine("mujoco")
 
 
