@@ -122,3 +122,31 @@ def test_the_cli_reports_the_agreement(tiny, tmp_path):
     assert code == 0, output
     assert "pybullet against mujoco" in output and "kappa" in output
     assert json.loads(report.read_text())["crosscheck"]["objects"] == 1
+
+
+@pytest.mark.slow
+def test_the_card_and_the_study_report_show_a_recorded_crosscheck(tiny, checked, tmp_path):
+    from classifiers.report.document import Report
+    from classifiers.report.study_report import _crosscheck_section
+    from grip_env.dataset.card import CROSSCHECK_FILE, dataset_card
+
+    found, _ = checked
+    assert "Not cross-checked in the other engine yet" in dataset_card(tiny)
+    stored = json.loads(json.dumps({"crosscheck": {"objects": 2, **found.as_dict()}}))
+    card = dataset_card(tiny, stored)
+    overall = found.overall
+    assert f"| all | 2 | {overall.agreement:.1%} [" in card
+    assert f"| named | 2 | {found.families['named'].agreement:.1%} [" in card
+    assert "| mujoco | 48 |" in card and "core-s a trustworthy label" in card
+    study = tmp_path / "study"
+    study.mkdir()
+    (study / "data.json").write_text(json.dumps({"dataset": str(tmp_path / "data")}))
+    report = Report("study")
+    _crosscheck_section(report, study)
+    assert not report.blocks  # no cross-check recorded with the dataset: no section
+    (tmp_path / "data" / CROSSCHECK_FILE).parent.mkdir(parents=True)
+    (tmp_path / "data" / CROSSCHECK_FILE).write_text(json.dumps(stored))
+    _crosscheck_section(report, study)
+    assert report.blocks[0].content == "Agreement between engines"
+    assert any("reproduced their recorded labels" in str(b.content) for b in report.blocks)
+    assert [b.kind for b in report.blocks] == ["heading", "text", "table", "table"]
