@@ -29,8 +29,9 @@ History of PyBullet's (the figures behind each are in BENCHMARKS.md):
 from __future__ import annotations
 
 LABEL_MODEL = "2026.12-xm"
-#: MuJoCo's label model (``sim.engine: mujoco``): a draft, not frozen by a golden test yet, whose
-#: grips mostly slip in the hand at the lift (BENCHMARKS.md, "PyBullet beside MuJoCo").
+#: MuJoCo's label model (``sim.engine: mujoco``), pinned by its own golden recording
+#: (``python -m tests.golden --engine mujoco --record`` renews it): a draft whose grips mostly
+#: slip in the hand at the lift (BENCHMARKS.md, "PyBullet beside MuJoCo").
 MUJOCO_LABEL_MODEL = "mujoco-draft"
 #: Each engine's label model: PyBullet's is the standard dataset's.
 ENGINE_LABEL_MODELS = {"pybullet": LABEL_MODEL, "mujoco": MUJOCO_LABEL_MODEL}
