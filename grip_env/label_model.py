@@ -22,9 +22,10 @@ History of PyBullet's (the figures behind each are in BENCHMARKS.md):
 - ``2026.12-xm``: the same on every x86-64-v3 machine (glibc's libm is not held: below v3 its
   non-FMA sin/cos move trials; BENCHMARKS.md, "Each engine's labels frozen"). The simulated
   shape's simplification decides with elementwise arithmetic (a BLAS product, rounded
-  differently on another CPU, kept other vertices of a symmetric contour), and a mesh's posed vertices are rounded to 1e-6 mm before
-  its outline is built. The simulated shapes of curved and mesh objects moved by their last
-  bits (20 of the default study's 80), which moves some of their trials as any 1 nm change does.
+  differently on another CPU, kept other vertices of a symmetric contour), and a mesh's posed
+  vertices are rounded to 1e-6 mm before its outline is built. The simulated shapes of curved
+  and mesh objects moved by their last bits (20 of the default study's 80), which moves some of
+  their trials as any 1 nm change does.
 """
 
 from __future__ import annotations
