@@ -13,7 +13,7 @@ import importlib.util
 import golden
 import pytest
 
-from grip_env.label_model import label_model_for
+from grip_env.label_model import LABEL_MODEL, label_model_for
 
 ENGINES = ["pybullet", pytest.param("mujoco", marks=pytest.mark.skipif(
     importlib.util.find_spec("mujoco") is None, reason="mujoco not installed"))]
@@ -31,7 +31,7 @@ def test_the_recording_is_of_the_code_s_label_model_and_large_enough(engine):
 
 
 def test_pybullet_s_recording_is_of_the_standard_label_model():
-    assert golden.recording()["label_model"] == golden.LABEL_MODEL
+    assert golden.recording()["label_model"] == LABEL_MODEL
 
 
 def test_every_engine_s_recording_pins_the_same_grips_and_names_its_engine():
