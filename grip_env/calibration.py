@@ -38,7 +38,7 @@ import pandas as pd
 from scipy import stats
 
 from grip_env.config import Config
-from grip_env.label_model import LABEL_MODEL
+from grip_env.label_model import label_model_for
 from grip_env.objects import PlanarObject, load_object_set, procedural_objects
 from grip_env.objects.shapes import rectangle
 from grip_env.progress import progress_bar
@@ -614,8 +614,9 @@ def calibrate(
                                           settings.seed))  # fmt: skip
     if dataset is not None:
         checks += dataset_checks(dataset, settings)
-    result = {"label_model": LABEL_MODEL, "reference_level_g": reference,
-              "mu": float(config.grasp.mu), "settings": asdict(settings), "trials": len(trials),
+    result = {"label_model": label_model_for(config.sim.engine),
+              "reference_level_g": reference, "mu": float(config.grasp.mu),
+              "settings": asdict(settings), "trials": len(trials),
               "checks": {c["name"]: c for c in checks},
               "config": config.model_dump(mode="json")}  # fmt: skip
     return result, trials

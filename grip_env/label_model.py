@@ -8,24 +8,32 @@ renew the golden recording (``python -m tests.golden --record``) and regenerate 
 dataset. It lives outside ``grip_env.sim`` (which re-exports it) so that reading a manifest
 does not import PyBullet.
 
-History (the figures behind each are in BENCHMARKS.md):
+Each engine (``sim.engine``) has its own label model (``ENGINE_LABEL_MODELS``): the same grip,
+draws and protocol in another contact model is another label. A manifest records the label model
+beside the engine's name and version (``manifest["engine"]``); each engine's golden recording
+(``tests/golden.py --engine NAME``) pins its id.
+
+History of PyBullet's (the figures behind each are in BENCHMARKS.md):
 
 - ``2026.12-crn``: every trial in a world built for it; trial k of every grip of an object
   shares one draw (common random numbers, keyed by the object's id); the palm's error in the
   palm frame; a quasi-static ramp (each level held until the object rests: at least 3 steps, at
   most 60). Before it, datasets recorded no label model.
-- ``2026.12-xm``: the same on every x86-64 machine. The simulated shape's simplification decides
-  with elementwise arithmetic (a BLAS product, rounded differently on another CPU, kept other
-  vertices of a symmetric contour), and a mesh's posed vertices are rounded to 1e-6 mm before
-  its outline is built. The simulated shapes of curved and mesh objects moved by their last
-  bits (20 of the default study's 80), which moves some of their trials as any 1 nm change does.
+- ``2026.12-xm``: the same on every x86-64-v3 machine (glibc's libm is not held: below v3 its
+  non-FMA sin/cos move trials; BENCHMARKS.md, "Each engine's labels frozen"). The simulated
+  shape's simplification decides with elementwise arithmetic (a BLAS product, rounded
+  differently on another CPU, kept other vertices of a symmetric contour), and a mesh's posed
+  vertices are rounded to 1e-6 mm before its outline is built. The simulated shapes of curved
+  and mesh objects moved by their last bits (20 of the default study's 80), which moves some of
+  their trials as any 1 nm change does.
 """
 
 from __future__ import annotations
 
 LABEL_MODEL = "2026.12-xm"
-#: MuJoCo's label model (``sim.engine: mujoco``): a draft, not frozen by a golden test yet, whose
-#: grips mostly slip in the hand at the lift (BENCHMARKS.md, "PyBullet beside MuJoCo").
+#: MuJoCo's label model (``sim.engine: mujoco``), pinned by its own golden recording
+#: (``python -m tests.golden --engine mujoco --record`` renews it): a draft whose grips mostly
+#: slip in the hand at the lift (BENCHMARKS.md, "PyBullet beside MuJoCo").
 MUJOCO_LABEL_MODEL = "mujoco-draft"
 #: Each engine's label model: PyBullet's is the standard dataset's.
 ENGINE_LABEL_MODELS = {"pybullet": LABEL_MODEL, "mujoco": MUJOCO_LABEL_MODEL}
@@ -44,6 +52,24 @@ def label_model_for(engine: str) -> str:
     return ENGINE_LABEL_MODELS[engine]
 
 
+def engine_of(manifest: dict) -> str:
+    """The engine that made a dataset's labels: its manifest's ``engine`` record, else its
+    config's ``sim.engine``, else PyBullet (every dataset made before engines could be chosen)."""
+    recorded = manifest.get("engine")
+    if isinstance(recorded, dict) and isinstance(recorded.get("name"), str):
+        return recorded["name"]
+    config = manifest.get("config")
+    sim = config.get("sim") if isinstance(config, dict) else None
+    engine = sim.get("engine") if isinstance(sim, dict) else None
+    return engine if isinstance(engine, str) else "pybullet"
+
+
+def expected_label_model(manifest: dict) -> str:
+    """The label model this code makes in the engine a manifest names (PyBullet's when the
+    engine is not one this code knows)."""
+    return ENGINE_LABEL_MODELS.get(engine_of(manifest), LABEL_MODEL)
+
+
 def label_model_of(manifest: dict) -> str:
     """The label model a dataset manifest records (``UNRECORDED`` for older datasets)."""
     value = manifest.get("label_model")
@@ -51,9 +77,10 @@ def label_model_of(manifest: dict) -> str:
 
 
 def label_model_warning(manifest: dict, where: str = "dataset") -> str | None:
-    """One line saying that ``where``'s labels come from another label model, or None."""
-    found = label_model_of(manifest)
-    if found == LABEL_MODEL:
+    """One line saying that ``where``'s labels come from another label model than this code
+    makes in its engine, or None."""
+    found, expected = label_model_of(manifest), expected_label_model(manifest)
+    if found == expected:
         return None
-    return (f"{where} was labelled by label model {found!r}, this grip-env's is {LABEL_MODEL!r}: "
+    return (f"{where} was labelled by label model {found!r}, this grip-env's is {expected!r}: "
             f"its outcomes are not what this code produces (regenerate it to compare)")

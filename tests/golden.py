@@ -1,13 +1,15 @@
-"""The golden trials: a fixed set of planned grips whose outcomes pin the label model.
+"""The golden trials: a fixed set of planned grips whose outcomes pin each engine's label model.
 
-    python -m tests.golden            # compare with the recording (what tests/test_golden.py does)
-    python -m tests.golden --record   # renew the recording, after bumping LABEL_MODEL
+    python -m tests.golden                           # compare with the recording (the test does)
+    python -m tests.golden --record                  # renew it, after bumping LABEL_MODEL
+    python -m tests.golden --engine mujoco --record  # MuJoCo's, after bumping MUJOCO_LABEL_MODEL
 
 Each default object of ``OBJECTS`` gives its ``GRIPS`` best grips by Q_C and its worst (so that
 failures are pinned too); their plans are stored
 in the recording, so that the golden test pins the simulator (scene, hand, controller, draws,
 ramp, judgement) and not the planner. Every grip runs ``TRIALS`` trials with ``SEED`` under the
-default config.
+default config. MuJoCo's recording (``sim.engine: mujoco``) runs the grips of PyBullet's, so both
+pin the same trials; each names its engine's label model (``grip_env.label_model``) and version.
 """
 
 from __future__ import annotations
@@ -20,11 +22,16 @@ from pathlib import Path
 import pandas as pd
 
 from grip_env.config import Config
+from grip_env.dataset.manifest import engine_record
+from grip_env.label_model import label_model_for
 from grip_env.objects import PlanarObject, load_object_set
-from grip_env.sim import LABEL_MODEL, run_trial_outcomes
+from grip_env.sim import run_trial_outcomes
 from grip_env.sim.trial import PLAN_COLUMNS
 
-RECORDING = Path(__file__).parent / "data" / "golden_outcomes.json"
+#: Each engine's recording (PyBullet's plans the grips; the others run the same ones).
+RECORDINGS = {"pybullet": Path(__file__).parent / "data" / "golden_outcomes.json",
+              "mujoco": Path(__file__).parent / "data" / "golden_outcomes_mujoco.json"}
+RECORDING = RECORDINGS["pybullet"]
 #: Polygons and two curved outlines (their simulated shapes are simplified).
 OBJECTS = ("pentagon", "trapezoid", "rectangle", "hexagon", "ellipse", "bean")
 GRIPS = 2
@@ -51,11 +58,12 @@ def plans() -> pd.DataFrame:
     return pd.concat(rows, ignore_index=True)
 
 
-def run(grips: pd.DataFrame) -> list[dict]:
-    """Every golden trial's pinned outcome, in recording order."""
+def run(grips: pd.DataFrame, engine: str = "pybullet") -> list[dict]:
+    """Every golden trial's pinned outcome in ``engine``, in recording order."""
     records = []
+    config = Config().override(sim={"engine": engine})
     for name, group in grips.groupby("object_id", sort=False):
-        outcomes = run_trial_outcomes(_object(str(name)), group, Config(), trials=TRIALS,
+        outcomes = run_trial_outcomes(_object(str(name)), group, config, trials=TRIALS,
                                       seed=SEED)
         for row in outcomes.itertuples(index=False):
             record = {"grip_id": group.loc[row.grip, "grip_id"], "trial": int(row.trial)}
@@ -67,25 +75,36 @@ def run(grips: pd.DataFrame) -> list[dict]:
     return records
 
 
-def record() -> None:
-    grips = plans()
-    RECORDING.write_text(json.dumps({
-        "label_model": LABEL_MODEL, "seed": SEED, "trials": TRIALS,
-        "grips": grips.to_dict(orient="records"), "outcomes": run(grips)}, indent=1) + "\n")
+def record(engine: str = "pybullet") -> None:
+    """Renew ``engine``'s recording (PyBullet's plans the grips again; another engine runs the
+    grips of PyBullet's recording)."""
+    grips = plans() if engine == "pybullet" else pd.DataFrame(recording()["grips"])
+    stored = {"label_model": label_model_for(engine), "seed": SEED, "trials": TRIALS,
+              "grips": grips.to_dict(orient="records"), "outcomes": run(grips, engine)}
+    if engine != "pybullet":  # PyBullet's recording keeps the fields it was made with
+        stored = {"engine": engine_record(engine), **stored}
+    RECORDINGS[engine].write_text(json.dumps(stored, indent=1) + "\n")
 
 
-def recording() -> dict:
-    """The stored recording."""
-    return json.loads(RECORDING.read_text())
+def recording(engine: str = "pybullet") -> dict:
+    """The stored recording of ``engine``."""
+    return json.loads(RECORDINGS[engine].read_text())
 
 
-def differences(stored: dict) -> list[str]:
+def renew_command(engine: str) -> str:
+    """The command that renews ``engine``'s recording."""
+    flag = "" if engine == "pybullet" else f" --engine {engine}"
+    return f"python -m tests.golden{flag} --record"
+
+
+def differences(stored: dict, engine: str = "pybullet") -> list[str]:
     """Lines naming every pinned outcome that differs from the recording (none: it holds)."""
     lines = []
-    if stored["label_model"] != LABEL_MODEL:
+    expected = label_model_for(engine)
+    if stored["label_model"] != expected:
         lines.append(f"the recording is of label model {stored['label_model']!r}, the code's is "
-                     f"{LABEL_MODEL!r}: renew it with python -m tests.golden --record")
-    now = run(pd.DataFrame(stored["grips"]))
+                     f"{expected!r}: renew it with {renew_command(engine)}")
+    now = run(pd.DataFrame(stored["grips"]), engine)
     for old, new in zip(stored["outcomes"], now, strict=True):
         for field in PINNED:
             if old[field] != new[field]:
@@ -97,12 +116,16 @@ def differences(stored: dict) -> list[str]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--record", action="store_true", help="renew the recording")
-    if parser.parse_args().record:
-        record()
-        print(f"recorded {len(recording()['outcomes'])} trials for {LABEL_MODEL}")
+    parser.add_argument("--engine", choices=sorted(RECORDINGS), default="pybullet",
+                        help="the engine whose recording to renew or check")
+    args = parser.parse_args()
+    model = label_model_for(args.engine)
+    if args.record:
+        record(args.engine)
+        print(f"recorded {len(recording(args.engine)['outcomes'])} trials for {model}")
         return
-    lines = differences(recording())
-    print("\n".join(lines) or f"every golden trial matches label model {LABEL_MODEL}")
+    lines = differences(recording(args.engine), args.engine)
+    print("\n".join(lines) or f"every golden trial matches label model {model}")
     sys.exit(1 if lines else 0)
 
 

@@ -46,6 +46,7 @@ BAD_CONFIGS = {
     "steps_per_level": ("sim:\n  ramp_steps_per_level: 0\n", "sim.ramp_steps_per_level"),
     "longest_level": ("sim:\n  ramp_max_steps_per_level: -3\n",
                       "sim.ramp_max_steps_per_level"),
+    "engine": ("sim:\n  engine: physx\n", "sim.engine"),
 }
 
 
@@ -241,3 +242,61 @@ def test_too_few_objects_for_the_folds_says_which_setting_and_writes_nothing(
     assert_refused(code, output, "3 objects, fewer than the 5 folds of learning.folds",
                    "at most 3")
     assert not out.exists()
+
+
+# ----------------------------------------------------------------- engines and cross-checks
+def _relabelled(dataset: Path, folder: Path, label_model: str, engine: str | None = None) -> Path:
+    """A copy of ``dataset`` whose manifest records ``label_model`` (and ``engine``)."""
+    import shutil
+
+    from grip_env.dataset.manifest import read_manifest, write_manifest
+
+    shutil.copytree(dataset, folder)
+    manifest = {**read_manifest(folder), "label_model": label_model}
+    if engine is not None:
+        manifest["engine"] = {"name": engine, "version": "4.0.1"}
+        manifest["config"]["sim"]["engine"] = engine
+    write_manifest(folder, manifest)
+    return folder
+
+
+@pytest.mark.parametrize("case", ["old pybullet", "old mujoco", "unknown engine"])
+def test_a_crosscheck_of_labels_this_code_cannot_make_is_refused_and_writes_nothing(
+        three_objects, tmp_path, case):
+    pytest.importorskip("mujoco")
+    label, engine, fragments = {
+        "old pybullet": ("2026.12-crn", None, ("label model '2026.12-crn'", "cannot cross-check")),
+        "old mujoco": ("mujoco-1999", "mujoco", ("label model 'mujoco-1999'", "in mujoco",
+                                                 "cannot cross-check")),
+        "unknown engine": ("2026.12-xm", "physx", ("unknown engine 'physx'",)),
+    }[case]
+    folder = _relabelled(three_objects, tmp_path / "data", label, engine)
+    report = tmp_path / "cross.json"
+    before = sorted(p.name for p in folder.rglob("*"))
+    assert_refused(*run("validate", folder, "--crosscheck", 1, "--report", report), *fragments)
+    assert not report.exists() and sorted(p.name for p in folder.rglob("*")) == before
+
+
+def test_a_crosscheck_without_mujoco_says_how_to_install_it(three_objects, tmp_path, monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "mujoco", None)  # as where it is not installed
+    monkeypatch.delitem(sys.modules, "grip_env.sim.mujoco_world", raising=False)
+    report = tmp_path / "cross.json"
+    assert_refused(*run("validate", three_objects, "--crosscheck", 1, "--report", report),
+                   "engine 'mujoco' is not installed", 'pip install "grip-env[mujoco]"')
+    assert not report.exists()
+
+
+def test_an_environment_without_mujoco_says_how_to_install_it(monkeypatch):
+    import sys
+
+    import gymnasium
+
+    import grip_env.envs  # noqa: F401  (registers the environments)
+    from grip_env.sim import EngineUnavailable
+
+    monkeypatch.setitem(sys.modules, "mujoco", None)
+    monkeypatch.delitem(sys.modules, "grip_env.sim.mujoco_world", raising=False)
+    with pytest.raises(EngineUnavailable, match=r'pip install "grip-env\[mujoco\]"'):
+        gymnasium.make("GripSelect-v0", objects=["rectangle"], engine="mujoco")

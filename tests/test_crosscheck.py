@@ -5,12 +5,13 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 from cli_runs import assert_refused, cli
 
 from grip_env.config import Config
 from grip_env.dataset import generate
-from grip_env.dataset.crosscheck import crosscheck
+from grip_env.dataset.crosscheck import CrossCheck, _kappa, crosscheck, trials_for
 from grip_env.dataset.manifest import read_manifest, write_manifest
 from grip_env.objects import load_object_set
 
@@ -26,17 +27,78 @@ def tiny(tmp_path_factory: pytest.TempPathFactory) -> Path:
                     progress=False)
 
 
+@pytest.fixture(scope="module")
+def checked(tiny: Path, tmp_path_factory: pytest.TempPathFactory) -> tuple[CrossCheck, Path]:
+    parts = tmp_path_factory.mktemp("parts") / "cross.crosscheck"
+    return crosscheck(tiny, 2, seed=0, parts=parts), parts
+
+
 @pytest.mark.slow
-def test_every_grip_runs_in_both_engines_and_pybullet_reproduces_its_labels(tiny):
-    found = crosscheck(tiny, 2, seed=0)
+def test_every_grip_runs_in_both_engines_and_pybullet_reproduces_its_labels(checked):
+    found, _ = checked
+    overall = found.overall
     assert (found.engine, found.other) == ("pybullet", "mujoco")
-    assert found.objects == 2 and found.grips == 8 and found.trials == 24
-    assert found.reproduced == found.grips  # the own engine's run is the recorded labels
-    assert 0.0 <= found.agreement <= 1.0
-    low, high = found.agreement_interval
-    assert low <= found.agreement <= high
+    assert overall.objects == 2 and overall.grips == 8 and overall.trials == 24
+    assert found.reproduced == overall.grips  # the own engine's run is the recorded labels
     assert set(found.families) == {"named"}
-    assert repr(crosscheck(tiny, 2, seed=0)) == repr(found)  # seeded: the same figures again
+    assert found.families["named"].grips == 8
+    for name in ("agreement", "kappa", "within", "pooled", "top1_own", "top1_other",
+                 "retest_own", "retest_other"):
+        value, (low, high) = getattr(overall, name), getattr(overall, f"{name}_interval")
+        if np.isfinite(value):
+            assert low <= value <= high, name
+    assert 0.0 <= overall.agreement <= 1.0 and overall.top1_own in (0.0, 0.5, 1.0)
+    assert not (overall.retest_own > 1.0 or overall.retest_other > 1.0)  # NaN: tied labels
+
+
+@pytest.mark.slow
+def test_each_engine_s_cost_is_counted_on_its_own_trials(checked):
+    found, _ = checked
+    costs = {cost.engine: cost for cost in found.cost}
+    assert set(costs) == {"pybullet", "mujoco"}
+    for cost in costs.values():
+        assert cost.trials == 48  # 8 grips x 3 trials, for the labels and for the retest
+        assert cost.steps > 100 * cost.trials and cost.cpu_seconds > 0
+        assert cost.ms_per_trial == pytest.approx(1e3 * cost.cpu_seconds / cost.trials)
+        assert cost.us_per_step == pytest.approx(1e6 * cost.cpu_seconds / cost.steps)
+
+
+@pytest.mark.slow
+def test_a_rerun_takes_each_object_from_its_part_and_remakes_a_stale_one(tiny, checked):
+    found, parts = checked
+    files = sorted(parts.glob("*.json"))
+    assert len(files) == 2
+    again = crosscheck(tiny, 2, seed=0, parts=parts)
+    assert repr(again) == repr(found)  # seeded, and the parts read back exactly
+    stored = json.loads(files[0].read_text())
+    stored["draws"]["mujoco"] = stored["draws"]["pybullet"]  # MuJoCo "agrees" everywhere
+    files[0].write_text(json.dumps(stored))
+    edited = crosscheck(tiny, 2, seed=0, parts=parts)  # the part is read, not simulated
+    trials = [24 // 2, 24 // 2]
+    alike = round(found.overall.agreement * 24)
+    assert edited.overall.agreement > found.overall.agreement or alike == 24
+    assert edited.overall.trials == sum(trials)
+    stored["key"]["fingerprint"] = "another dataset"
+    files[0].write_text(json.dumps(stored))
+    remade = crosscheck(tiny, 2, seed=0, parts=parts)  # not this run's part: simulated again
+    assert remade.overall.agreement == found.overall.agreement
+    assert json.loads(files[0].read_text())["key"]["fingerprint"] != "another dataset"
+
+
+def test_trials_for_a_trustworthy_label_follow_spearman_brown():
+    # retest 0.8 from 3 trials: one trial's reliability 0.8 / (3 - 2 x 0.8) = 4/7, and
+    # n = 0.8 (1 - 4/7) / (0.2 x 4/7) = 3 trials give 0.8 again
+    assert trials_for(0.8, 3) == pytest.approx(3.0)
+    assert trials_for(0.834, 5) == pytest.approx(3.98, abs=0.01)  # BENCHMARKS: 4 trials, 0.8
+    assert trials_for(0.5, 1) == pytest.approx(4.0)
+    assert trials_for(-0.1, 3) == float("inf") and np.isnan(trials_for(float("nan"), 3))
+
+
+def test_kappa_is_cohen_s_on_the_pooled_trials():
+    # 10 trials: 6 alike; engine a succeeds 5 times, b 5 times: chance 0.5, kappa 0.2
+    rows = [{"trials": 4, "alike": 3, "a": 2, "b": 3}, {"trials": 6, "alike": 3, "a": 3, "b": 2}]
+    agreement, kappa = _kappa(rows)
+    assert agreement == pytest.approx(0.6) and kappa == pytest.approx(0.2)
 
 
 @pytest.mark.slow
@@ -60,3 +122,31 @@ def test_the_cli_reports_the_agreement(tiny, tmp_path):
     assert code == 0, output
     assert "pybullet against mujoco" in output and "kappa" in output
     assert json.loads(report.read_text())["crosscheck"]["objects"] == 1
+
+
+@pytest.mark.slow
+def test_the_card_and_the_study_report_show_a_recorded_crosscheck(tiny, checked, tmp_path):
+    from classifiers.report.document import Report
+    from classifiers.report.study_report import _crosscheck_section
+    from grip_env.dataset.card import CROSSCHECK_FILE, dataset_card
+
+    found, _ = checked
+    assert "Not cross-checked in the other engine yet" in dataset_card(tiny)
+    stored = json.loads(json.dumps({"crosscheck": {"objects": 2, **found.as_dict()}}))
+    card = dataset_card(tiny, stored)
+    overall = found.overall
+    assert f"| all | 2 | {overall.agreement:.1%} [" in card
+    assert f"| named | 2 | {found.families['named'].agreement:.1%} [" in card
+    assert "| mujoco | 48 |" in card and "core-s a trustworthy label" in card
+    study = tmp_path / "study"
+    study.mkdir()
+    (study / "data.json").write_text(json.dumps({"dataset": str(tmp_path / "data")}))
+    report = Report("study")
+    _crosscheck_section(report, study)
+    assert not report.blocks  # no cross-check recorded with the dataset: no section
+    (tmp_path / "data" / CROSSCHECK_FILE).parent.mkdir(parents=True)
+    (tmp_path / "data" / CROSSCHECK_FILE).write_text(json.dumps(stored))
+    _crosscheck_section(report, study)
+    assert report.blocks[0].content == "Agreement between engines"
+    assert any("reproduced their recorded labels" in str(b.content) for b in report.blocks)
+    assert [b.kind for b in report.blocks] == ["heading", "text", "table", "table"]

@@ -30,10 +30,36 @@ def test_an_unknown_engine_is_refused_by_name():
         require_engine("physx")
 
 
+def without_mujoco(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Make ``import mujoco`` fail as it does where it is not installed (``None`` in
+    ``sys.modules`` is Python's own "not importable"; the world's module is imported anew)."""
+    import sys
+
+    monkeypatch.setitem(sys.modules, "mujoco", None)
+    monkeypatch.delitem(sys.modules, "grip_env.sim.mujoco_world", raising=False)
+
+
 def test_an_engine_not_installed_says_how_to_install_it(monkeypatch):
-    monkeypatch.setitem(engine._PACKAGES, "mujoco", "grip_env_no_such_package")
+    without_mujoco(monkeypatch)
     with pytest.raises(EngineUnavailable, match='pip install "grip-env\\[mujoco\\]"'):
         make_world(Config().override(sim={"engine": "mujoco"}).sim)
+    with pytest.raises(ImportError):  # the simulation is real: the module cannot be imported
+        import grip_env.sim.mujoco_world  # noqa: F401
+
+
+def test_an_engine_that_cannot_be_loaded_says_so_and_how_to_reinstall(monkeypatch):
+    import importlib
+
+    real = importlib.import_module
+
+    def broken(name: str, *args: object):
+        if name == "grip_env.sim.mujoco_world":
+            raise ImportError("libmujoco.so.4.0.1: cannot open shared object file")
+        return real(name, *args)
+
+    monkeypatch.setattr(importlib, "import_module", broken)
+    with pytest.raises(EngineUnavailable, match=r"cannot be loaded .*libmujoco.*reinstall"):
+        require_engine("mujoco")
 
 
 @pytest.mark.parametrize("command", ["generate", "calibrate"])
@@ -45,9 +71,9 @@ def test_the_cli_refuses_an_unknown_engine_and_writes_nothing(tmp_path, command)
     assert not out.exists()
 
 
-@pytest.mark.parametrize("command", ["generate", "calibrate"])
+@pytest.mark.parametrize("command", ["generate", "calibrate", "study"])
 def test_the_cli_refuses_a_missing_engine_in_one_line(tmp_path, monkeypatch, command):
-    monkeypatch.setitem(engine._PACKAGES, "mujoco", "grip_env_no_such_package")
+    without_mujoco(monkeypatch)
     config = tmp_path / "mujoco.yaml"
     config.write_text("sim:\n  engine: mujoco\n")
     out = tmp_path / "out"
@@ -114,3 +140,49 @@ def test_an_environment_runs_live_in_mujoco():
     _, reward, _, _, info = env.step(0)
     assert reward in (0.0, 1.0) and "success" in info
     env.close()
+
+
+def test_a_session_stamps_the_label_model_and_version_of_its_own_engine():
+    from datetime import UTC, datetime
+
+    from grip_env.dataset.manifest import session_record
+    from grip_env.label_model import LABEL_MODEL, MUJOCO_LABEL_MODEL
+
+    start = datetime(2026, 12, 6, tzinfo=UTC)
+    pybullet = session_record(start, 1.0, 1, "process", 1, 3, None)
+    assert pybullet["label_model"] == LABEL_MODEL and pybullet["engine"]["name"] == "pybullet"
+    mujoco = session_record(start, 1.0, 1, "process", 1, 3, None, engine="mujoco")
+    assert mujoco["label_model"] == MUJOCO_LABEL_MODEL != LABEL_MODEL
+    assert mujoco["engine"]["name"] == "mujoco"
+
+
+def test_a_dataset_is_judged_against_the_label_model_of_its_own_engine():
+    from grip_env.label_model import (
+        LABEL_MODEL,
+        MUJOCO_LABEL_MODEL,
+        engine_of,
+        label_model_warning,
+    )
+
+    mujoco = {"label_model": MUJOCO_LABEL_MODEL, "engine": {"name": "mujoco", "version": "4"}}
+    assert engine_of(mujoco) == "mujoco" and label_model_warning(mujoco) is None
+    mislabelled = {**mujoco, "label_model": LABEL_MODEL}
+    warning = label_model_warning(mislabelled)
+    assert warning and repr(LABEL_MODEL) in warning and repr(MUJOCO_LABEL_MODEL) in warning
+    older = {"label_model": LABEL_MODEL, "config": {"sim": {}}}  # made before engines
+    assert engine_of(older) == "pybullet" and label_model_warning(older) is None
+    by_config = {"label_model": MUJOCO_LABEL_MODEL, "config": {"sim": {"engine": "mujoco"}}}
+    assert label_model_warning(by_config) is None
+
+
+@pytest.mark.skipif(__import__("importlib").util.find_spec("mujoco") is None,
+                    reason="mujoco not installed")
+def test_the_engine_version_a_manifest_records_is_the_engine_s_own():
+    import re
+
+    import mujoco
+
+    from grip_env.dataset.manifest import engine_record
+
+    assert engine_record("mujoco") == {"name": "mujoco", "version": mujoco.__version__}
+    assert re.fullmatch(r"\d+\.\d+\.\d+", engine_record("pybullet")["version"])

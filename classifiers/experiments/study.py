@@ -319,14 +319,18 @@ def check_learner_names(config: Config) -> None:
 def check_label_model(data_dir: Path) -> None:
     """ValueError when ``data_dir`` holds a dataset of another label model than this code's: a
     study never mixes label models (its stages would compare labels of two simulations)."""
-    from grip_env.dataset import dataset_label_model
-    from grip_env.label_model import LABEL_MODEL
+    from grip_env.dataset import dataset_label_model, dataset_manifest
+    from grip_env.label_model import LABEL_MODEL, expected_label_model
 
     found = dataset_label_model(data_dir)
-    if found not in (None, LABEL_MODEL):
+    try:  # the label model this code makes in the dataset's engine
+        expected = expected_label_model(dataset_manifest(data_dir))
+    except ValueError:  # no readable manifest: its readers say what is wrong
+        expected = LABEL_MODEL
+    if found not in (None, expected):
         raise ValueError(
             f"{data_dir} holds a dataset of label model {found!r}, this grip-env's is "
-            f"{LABEL_MODEL!r}: a study does not mix label models; regenerate it into an empty "
+            f"{expected!r}: a study does not mix label models; regenerate it into an empty "
             f"folder (another study folder, or delete {data_dir})"
         )
 
@@ -461,15 +465,17 @@ def recorded_calibration(data_dir: Path, config: Config) -> Path | None:
     the labels are still this code's.
     """
     from grip_env.calibration import CalibrationSettings
-    from grip_env.label_model import LABEL_MODEL
+    from grip_env.label_model import label_model_for
 
     path = Path(data_dir) / RECORDED_CALIBRATION
     found = _stored(path)
-    if not found or found.get("label_model") != LABEL_MODEL or "config" not in found:
+    if not found or "config" not in found:
         return None
     try:
         recipe = Config.model_validate(found["config"])
     except ValueError:
+        return None
+    if found.get("label_model") != label_model_for(recipe.sim.engine):
         return None
     full = asdict(CalibrationSettings())
     settings = {k: v for k, v in (found.get("settings") or {}).items() if k != "workers"}

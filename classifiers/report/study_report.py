@@ -66,6 +66,7 @@ def write_report(out: Path, config: Config, table: pd.DataFrame,
     _feature_section(report, table, fig_dir)
     _rank_section(report, objects, config)
     _calibration_section(report, out, fig_dir)
+    _crosscheck_section(report, out)
     _perception_section(report, out, table)
     _classifier_section(report, out)
     _regression_section(report, out)
@@ -416,6 +417,23 @@ def _calibration_section(report: Report, out: Path, fig_dir: Path) -> None:
     trials_path = out / "calibration" / TRIALS_FILE
     trials = pd.read_parquet(trials_path) if trials_path.exists() else None
     calibration_section(report, result, trials, fig_dir, out)
+
+
+def _crosscheck_section(report: Report, out: Path) -> None:
+    """The dataset's cross-check in the other engine, when one is recorded with it
+    (``grip_env.dataset.card.CROSSCHECK_FILE``); nothing otherwise."""
+    from grip_env.dataset.card import crosscheck_tables, recorded_crosscheck
+
+    recorded = _json(out / "data.json") or {}  # the study's record of its dataset
+    found = recorded_crosscheck(Path(recorded.get("dataset", out / "dataset")))
+    if found is None:
+        return
+    intro, agreement, cost = crosscheck_tables(found)
+    report.heading("Agreement between engines")
+    report.text(intro)
+    report.table(agreement)
+    if len(cost):
+        report.table(cost, caption="Each engine's cost in the same run (CPU of the workers)")
 
 
 @_stage_section("Planning on the rendered contour against the true one",

@@ -57,8 +57,10 @@ def study(
     with stop_on_signals(f"rerun the same command to finish {out}"), user_errors(), shown():
         check_output_dir(out)
         from grip_env.config import load_config
+        from grip_env.sim.engine import require_engine
 
         settings = load_config(config)
+        require_engine(settings.sim.engine)  # its trials run in it: refused before any work
         data = study_data(data, regenerate, quick)
         if update_readme and not readme.is_file():
             raise ValueError(f"--readme {readme} is not a file")

@@ -35,7 +35,9 @@ def validate(
     seed: Annotated[int, typer.Option(min=0, help="seed of the samples")] = 0,
     workers: Annotated[int, typer.Option(min=1, help="worker processes for the samples")] = 2,
     report: Annotated[Path | None, typer.Option(
-        help="write what --resimulate and --retest found to this JSON file (for the card)")
+        help="write what --resimulate, --retest and --crosscheck found to this JSON file (for "
+             "the card); a cross-check keeps each object's outcomes in REPORT's stem + "
+             "'.crosscheck/', so that the same command resumes it")
     ] = None,
 ) -> None:
     """Check a dataset: schema, checksums, features and outcomes; with `--resimulate N`, that
@@ -78,7 +80,7 @@ def validate(
     if resimulate is not None:
         found["resimulation"] = _resimulate(directory, resimulate, seed, workers)
     if crosscheck is not None:
-        found["crosscheck"] = _crosscheck(directory, crosscheck, seed, workers)
+        found["crosscheck"] = _crosscheck(directory, crosscheck, seed, workers, report)
     if report is not None:
         report.write_text(json.dumps(found, indent=1), encoding="utf-8")
     if resimulate is not None and found["resimulation"]["differences"]:
@@ -111,16 +113,32 @@ def _resimulate(directory: Path, grips: int, seed: int, workers: int) -> dict[st
     return {"grips": grips, "seed": seed, "summary": found.summary(), **asdict(found)}
 
 
-def _crosscheck(directory: Path, objects: int, seed: int, workers: int) -> dict[str, object]:
-    """Report the agreement between engines."""
-    with user_errors():
+def _crosscheck(directory: Path, objects: int, seed: int, workers: int,
+                report: Path | None) -> dict[str, object]:
+    """Report the agreement between engines and their costs (each object's outcomes kept beside
+    ``report``, so that a rerun of an interrupted cross-check resumes)."""
+    with user_errors(), shown():
         from grip_env.dataset.crosscheck import crosscheck
 
-        found = crosscheck(directory, objects, seed=seed, workers=workers)
+        parts = None if report is None else crosscheck_parts(report)
+        found = crosscheck(directory, objects, seed=seed, workers=workers, parts=parts)
     typer.echo(found.summary())
     for family, figures in found.families.items():
-        typer.echo(f"  {family}: " + ", ".join(f"{k} {v:.3g}" for k, v in figures.items()))
-    return {"seed": seed, "summary": found.summary(), **asdict(found)}
+        typer.echo(f"  {family} ({figures.objects} objects): success agree "
+                   f"{figures.agreement:.1%}, kappa {figures.kappa:.2f}, within "
+                   f"{figures.within:.2f} (retests {figures.retest_own:.2f}, "
+                   f"{figures.retest_other:.2f}), pooled {figures.pooled:.2f}, top-1 "
+                   f"{figures.top1_own:.0%} / {figures.top1_other:.0%}")
+    for cost in found.cost:
+        typer.echo(f"  {cost.engine}: {cost.ms_per_trial:.0f} ms a trial, "
+                   f"{cost.us_per_step:.0f} us a step, {cost.trials_for_trustworthy:.1f} trials "
+                   f"for a retest of 0.8: {cost.core_seconds_per_label:.2f} core-s a label")
+    return {"objects": objects, **found.as_dict()}
+
+
+def crosscheck_parts(report: Path) -> Path:
+    """The folder beside ``report`` that keeps a cross-check's per-object outcomes."""
+    return report.with_name(report.stem + ".crosscheck")
 
 
 def _retest(directory: Path, objects: int, seed: int, workers: int) -> dict[str, object]:

@@ -1,6 +1,7 @@
 """A dataset card (``docs/dataset.md`` for the standard dataset), written from the dataset itself.
 
     grip-env validate DIR --resimulate 100 --retest 40 --report R.json
+    grip-env validate DIR --crosscheck 40 --report DIR/crosscheck/crosscheck.json
     python -m grip_env.dataset.card DIR --out docs/dataset.md --report R.json
 
 Every figure comes from the dataset's manifest and grips (and, when given, the report of a
@@ -36,7 +37,8 @@ def dataset_card(directory: str | Path, report: dict[str, Any] | None = None) ->
     families = pd.Series({e["object_id"]: e["family"] for e in manifest["objects"]})
     sections = [_heading(manifest, grips), _making(manifest, grips),
                 _composition(grips, families, manifest), _outcomes(grips, manifest),
-                _reliability(report), _calibration(Path(directory)), _limits(manifest, report),
+                _reliability(report), _calibration(Path(directory)),
+                _engines(manifest, Path(directory), report), _limits(manifest, report),
                 _licence()]
     return "\n\n".join(sections) + "\n"
 
@@ -217,6 +219,81 @@ def _limits(manifest: dict[str, Any], report: dict[str, Any] | None) -> str:
         "- The labels belong to one label model; another grip-env warns about them, and a "
         "change of the simulator that moves any outcome needs the dataset regenerated.",
     ])
+
+
+#: The cross-check recorded with a dataset (``grip-env validate DIR --crosscheck N --report
+#: DIR/crosscheck/crosscheck.json``), read by the card and by the study's report.
+CROSSCHECK_FILE = Path("crosscheck") / "crosscheck.json"
+
+
+def recorded_crosscheck(directory: Path, report: dict[str, Any] | None = None,
+                        ) -> dict[str, Any] | None:
+    """The cross-check of ``report`` (a ``validate --report`` JSON), else the one recorded with
+    the dataset in ``directory`` (:data:`CROSSCHECK_FILE`), else None."""
+    if report and "crosscheck" in report:
+        return report["crosscheck"]
+    path = Path(directory) / CROSSCHECK_FILE
+    return json.loads(path.read_text()).get("crosscheck") if path.is_file() else None
+
+
+def _engines(manifest: dict[str, Any], directory: Path, report: dict[str, Any] | None) -> str:
+    engine = manifest.get("engine") or {"name": "pybullet", "version": None}
+    head = ["## The engine's share of a label", "",
+            f"Labelled in {engine['name']} {engine.get('version') or '(version unrecorded)'}, "
+            f"label model `{label_model_of(manifest)}`."]
+    found = recorded_crosscheck(directory, report)
+    if found is None:
+        return "\n".join([*head, "", "Not cross-checked in the other engine yet: `grip-env "
+                          f"validate DIR --crosscheck 40 --report DIR/{CROSSCHECK_FILE}`."])
+    return "\n".join([*head, "", crosscheck_markdown(found)])
+
+
+def _figure(group: dict[str, Any], name: str, percent: bool = False) -> str:
+    value, (low, high) = group[name], group[f"{name}_interval"]
+    if value is None or not np.isfinite(value):
+        return "–"
+    shown = (lambda v: f"{v:.1%}") if percent else (lambda v: f"{v:.2f}")
+    bounds = f" [{shown(low)}, {shown(high)}]" if low is not None and np.isfinite(low) else ""
+    return shown(value) + bounds
+
+
+def crosscheck_tables(found: dict[str, Any]) -> tuple[str, pd.DataFrame, pd.DataFrame]:
+    """A ``validate --crosscheck`` result (its report's ``crosscheck``) as what it is, the
+    agreement overall and by family with each engine's retest beside it, and the engines'
+    costs (tables of formatted text)."""
+    a, b = found["engine"], found["other"]
+    intro = (f"`grip-env validate DIR --crosscheck {found.get('objects', '')} --seed "
+             f"{found['seed']}`: every recorded grip of the sampled objects simulated again in "
+             f"{a} and in {b} (same grips, draws and protocol; {found['reproduced']} of "
+             f"{found['overall']['grips']} grips reproduced their recorded labels in {a}). "
+             "Intervals: 95 % bootstrap over objects. Each engine's within-object retest (its "
+             "own labels under new draws) is the ceiling of the agreement between them.")
+    groups = [("all", found["overall"]), *sorted(found.get("families", {}).items())]
+    agreement = pd.DataFrame([{
+        "objects": name, "n": str(g["objects"]), "success alike": _figure(g, "agreement", True),
+        "kappa": _figure(g, "kappa"), "within-object Spearman": _figure(g, "within"),
+        f"retest {a}": _figure(g, "retest_own"), f"retest {b}": _figure(g, "retest_other"),
+        "pooled Spearman": _figure(g, "pooled"), f"top-1 {a} in {b}": _figure(g, "top1_own", True),
+        f"top-1 {b} in {a}": _figure(g, "top1_other", True)} for name, g in groups])
+    cost = pd.DataFrame([{
+        "engine": c["engine"], "trials": f"{c['trials']:,}",
+        "CPU s a trial": f"{c['ms_per_trial'] / 1e3:.3f}", "µs a step": f"{c['us_per_step']:.0f}",
+        "trials for retest 0.8": f"{c['trials_for_trustworthy']:.1f}",
+        "core-s a trustworthy label": f"{c['core_seconds_per_label']:.2f}"}
+        for c in found.get("cost", [])])
+    return intro, agreement, cost
+
+
+def crosscheck_markdown(found: dict[str, Any]) -> str:
+    """:func:`crosscheck_tables` as Markdown."""
+    intro, agreement, cost = crosscheck_tables(found)
+    return "\n\n".join([intro, *(_markdown(t) for t in (agreement, cost) if len(t))])
+
+
+def _markdown(table: pd.DataFrame) -> str:
+    return "\n".join([f"| {' | '.join(table.columns)} |",
+                      f"| {' | '.join('---' for _ in table.columns)} |",
+                      *(f"| {' | '.join(row)} |" for row in table.astype(str).to_numpy())])
 
 
 def _licence() -> str:

@@ -2,32 +2,90 @@
 
 Every recorded grip of a seeded sample of objects (as ``retest`` samples them) runs its
 ``dataset.trials`` trials in the dataset's own engine and in the other one, with the same grips,
-the same draws (trials 0..T-1 of the dataset's seed) and the same protocol. The own engine's run
-is the recorded labels again (checked: ``reproduced`` counts the grips whose mean robustness is
-the recorded one); the figures compare it with the other engine's:
+the same draws (trials 0..T-1 of the dataset's seed) and the same protocol; with ``ceilings``
+each engine also runs trials T..2T-1, its own within-object retest (the ceiling any agreement
+between engines can reach). The own engine's first run is the recorded labels again (checked:
+``reproduced`` counts the grips whose mean robustness is the recorded one). Reported, over all
+objects and by family (mesh, procedural, named...), with 95 % bootstrap intervals over objects:
 
 * per-trial success agreement and Cohen's kappa;
-* the pooled Spearman of the grips' mean robustness, and its mean within objects;
-* top-1: how often the grip one engine ranks first (by mean robustness) succeeds in most of its
-  trials in the other, both ways;
-* the same by object family.
+* the pooled Spearman of the grips' mean robustness, and its mean within objects, beside each
+  engine's own within-object retest;
+* top-1, both ways: how often the grip one engine ranks first (by mean robustness) succeeds in
+  most of its trials in the other;
+* each engine's cost: CPU seconds a trial and a protocol step (of the worker processes), and a
+  trustworthy label's: the trials that bring its within-object retest to ``TRUSTWORTHY``
+  (Spearman-Brown from the measured retest) times a trial's cost.
 
-Intervals are 95 % bootstrap intervals over objects.
+Each object's outcomes are kept in ``parts`` (when given) as it finishes: an interrupted run
+given the same folder again simulates only the objects not done.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import json
+import math
+import time
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from grip_env.config import ENGINES
+from grip_env.dataset.files import write_text_atomically
 from grip_env.dataset.manifest import read_manifest
 from grip_env.dataset.resimulation import BOOTSTRAP, _map, _ObjectCheck, _retest_sample
-from grip_env.label_model import label_model_for, label_model_of
+from grip_env.label_model import engine_of, label_model_for, label_model_of
 from grip_env.objects.family import object_family
+
+#: The within-object retest a trustworthy label reaches (the labels' target, BENCHMARKS.md).
+TRUSTWORTHY = 0.8
+#: The outcome columns an object's part keeps for each run.
+_KEPT = ("grip", "trial", "robustness", "success", "steps")
+#: Per-object scores, each averaged over objects (NaN where an object gives none).
+_SCORES = ("spearman", "top_own", "top_other", "retest_own", "retest_other")
+
+
+@dataclass
+class Agreement:
+    """The engines' agreement on a group of objects; each ``*_interval`` a 95 % bootstrap
+    interval over the objects."""
+
+    objects: int
+    grips: int
+    trials: int
+    agreement: float  # share of trials both engines judge alike (success)
+    agreement_interval: tuple[float, float]
+    kappa: float
+    kappa_interval: tuple[float, float]
+    pooled: float  # Spearman of the grips' mean robustness, all the group's grips together
+    pooled_interval: tuple[float, float]
+    within: float  # mean over objects of the within-object Spearman between engines
+    within_interval: tuple[float, float]
+    top1_own: float  # share of objects whose own-engine first grip mostly succeeds in the other
+    top1_own_interval: tuple[float, float]
+    top1_other: float  # ... whose other-engine first grip mostly succeeds in the own engine
+    top1_other_interval: tuple[float, float]
+    retest_own: float  # mean over objects of the own engine's within-object retest (ceiling)
+    retest_own_interval: tuple[float, float]
+    retest_other: float  # ... of the other engine's
+    retest_other_interval: tuple[float, float]
+
+
+@dataclass
+class EngineCost:
+    """What one engine's trials of the cross-check cost (CPU seconds of the worker processes)."""
+
+    engine: str
+    trials: int
+    steps: int  # protocol steps (``sim.timestep`` each; MuJoCo subdivides them)
+    cpu_seconds: float
+    ms_per_trial: float
+    us_per_step: float
+    trials_for_trustworthy: float  # trials a grip for a within-object retest of TRUSTWORTHY
+    core_seconds_per_label: float  # those trials (rounded up) times a trial's cost
 
 
 @dataclass
@@ -36,26 +94,26 @@ class CrossCheck:
 
     engine: str
     other: str
-    objects: int
-    grips: int
-    trials: int
+    seed: int
     reproduced: int  # grips whose own-engine mean robustness is the recorded one, bit for bit
-    agreement: float  # share of trials both engines judge alike (success)
-    agreement_interval: tuple[float, float]
-    kappa: float
-    pooled: float  # Spearman of the grips' mean robustness, all objects together
-    within: float  # mean over objects of the within-object Spearman
-    within_interval: tuple[float, float]
-    top1: float  # share of (object, direction) whose first-ranked grip mostly succeeds
-    families: dict[str, dict[str, float]] = field(default_factory=dict)
+    overall: Agreement
+    families: dict[str, Agreement] = field(default_factory=dict)
+    cost: list[EngineCost] = field(default_factory=list)
 
     def summary(self) -> str:
-        a, w = self.agreement_interval, self.within_interval
-        return (f"{self.engine} against {self.other} on {self.grips} grips of {self.objects} "
-                f"objects ({self.trials} trials; {self.reproduced} reproduced): success agree "
-                f"{self.agreement:.1%} [{a[0]:.1%}, {a[1]:.1%}], kappa {self.kappa:.2f}, "
-                f"within-object Spearman {self.within:.2f} [{w[0]:.2f}, {w[1]:.2f}], pooled "
-                f"{self.pooled:.2f}, top-1 {self.top1:.1%}")
+        o = self.overall
+        a, w = o.agreement_interval, o.within_interval
+        return (f"{self.engine} against {self.other} on {o.grips} grips of {o.objects} objects "
+                f"({o.trials} trials; {self.reproduced} reproduced): success agree "
+                f"{o.agreement:.1%} [{a[0]:.1%}, {a[1]:.1%}], kappa {o.kappa:.2f}, "
+                f"within-object Spearman {o.within:.2f} [{w[0]:.2f}, {w[1]:.2f}] (retest "
+                f"{self.engine} {o.retest_own:.2f}, {self.other} {o.retest_other:.2f}), pooled "
+                f"{o.pooled:.2f}, top-1 {self.engine} in {self.other} {o.top1_own:.1%}, "
+                f"{self.other} in {self.engine} {o.top1_other:.1%}")
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-able, with the summary."""
+        return {"summary": self.summary(), **asdict(self)}
 
 
 def other_engine(engine: str) -> str:
@@ -67,13 +125,13 @@ def check_crosscheckable(directory: Path) -> str:
     """The engine of the dataset in ``directory``, once it is sure this code can cross-check it.
 
     Raises:
-        ValueError: its label model is not one this code reproduces (its engine's), or the other
-            engine is not installed.
+        ValueError: an unknown engine, a label model this code does not make (its engine's),
+            or an engine that is not installed.
     """
     from grip_env.sim.engine import require_engine
 
     manifest = read_manifest(directory)
-    engine = manifest.get("config", {}).get("sim", {}).get("engine", ENGINES[0])
+    engine = engine_of(manifest)
     found, expected = label_model_of(manifest), label_model_for(engine)
     if found != expected:
         raise ValueError(f"dataset {directory} was labelled by label model {found!r}; this code "
@@ -84,8 +142,14 @@ def check_crosscheckable(directory: Path) -> str:
     return engine
 
 
-def crosscheck(path: str | Path, objects: int, seed: int = 0, workers: int = 1) -> CrossCheck:
+def crosscheck(path: str | Path, objects: int, seed: int = 0, workers: int = 1,
+               parts: str | Path | None = None, ceilings: bool = True) -> CrossCheck:
     """Simulate every grip of ``objects`` seeded objects in both engines and compare.
+
+    Args:
+        parts: a folder keeping each object's outcomes as it finishes (a rerun given it
+            simulates only what is missing); None keeps nothing.
+        ceilings: also run each engine's within-object retest (twice the trials).
 
     Raises:
         ValueError: ``objects`` is not a positive integer, the dataset is unreadable, or its
@@ -94,37 +158,113 @@ def crosscheck(path: str | Path, objects: int, seed: int = 0, workers: int = 1) 
     directory = Path(path)
     engine = check_crosscheckable(directory)
     checks = _retest_sample(directory, objects, seed)
-    runs = _map(_both_engines, checks, workers, "crosscheck")
+    key = _run_key(read_manifest(directory), ceilings)
+    folder = None if parts is None else Path(parts)
+    if folder is not None:
+        folder.mkdir(parents=True, exist_ok=True)
+    runs = _map(_object_runs, [(check, folder, key) for check in checks], workers, "crosscheck")
     return _figures(checks, runs, engine, seed)
 
 
-def _both_engines(check: _ObjectCheck) -> tuple[pd.DataFrame, pd.DataFrame]:
-    """Per-trial outcomes of every recorded grip of one object in its engine and the other."""
+@dataclass
+class _Runs:
+    """One object's outcomes: per engine, trials 0..T-1 (``draws``) and T..2T-1 (``retest``,
+    None without ceilings), and the CPU seconds each engine took."""
+
+    draws: dict[str, pd.DataFrame]
+    retest: dict[str, pd.DataFrame | None]
+    seconds: dict[str, float]
+
+
+def _run_key(manifest: dict[str, Any], ceilings: bool) -> dict[str, Any]:
+    """What an object's outcomes depend on: a part made under another key is made again."""
+    return {"fingerprint": manifest.get("fingerprint"), "ceilings": ceilings,
+            "label_models": {e: label_model_for(e) for e in ENGINES}}
+
+
+def _object_runs(item: tuple[_ObjectCheck, Path | None, dict[str, Any]]) -> _Runs:
+    """One object's outcomes in both engines: from its part when one of this run is kept, else
+    simulated (and kept)."""
+    check, folder, key = item
+    file = None if folder is None else folder / f"{check.task.index:05d}.json"
+    key = {**key, "object_id": check.task.object_id}
+    if file is not None and file.is_file():
+        stored = json.loads(file.read_text(encoding="utf-8"))
+        if stored.get("key") == key:
+            return _from_json(stored)
+    runs = _simulate(check, key["ceilings"])
+    if file is not None:
+        write_text_atomically(file, json.dumps({"key": key, **_to_json(runs)}) + "\n")
+    return runs
+
+
+def _simulate(check: _ObjectCheck, ceilings: bool) -> _Runs:
+    """Both engines' runs of one object, each timed by the CPU of this process (where the trials
+    run when its kernels are portable; else they run in the held worker, and the wall time of
+    the call stands for their CPU)."""
+    from grip_env.portable_math import math_is_portable
     from grip_env.sim import run_trial_outcomes
 
+    clock = time.process_time if math_is_portable() else time.perf_counter
     config = check.task.config
     grips = check.recorded.assign(object_id=check.task.object_id).reset_index(drop=True)
-    other = config.override(sim={"engine": other_engine(config.sim.engine)})
     trials, seed = config.dataset.trials, config.dataset.seed
-    return (run_trial_outcomes(check.task.obj, grips, config, trials, seed),
-            run_trial_outcomes(check.task.obj, grips, other, trials, seed))
+    draws, retest, seconds = {}, {}, {}
+    for engine in (config.sim.engine, other_engine(config.sim.engine)):
+        in_engine = config.override(sim={"engine": engine})
+        started = clock()
+        draws[engine] = run_trial_outcomes(check.task.obj, grips, in_engine, trials, seed)
+        retest[engine] = (run_trial_outcomes(check.task.obj, grips, in_engine, trials, seed,
+                                             trial_offset=trials) if ceilings else None)
+        seconds[engine] = clock() - started
+    return _Runs(draws, retest, seconds)
 
 
-def _object_figures(own: pd.DataFrame, other: pd.DataFrame) -> dict[str, float]:
-    """One object's sums and scores (trials alike, both successes, the grips' means...)."""
+def _to_json(runs: _Runs) -> dict[str, Any]:
+    def table(frame: pd.DataFrame | None) -> dict[str, list] | None:
+        return None if frame is None else {c: frame[c].tolist() for c in _KEPT}
+
+    return {"draws": {e: table(f) for e, f in runs.draws.items()},
+            "retest": {e: table(f) for e, f in runs.retest.items()}, "seconds": runs.seconds}
+
+
+def _from_json(stored: dict[str, Any]) -> _Runs:
+    def frame(columns: dict[str, list] | None) -> pd.DataFrame | None:
+        return None if columns is None else pd.DataFrame(columns).astype({"success": bool})
+
+    return _Runs({e: frame(c) for e, c in stored["draws"].items()},  # type: ignore[misc]
+                 {e: frame(c) for e, c in stored["retest"].items()}, stored["seconds"])
+
+
+def _means(frame: pd.DataFrame, column: str = "robustness") -> np.ndarray:
+    return frame.groupby("grip", sort=True)[column].mean().to_numpy()
+
+
+def _spearman(a: np.ndarray, b: np.ndarray) -> float:
     from scipy import stats
 
-    a, b = own["success"].to_numpy(bool), other["success"].to_numpy(bool)
-    mean_a = own.groupby("grip", sort=True)["robustness"].mean().to_numpy()
-    mean_b = other.groupby("grip", sort=True)["robustness"].mean().to_numpy()
-    rate_a = own.groupby("grip", sort=True)["success"].mean().to_numpy()
-    rate_b = other.groupby("grip", sort=True)["success"].mean().to_numpy()
-    spearman = (float(stats.spearmanr(mean_a, mean_b).statistic)
-                if np.ptp(mean_a) > 0 and np.ptp(mean_b) > 0 else float("nan"))
-    top = (float(rate_b[int(np.argmax(mean_a))] > 0.5)
-           + float(rate_a[int(np.argmax(mean_b))] > 0.5))
-    return {"trials": len(a), "alike": int((a == b).sum()), "a": int(a.sum()), "b": int(b.sum()),
-            "both": int((a & b).sum()), "spearman": spearman, "top": top / 2}
+    if len(a) < 2 or np.ptp(a) == 0 or np.ptp(b) == 0:
+        return float("nan")
+    return float(stats.spearmanr(a, b).statistic)
+
+
+def _object_figures(runs: _Runs, engine: str, other: str) -> dict[str, Any]:
+    """One object's sums and scores (trials alike, successes, the grips' means, retests)."""
+    own, theirs = runs.draws[engine], runs.draws[other]
+    a, b = own["success"].to_numpy(bool), theirs["success"].to_numpy(bool)
+    mean_a, mean_b = _means(own), _means(theirs)
+    rate_a, rate_b = _means(own, "success"), _means(theirs, "success")
+
+    def retest(name: str) -> float:
+        again = runs.retest.get(name)
+        return float("nan") if again is None else _spearman(_means(runs.draws[name]),
+                                                            _means(again))
+
+    return {"trials": len(a), "alike": int((a == b).sum()), "a": int(a.sum()),
+            "b": int(b.sum()), "means": (mean_a, mean_b), "spearman": _spearman(mean_a, mean_b),
+            "top_own": float(rate_b[int(np.argmax(mean_a))] > 0.5),
+            "top_other": float(rate_a[int(np.argmax(mean_b))] > 0.5),
+            "retest_own": retest(engine), "retest_other": retest(other)}
 
 
 def _reproduced(own: pd.DataFrame, check: _ObjectCheck) -> int:
@@ -139,7 +279,7 @@ def _reproduced(own: pd.DataFrame, check: _ObjectCheck) -> int:
     return int((mean == check.recorded["robustness_mean"].to_numpy()).sum())
 
 
-def _kappa(rows: list[dict[str, float]]) -> tuple[float, float]:
+def _kappa(rows: list[dict[str, Any]]) -> tuple[float, float]:
     """Per-trial agreement and Cohen's kappa over the objects ``rows``."""
     n = sum(r["trials"] for r in rows)
     if n == 0:
@@ -150,47 +290,93 @@ def _kappa(rows: list[dict[str, float]]) -> tuple[float, float]:
     return observed, (observed - chance) / (1 - chance) if chance < 1 else float("nan")
 
 
-def _interval(values: np.ndarray, rng: np.random.Generator) -> tuple[float, float]:
-    values = values[np.isfinite(values)]
-    if not len(values):
-        return float("nan"), float("nan")
-    boot = rng.choice(values, (BOOTSTRAP, len(values))).mean(axis=1)
-    return float(np.quantile(boot, 0.025)), float(np.quantile(boot, 0.975))
-
-
-def _figures(checks: list[_ObjectCheck], runs: list[tuple[pd.DataFrame, pd.DataFrame]],
-             engine: str, seed: int) -> CrossCheck:
-    from scipy import stats
-
-    rng = np.random.default_rng(seed)
-    rows = [_object_figures(own, other) for own, other in runs]
+def _group_values(rows: list[dict[str, Any]]) -> dict[str, float]:
+    """The group's figures (each a point estimate) from its objects' ``rows``."""
     agreement, kappa = _kappa(rows)
-    alike = np.array([r["alike"] / r["trials"] for r in rows]) if rows else np.zeros(0)
-    boot = rng.choice(len(rows), (BOOTSTRAP, len(rows))) if rows else np.zeros((0, 0), int)
-    trials = np.array([r["trials"] for r in rows])
-    shares = ((alike * trials)[boot].sum(axis=1) / trials[boot].sum(axis=1)) if rows else alike
-    agreement_interval = ((float(np.quantile(shares, 0.025)), float(np.quantile(shares, 0.975)))
-                          if rows else (float("nan"), float("nan")))
-    within = np.array([r["spearman"] for r in rows])
-    means = [(own.groupby("grip")["robustness"].mean(),
-              other.groupby("grip")["robustness"].mean()) for own, other in runs]
-    own_means = np.concatenate([a for a, _ in means]) if means else np.zeros(0)
-    other_means = np.concatenate([b for _, b in means]) if means else np.zeros(0)
-    pooled = (float(stats.spearmanr(own_means, other_means).statistic)
-              if len(own_means) and np.ptp(own_means) > 0 and np.ptp(other_means) > 0
-              else float("nan"))
-    reproduced = sum(_reproduced(own, check) for (own, _), check in zip(runs, checks, strict=True))
-    families: dict[str, list[dict[str, float]]] = {}
-    for check, row in zip(checks, rows, strict=True):
-        families.setdefault(object_family(check.task.obj), []).append(row)
-    by_family = {name: {"objects": len(group), "agreement": _kappa(group)[0],
-                        "kappa": _kappa(group)[1],
-                        "within": float(np.nanmean([r["spearman"] for r in group]))
-                        if any(np.isfinite(r["spearman"]) for r in group) else float("nan")}
-                 for name, group in sorted(families.items())}
-    return CrossCheck(
-        engine, other_engine(engine), len(checks), int(sum(len(c.recorded) for c in checks)),
-        int(trials.sum()) if rows else 0, reproduced, agreement, agreement_interval, kappa,
-        pooled, float(np.nanmean(within)) if np.isfinite(within).any() else float("nan"),
-        _interval(within, rng), float(np.mean([r["top"] for r in rows])) if rows else float("nan"),
-        by_family)
+    found = {"agreement": agreement, "kappa": kappa}
+    if rows:
+        found["pooled"] = _spearman(np.concatenate([r["means"][0] for r in rows]),
+                                    np.concatenate([r["means"][1] for r in rows]))
+    else:
+        found["pooled"] = float("nan")
+    for score in _SCORES:
+        values = np.array([r[score] for r in rows], float)
+        found[score] = float(np.nanmean(values)) if np.isfinite(values).any() else float("nan")
+    return found
+
+
+def _agreement(rows: list[dict[str, Any]], grips: int, rng: np.random.Generator) -> Agreement:
+    """The group's figures with bootstrap intervals (objects resampled ``BOOTSTRAP`` times)."""
+    point = _group_values(rows)
+    if rows:
+        picks = rng.integers(0, len(rows), (BOOTSTRAP, len(rows)))
+        boot = [_group_values([rows[i] for i in pick]) for pick in picks]
+    else:
+        boot = []
+
+    def interval(name: str) -> tuple[float, float]:
+        values = np.array([b[name] for b in boot], float)
+        values = values[np.isfinite(values)]
+        if not len(values):
+            return float("nan"), float("nan")
+        return float(np.quantile(values, 0.025)), float(np.quantile(values, 0.975))
+
+    named = {"spearman": "within", "top_own": "top1_own", "top_other": "top1_other"}
+    figures: dict[str, Any] = {}
+    for name, value in point.items():
+        shown = named.get(name, name)
+        figures[shown], figures[f"{shown}_interval"] = value, interval(name)
+    return Agreement(len(rows), grips, int(sum(r["trials"] for r in rows)), **figures)
+
+
+def _costs(runs: list[_Runs], engines: tuple[str, str], retests: dict[str, float],
+           trials: int) -> list[EngineCost]:
+    """Each engine's cost a trial, a step and a trustworthy label."""
+    costs = []
+    for engine in engines:
+        frames = [f for r in runs for f in (r.draws[engine], r.retest.get(engine))
+                  if f is not None]
+        count = int(sum(len(f) for f in frames))
+        steps = int(sum(f["steps"].sum() for f in frames))
+        seconds = float(sum(r.seconds[engine] for r in runs))
+        per_trial = seconds / count if count else float("nan")
+        needed = trials_for(retests[engine], trials)
+        costs.append(EngineCost(engine, count, steps, seconds, 1e3 * per_trial,
+                                1e6 * seconds / steps if steps else float("nan"), needed,
+                                math.ceil(needed) * per_trial if math.isfinite(needed)
+                                else float("nan")))
+    return costs
+
+
+def trials_for(retest: float, trials: int, target: float = TRUSTWORTHY) -> float:
+    """Trials a grip whose mean reaches a within-object retest of ``target``, from the retest
+    measured at ``trials`` a grip (Spearman-Brown: the trials' labels average as independent
+    draws, as BENCHMARKS.md found on the standard dataset). NaN when not measured, inf when the
+    measured retest is not positive."""
+    if not math.isfinite(retest):
+        return float("nan")
+    if retest <= 0:
+        return float("inf")
+    if retest >= 1:
+        return 1.0
+    single = retest / (trials - (trials - 1) * retest)
+    return target * (1 - single) / ((1 - target) * single)
+
+
+def _figures(checks: list[_ObjectCheck], runs: list[_Runs], engine: str,
+             seed: int) -> CrossCheck:
+    rng = np.random.default_rng(seed)
+    other = other_engine(engine)
+    rows = [_object_figures(r, engine, other) for r in runs]
+    grips = [len(c.recorded) for c in checks]
+    overall = _agreement(rows, sum(grips), rng)
+    groups: dict[str, list[int]] = {}
+    for i, check in enumerate(checks):
+        groups.setdefault(object_family(check.task.obj), []).append(i)
+    families = {name: _agreement([rows[i] for i in members], sum(grips[i] for i in members), rng)
+                for name, members in sorted(groups.items())}
+    reproduced = sum(_reproduced(r.draws[engine], c) for r, c in zip(runs, checks, strict=True))
+    trials = checks[0].task.config.dataset.trials if checks else 0
+    cost = _costs(runs, (engine, other), {engine: overall.retest_own,
+                                          other: overall.retest_other}, trials)
+    return CrossCheck(engine, other, seed, reproduced, overall, families, cost)

@@ -50,6 +50,7 @@ from grip_env.dataset.manifest import (
     write_manifest,
 )
 from grip_env.dataset.shards import GRIPS_DIR, shard_path, write_shard
+from grip_env.label_model import engine_of
 from grip_env.objects import PlanarObject
 from grip_env.progress import progress_bar
 from grip_env.shutdown import deferred_signals
@@ -244,7 +245,8 @@ def _run(
             manifest["complete"] = len(manifest["shards"]) == total
             if done:
                 manifest.setdefault("sessions", []).append(session_record(
-                    began, _elapsed(started), workers, backend, done, rows, commit))
+                    began, _elapsed(started), workers, backend, done, rows, commit,
+                    engine_of(manifest)))
             try:
                 write_manifest(directory, manifest)
             except OSError:  # disk full: a shard the manifest on disk does not list goes

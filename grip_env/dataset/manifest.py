@@ -22,7 +22,7 @@ from grip_env.dataset.catalog import OBJECTS_FILE, DatasetObject
 from grip_env.dataset.files import write_text_atomically
 from grip_env.dataset.sampling import sampling_record
 from grip_env.dataset.shards import GRIPS_DIR, SHARD_FILE, ShardRecord
-from grip_env.label_model import LABEL_MODEL, label_model_for
+from grip_env.label_model import label_model_for
 from grip_env.objects.family import object_family
 
 FORMAT = "grip-env-dataset"
@@ -37,7 +37,8 @@ LEARNING_SECTIONS = ("learning", "selector")
 #: datasets: a run identity leaves them out at that value, so such a dataset stays this code's run.
 LATER_SETTINGS: dict[str, dict[str, Any]] = {"synthesis": {"frictional_closure": False},
                                               "sim": {"engine": DEFAULT_ENGINE}}
-_VERSIONED_PACKAGES = ("numpy", "pandas", "pyarrow", "pybullet", "scipy", "shapely", "pydantic")
+_VERSIONED_PACKAGES = ("numpy", "pandas", "pyarrow", "pybullet", "mujoco", "scipy", "shapely",
+                       "pydantic")
 
 Manifest = dict[str, Any]
 
@@ -141,7 +142,7 @@ def new_manifest(
         "created": datetime.now(UTC).isoformat(timespec="seconds"),
         "versions": _versions(),
         "label_model": label_model_for(config.sim.engine),
-        "engine": _engine(config.sim.engine),
+        "engine": engine_record(config.sim.engine),
         "seed": config.dataset.seed,
         "trials": config.dataset.trials,
         "sampling": sampling_record(config.dataset),
@@ -246,12 +247,15 @@ def earlier_runs(manifest: Manifest) -> list[dict[str, Any]]:
 
 
 def session_record(started: datetime, seconds: float, workers: int, backend: str, objects: int,
-                   rows: int, git_commit: str | None) -> dict[str, Any]:
+                   rows: int, git_commit: str | None, engine: str = DEFAULT_ENGINE,
+                   ) -> dict[str, Any]:
     """One ``generate`` run's share of a dataset (``manifest["sessions"]``): a resumed dataset
-    lists every run, so its cost (core-hours, grips per core-second) adds up across them."""
+    lists every run, so its cost (core-hours, grips per core-second) adds up across them. It
+    names the label model ``engine`` made (``label_model_for``) and that engine's version."""
     return {"started": started.isoformat(timespec="seconds"), "seconds": round(seconds, 1),
             "workers": workers, "backend": backend, "objects": objects, "rows": rows,
-            "git_commit": git_commit, "label_model": LABEL_MODEL, "machine": _machine()}
+            "git_commit": git_commit, "label_model": label_model_for(engine),
+            "engine": engine_record(engine), "machine": _machine()}
 
 
 def _machine() -> str:
@@ -267,8 +271,9 @@ def _machine() -> str:
     return f"{model} x {os.cpu_count()}"
 
 
-def _engine(name: str) -> dict[str, str | None]:
-    """The physics engine that made the labels and its installed version."""
+def engine_record(name: str) -> dict[str, str | None]:
+    """The physics engine that made the labels and its installed version (the distribution's,
+    which is ``mujoco.__version__`` for MuJoCo; None when it is not installed)."""
     try:
         version: str | None = metadata.version(name)
     except metadata.PackageNotFoundError:

@@ -40,7 +40,8 @@ from grip_env.dataset.manifest import (
     write_manifest,
 )
 from grip_env.dataset.resimulation import same_candidates
-from grip_env.sim import LABEL_MODEL, run_trial_outcomes
+from grip_env.label_model import label_model_for
+from grip_env.sim import run_trial_outcomes
 from grip_env.sim.disturbance import ramp_levels, reached
 from grip_env.sim.execution import trial_summary
 
@@ -75,9 +76,10 @@ def add_trials(
 
 
 def _check_same_run(recorded: dict, config: Config, earlier: int) -> None:
-    if recorded.get("label_model") != LABEL_MODEL:
+    expected = label_model_for(config.sim.engine)
+    if recorded.get("label_model") != expected:
         raise ValueError(f"the source's label model {recorded.get('label_model')!r} is not the "
-                         f"code's {LABEL_MODEL!r}: its trials are not this simulator's")
+                         f"code's {expected!r}: its trials are not this simulator's")
     if config.dataset.trials <= earlier:
         raise ValueError(f"trials must exceed the source's {earlier}, got {config.dataset.trials}")
     wanted = _settings(run_identity(config, []))

@@ -12,6 +12,7 @@ Geometry crosses the seam in millimetres; bodies are integer ids and links PyBul
 
 from __future__ import annotations
 
+import importlib
 import importlib.util
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
@@ -28,6 +29,8 @@ if TYPE_CHECKING:
 
 #: The Python package each engine needs, and how to install it.
 _PACKAGES = {"pybullet": "pybullet", "mujoco": "mujoco"}
+#: The module of grip_env that wraps each engine (importing it loads the engine, quietly).
+_MODULES = {"pybullet": "grip_env.sim.world", "mujoco": "grip_env.sim.mujoco_world"}
 _INSTALL = {"pybullet": "pip install grip-env", "mujoco": 'pip install "grip-env[mujoco]"'}
 
 Pose = tuple[tuple[float, float, float], tuple[float, float, float, float]]
@@ -97,12 +100,19 @@ def require_engine(name: str) -> None:
 
     Raises:
         ValueError: an unknown engine.
-        EngineUnavailable: its package is not installed (the message says how to install it).
+        EngineUnavailable: its package is not installed or cannot be imported (the message
+            says how to install it).
     """
     if name not in ENGINES:
         raise ValueError(f"unknown engine {name!r}: sim.engine is one of {', '.join(ENGINES)}")
-    if importlib.util.find_spec(_PACKAGES[name]) is None:
+    package = _PACKAGES[name]
+    if importlib.util.find_spec(package) is None:
         raise EngineUnavailable(f"engine {name!r} is not installed: {_INSTALL[name]}")
+    try:  # installed but unloadable (a missing shared library, a wheel of another Python)
+        importlib.import_module(_MODULES[name])
+    except ImportError as exc:
+        raise EngineUnavailable(f"engine {name!r} is installed but cannot be loaded ({exc}): "
+                                f"reinstall it: {_INSTALL[name]}") from None
 
 
 def make_world(config: SimConfig) -> Engine:

@@ -155,11 +155,50 @@ class MujocoWorld:
                        friction=friction, rgba=rgba)
         return Body(uid, thickness_mm, (-1,), inertia)
 
-    def add_mesh(self, *args: object, **kwargs: object) -> Body:
-        """Not built yet for MuJoCo: trials on meshes (``objects.execute_on: mesh``) need
-        PyBullet's per-group convex hulls of the OBJ file."""
-        raise ValueError("objects.execute_on: mesh runs on sim.engine pybullet only; "
-                         "the mujoco engine simulates the extrusion")
+    def add_mesh(
+        self, path: str | Path, scale: float, com_mm: NDArray[np.float64],
+        position_mm: NDArray[np.float64], orientation: tuple[float, float, float, float],
+        mass_kg: float, friction: float, inertia_per_kg: tuple[float, float, float],
+        axes: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0),
+        rgba: tuple[float, float, float, float] = (0.15, 0.15, 0.15, 1.0),
+    ) -> Body:
+        """A mesh file as one free body of the pieces PyBullet builds from it: one convex hull
+        per object (``o``/``g``) of the OBJ file (``read_obj_pieces``), scaled by ``scale`` (mm
+        per mesh unit), its centre of mass ``com_mm`` (mesh frame) at ``position_mm``, the mesh
+        frame turned by ``orientation`` (x, y, z, w), principal inertia per kg about ``axes``
+        (``World.add_mesh``). The hulls are the mesh's own: Bullet grows each by its 1 mm
+        collision margin, so PyBullet's body is 1 mm larger all round. ``top_mm`` is the top of
+        the posed pieces (PyBullet's: of its turned bounding box, higher; no trial reads it).
+
+        Raises:
+            ValueError: bad scale or mass, or an unreadable mesh.
+        """
+        from grip_env.objects.meshes import read_obj_pieces
+
+        if mass_kg <= 0 or scale <= 0:
+            raise ValueError(f"mesh scale and mass must be positive, got {scale}, {mass_kg}")
+        pieces = [piece * scale * MM for piece in read_obj_pieces(Path(path))]
+        uid = len(self._bodies)
+        name = self._new_body([f"object{uid}"], [], free=True)
+        turn = np.empty(9)
+        mujoco.mju_quat2Mat(turn, [orientation[3], *orientation[:3]])
+        turn = turn.reshape(3, 3)
+        origin = np.asarray(position_mm, float) - turn @ np.asarray(com_mm, float)
+        body = self._spec.worldbody.add_body(name=name, pos=(origin * MM).tolist(),
+                                             quat=[orientation[3], *orientation[:3]])
+        body.add_freejoint()
+        body.explicitinertial = True
+        body.mass = mass_kg
+        body.ipos = (np.asarray(com_mm, float) * MM).tolist()
+        body.iquat = [axes[3], axes[0], axes[1], axes[2]]
+        body.inertia = [i * mass_kg for i in inertia_per_kg]
+        for k, piece in enumerate(pieces):
+            mesh = self._spec.add_mesh(name=f"{name}_piece{k}")
+            mesh.uservert = piece.ravel().tolist()
+            self._geom(body, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=mesh.name,
+                       friction=friction, rgba=rgba)
+        top = max(float((origin + (turn @ (piece.T / MM)).T)[:, 2].max()) for piece in pieces)
+        return Body(uid, top, (-1,), tuple(map(float, inertia_per_kg)))  # type: ignore[arg-type]
 
     def set_dynamics(self, body: Body, mass_kg: float, friction: float,
                      spinning_friction: float = 0.0) -> None:
