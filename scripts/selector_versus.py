@@ -44,7 +44,8 @@ def main() -> None:
         run_selectors(table, out / "selector", config, progress=False)
         seconds = round(time.perf_counter() - start, 1)
     (out / "classifiers").mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(study / "classifiers" / "scores.parquet", out / "classifiers" / "scores.parquet")
+    scores = Path("classifiers") / "scores.parquet"
+    shutil.copyfile(study / scores, out / scores)
     board = study_benchmark(table, out, config)
     picks = pick_differences(board, PAIRS, config.learning.seed)
     row = board["methods"]["rl"]

@@ -67,3 +67,21 @@ def test_plot_and_summary_of_a_curve_file(tmp_path):
     with pytest.raises(ValueError, match="learning-curve"):
         frame.drop(columns="seed").to_csv(tmp_path / "bad.csv", index=False)
         read_curves(tmp_path / "bad.csv")
+
+
+def test_full_information_curve_learns_the_training_objects(grips, config):
+    from classifiers.experiments.selector.curve import full_information_curve
+
+    found = full_information_curve(grips, config, iterations=200, every=100)
+    again = full_information_curve(grips, config, iterations=200, every=100)
+    assert [row[0] for row in found] == [100, 200] and found == again  # seeded
+    train = grips[~grips["object_id"].astype(str).isin(_held_out(grips, config))]
+    best = train.groupby("object_id")["success_rate"].max().mean()
+    first = train.sort_values("Q_C").groupby("object_id").first()["success_rate"].mean()
+    assert first < found[-1][1] <= best + 1e-6  # beats best-Q_C on what it was fitted to
+
+
+def _held_out(grips, config):
+    from grip_env.dataset.split import held_out_objects
+
+    return held_out_objects(grips["object_id"].astype(str), config.learning)[1]
