@@ -141,8 +141,9 @@ def plot_curves(curves: pd.DataFrame | str | Path, path: str | Path,
         for _, run in runs.groupby("seed"):
             ax.plot(run["timesteps"], run["held_out_success"], color=colour, alpha=0.25, lw=0.8)
         mean = _seed_mean(runs)
+        seeds = runs["seed"].nunique()
         ax.plot(mean.index, mean.to_numpy(), color=colour, lw=2,
-                label=f"{variant} ({runs['seed'].nunique()} seeds)")  # fmt: skip
+                label=f"{variant} ({seeds} seed{'s' if seeds > 1 else ''})")  # fmt: skip
     styles = ("--", "-.", ":", (0, (5, 1)))
     for k, (name, value) in enumerate((references or {}).items()):
         ax.axhline(value, color="black", linestyle=styles[k % len(styles)], lw=1,
