@@ -322,8 +322,13 @@ class SelectorConfig(_Section):
     timesteps: int = Field(20_000, ge=1, le=100_000_000, description="training timesteps")
     max_candidates: int = Field(64, ge=2, le=4096, description="K, candidates per observation")
     max_attempts: int = Field(1, ge=1, le=100, description="attempts per episode")
-    reward: Literal["success", "robustness"] = Field(
-        "success", description="reward of a pick: success (0/1) or robustness / reference level"
+    reward: Literal["success", "expected_success", "robustness"] = Field(
+        "success", description="reward of a pick: success (0/1), expected_success (the grip's "
+        "recorded success rate: a variance-reduction baseline) or robustness / reference level"
+    )
+    context: Literal["none", "pool", "attention"] = Field(
+        "none", description="how the set policy's scorer sees the other candidates: not at all, "
+        "their pooled embedding, or self-attention"
     )
     seed: int = Field(0, ge=0, le=MAX_SEED, description="training seed")
     seeds: int = Field(4, ge=1, le=100, description="training runs, seeds seed, seed+1, ...")

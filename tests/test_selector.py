@@ -19,7 +19,7 @@ from typer.testing import CliRunner
 from classifiers.evaluation.synthetic import synthetic_grips
 from classifiers.experiments.selector import REPORT_FILE, run_selector
 from classifiers.experiments.selector.evaluation import attempt_metrics, random_metrics
-from classifiers.experiments.selector.policy import CandidateSetPolicy, masked_pool
+from classifiers.experiments.selector.policy import CONTEXTS, CandidateSetPolicy, masked_pool
 from classifiers.experiments.selector.training import (
     make_selector_env,
     make_selector_model,
@@ -68,8 +68,9 @@ class KnownOddsEnv(gym.Env):
         return self._observation(), reward, True, False, {}
 
 
-def _set_model(seed: int = 0) -> MaskablePPO:
-    return MaskablePPO(CandidateSetPolicy, KnownOddsEnv(), n_steps=64, batch_size=32, seed=seed)
+def _set_model(seed: int = 0, context: str = "none") -> MaskablePPO:
+    return MaskablePPO(CandidateSetPolicy, KnownOddsEnv(), n_steps=64, batch_size=32, seed=seed,
+                       policy_kwargs={"context": context})  # fmt: skip
 
 
 def _probabilities_and_value(model, features, mask):
@@ -80,9 +81,11 @@ def _probabilities_and_value(model, features, mask):
     return dist.distribution.probs[0].numpy(), float(value[0, 0])
 
 
+@pytest.mark.parametrize("context", CONTEXTS)
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_set_policy_is_permutation_equivariant(seed):
-    model = _set_model(seed)
+def test_set_policy_is_permutation_equivariant(seed, context):
+    model = _set_model(seed, context)
+    model.learn(64)  # trained weights: a freshly initialised score head is nearly flat
     rng = np.random.default_rng(seed)
     features = rng.normal(size=(K, F)).astype(np.float32)
     mask = np.array([1, 1, 0, 1, 1, 0], dtype=np.int8)
@@ -102,8 +105,10 @@ def test_set_policy_is_permutation_equivariant(seed):
     assert order[int(shuffled_action)] == int(action)
 
 
-def test_set_policy_ignores_padded_slots():
-    model = _set_model()
+@pytest.mark.parametrize("context", CONTEXTS)
+def test_set_policy_ignores_padded_slots(context):
+    model = _set_model(context=context)
+    model.learn(64)
     features = np.random.default_rng(3).normal(size=(K, F)).astype(np.float32)
     mask = np.array([1, 1, 1, 0, 0, 0], dtype=np.int8)
     probs, value = _probabilities_and_value(model, features, mask)
@@ -292,6 +297,46 @@ def test_robustness_reward_pays_the_picked_grips_robustness(grips, small_config)
         make_selector_env(None, config, "train", n_envs=1)
     with pytest.raises(ValueError, match="robustness_mean"):
         make_selector_env(grips.drop(columns="robustness_mean"), config, "train", n_envs=1)
+
+
+@pytest.mark.slow
+def test_context_policy_sees_the_other_candidates_and_saves_its_context(tmp_path):
+    features = np.random.default_rng(4).normal(size=(K, F)).astype(np.float32)
+    mask = np.array([1, 1, 1, 1, 0, 0], dtype=np.int8)
+    changed = features.copy()
+    changed[3] += 2.0  # another candidate: only a context policy's other scores may move
+    for context in CONTEXTS:
+        model = _set_model(context=context)
+        model.learn(64)
+        probs, _ = _probabilities_and_value(model, features, mask)
+        moved, _ = _probabilities_and_value(model, changed, mask)
+        ratio, moved_ratio = probs[0] / probs[1], moved[0] / moved[1]
+        if context == "none":
+            assert moved_ratio == pytest.approx(ratio, rel=1e-5)
+        else:
+            assert abs(moved_ratio - ratio) > 1e-6 * ratio
+        model.save(tmp_path / f"{context}.zip")
+        assert MaskablePPO.load(tmp_path / f"{context}.zip").policy.context == context
+    with pytest.raises(ValueError, match="context"):
+        _set_model(context="transformer")
+
+
+def test_expected_success_reward_pays_the_recorded_success_rate(grips, small_config):
+    config = small_config.override(selector={"reward": "expected_success", "max_attempts": 1})
+    env = make_selector_env(grips, config, "train", n_envs=1, seed=3).envs[0]
+    expected = dict(zip(grips["grip_id"], grips["success_rate"], strict=True))
+    rewards = []
+    for episode in range(8):
+        env.reset(seed=episode)
+        _, reward, terminated, _, info = env.step(0)
+        assert terminated and reward == pytest.approx(expected[info["grip_id"]])
+        rewards.append(reward)
+    assert not set(rewards) <= {0.0, 1.0}
+    with pytest.raises(ValueError, match="replay"):
+        make_selector_env(None, config, "train", n_envs=1)
+    with pytest.raises(ValueError, match="max_attempts 1"):
+        make_selector_env(grips, small_config.override(selector={"reward": "expected_success"}),
+                          "train", n_envs=1)  # fmt: skip
 
 
 @pytest.mark.slow

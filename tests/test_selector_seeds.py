@@ -36,6 +36,13 @@ def test_selector_seeds_differ_and_repeat(tmp_path):
     assert np.allclose(sums, 1.0)  # probabilities over each object's candidates
     by_seed = [group["score"].to_numpy() for _, group in scores.groupby("seed")]
     assert not np.allclose(*by_seed)  # another seed, another policy
+    curves = pd.read_csv(tmp_path / "a" / "held_out_curve.csv")
+    assert set(curves["seed"]) == {3, 4} and set(curves["variant"]) == {"rl"}
+    for seed in (3, 4):  # one row a rollout, as the seed's own report records it
+        own = json.loads((tmp_path / "a" / f"seed_{seed}" / "selector.json").read_text())
+        rows = curves[curves["seed"] == seed][["timesteps", "held_out_success"]]
+        assert rows.to_numpy().tolist() == own["training"]["held_out_curve"]
+    assert (tmp_path / "a" / "held_out_curve.png").stat().st_size > 10_000
     run_selectors(grips, tmp_path / "b", config.override(selector={"seeds": 1}), progress=False)
     again = pd.read_parquet(tmp_path / "b" / "scores.parquet")
     first = scores[scores["seed"] == 3].reset_index(drop=True)

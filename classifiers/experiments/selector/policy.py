@@ -10,7 +10,11 @@ swapped through SB3's own extension points:
   ONE shared scorer MLP maps each candidate's own feature vector to a logit, so
   ``latent_pi`` is the ``(B, K)`` vector of scores; a second shared encoder embeds each
   candidate for the critic and pools over valid candidates (masked mean and max), so
-  ``latent_vf`` does not depend on candidate order;
+  ``latent_vf`` does not depend on candidate order. With ``context="pool"`` the scorer also
+  sees the set: each candidate's embedding is joined with the masked mean and max of all valid
+  candidates' embeddings before the last layers; with ``context="attention"`` each candidate's
+  embedding attends to the valid candidates (one multi-head self-attention layer, padded slots
+  masked out, residual) before the score head;
 - ``action_net`` = identity, so the categorical's logits are the scores themselves.
   MaskablePPO sets invalid slots to -inf: the action distribution is the masked softmax.
 
@@ -21,7 +25,7 @@ way and leaves the value unchanged; any number of valid candidates up to K works
 from __future__ import annotations
 
 from itertools import pairwise
-from typing import Any
+from typing import Any, Literal
 
 import torch as th
 from gymnasium import spaces
@@ -29,6 +33,11 @@ from sb3_contrib.common.maskable.policies import MaskableActorCriticPolicy
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from stable_baselines3.common.type_aliases import Schedule
 from torch import nn
+
+#: How the actor's scorer sees the other candidates: not at all, pooled, or by attention.
+CONTEXTS: tuple[str, ...] = ("none", "pool", "attention")
+Context = Literal["none", "pool", "attention"]
+ATTENTION_HEADS = 4
 
 
 def _candidate_shape(observation_space: spaces.Space) -> tuple[int, int]:
@@ -90,6 +99,9 @@ class CandidateSetNetwork(nn.Module):
     :param n_features: F, features per candidate.
     :param pi_arch: hidden sizes of the shared scorer (ends in one logit per candidate).
     :param vf_arch: hidden sizes of the shared critic encoder (pooled mean and max).
+    :param context: ``"none"`` (each score from its own candidate only), ``"pool"`` (the first
+        hidden layer's embedding joined with its masked mean and max over the set) or
+        ``"attention"`` (that embedding passed through one masked self-attention layer).
     """
 
     def __init__(
@@ -99,14 +111,30 @@ class CandidateSetNetwork(nn.Module):
         pi_arch: list[int],
         vf_arch: list[int],
         activation_fn: type[nn.Module] = nn.Tanh,
+        context: Context = "none",
     ) -> None:
         super().__init__()
         if not vf_arch:
             raise ValueError("vf_arch needs at least one hidden layer to pool")
+        if context not in CONTEXTS:
+            raise ValueError(f"context must be one of {CONTEXTS}, got {context!r}")
+        if context != "none" and not pi_arch:
+            raise ValueError(f"context {context!r} needs at least one hidden layer in pi_arch")
         self.n_candidates = n_candidates
         self.n_features = n_features
-        self.scorer_body = _mlp([n_features, *pi_arch], activation_fn)
-        self.score_head = nn.Linear(([n_features, *pi_arch])[-1], 1)
+        self.context = context
+        if context == "none":
+            self.scorer_body = _mlp([n_features, *pi_arch], activation_fn)
+            width = ([n_features, *pi_arch])[-1]
+        else:
+            self.scorer_embed = _mlp([n_features, pi_arch[0]], activation_fn)
+            joined = 3 * pi_arch[0] if context == "pool" else pi_arch[0]
+            if context == "attention":
+                self.attention = nn.MultiheadAttention(pi_arch[0], _heads(pi_arch[0]),
+                                                       batch_first=True)  # fmt: skip
+            self.scorer_body = _mlp([joined, *pi_arch[1:]], activation_fn)
+            width = ([joined, *pi_arch[1:]])[-1]
+        self.score_head = nn.Linear(width, 1)
         self.critic_encoder = _mlp([n_features, *vf_arch], activation_fn)
         self.latent_dim_pi = n_candidates
         self.latent_dim_vf = 2 * vf_arch[-1]
@@ -117,8 +145,25 @@ class CandidateSetNetwork(nn.Module):
 
     def forward_actor(self, packed: th.Tensor) -> th.Tensor:
         """Per-candidate scores ``(B, K)`` (the categorical's logits)."""
-        features, _ = self._split(packed)
-        return self.score_head(self.scorer_body(features)).squeeze(-1)
+        features, mask = self._split(packed)
+        if self.context == "none":
+            return self.score_head(self.scorer_body(features)).squeeze(-1)
+        embedded = self.scorer_embed(features)
+        if self.context == "pool":
+            pooled = masked_pool(embedded, mask).unsqueeze(1).expand(-1, self.n_candidates, -1)
+            joined = th.cat([embedded, pooled], dim=-1)
+        else:
+            joined = embedded + self._attend(embedded, mask)
+        return self.score_head(self.scorer_body(joined)).squeeze(-1)
+
+    def _attend(self, embedded: th.Tensor, mask: th.Tensor) -> th.Tensor:
+        """Masked self-attention over the valid slots (a row with none attends to all, and its
+        scores are masked out by the policy anyway)."""
+        padded = mask < 0.5
+        padded = padded & ~padded.all(dim=1, keepdim=True)
+        attended, _ = self.attention(embedded, embedded, embedded, key_padding_mask=padded,
+                                     need_weights=False)  # fmt: skip
+        return attended
 
     def forward_critic(self, packed: th.Tensor) -> th.Tensor:
         """Order-free summary ``(B, 2H)`` of the valid candidates."""
@@ -129,11 +174,17 @@ class CandidateSetNetwork(nn.Module):
         return self.forward_actor(packed), self.forward_critic(packed)
 
 
+def _heads(width: int) -> int:
+    """:data:`ATTENTION_HEADS`, or fewer so that they divide ``width``."""
+    return next(h for h in range(min(ATTENTION_HEADS, width), 0, -1) if width % h == 0)
+
+
 class CandidateSetPolicy(MaskableActorCriticPolicy):
     """MaskablePPO policy that scores every candidate with the same network.
 
     ``net_arch`` is ``dict(pi=[...], vf=[...])`` (hidden sizes of the scorer and the critic
-    encoder) or a list used for both; default ``[64, 64]``.
+    encoder) or a list used for both; default ``[64, 64]``. ``context`` is how the scorer sees
+    the other candidates (:data:`CONTEXTS`, see :class:`CandidateSetNetwork`).
     """
 
     def __init__(
@@ -143,8 +194,12 @@ class CandidateSetPolicy(MaskableActorCriticPolicy):
         lr_schedule: Schedule,
         net_arch: list[int] | dict[str, list[int]] | None = None,
         activation_fn: type[nn.Module] = nn.Tanh,
+        context: Context = "none",
         **kwargs: Any,
     ) -> None:
+        if context not in CONTEXTS:
+            raise ValueError(f"context must be one of {CONTEXTS}, got {context!r}")
+        self.context = context
         n_candidates, _ = _candidate_shape(observation_space)
         if not isinstance(action_space, spaces.Discrete) or int(action_space.n) != n_candidates:
             raise ValueError(f"action space must be Discrete({n_candidates}), got {action_space}")
@@ -172,7 +227,11 @@ class CandidateSetPolicy(MaskableActorCriticPolicy):
             pi_arch=pi_arch,
             vf_arch=vf_arch or [64],
             activation_fn=self.activation_fn,
+            context=self.context,
         ).to(self.device)
+
+    def _get_constructor_parameters(self) -> dict[str, Any]:
+        return {**super()._get_constructor_parameters(), "context": self.context}
 
     def _build(self, lr_schedule: Schedule) -> None:
         super()._build(lr_schedule)

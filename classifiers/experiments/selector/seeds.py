@@ -6,6 +6,8 @@ depend on them), each with :func:`classifiers.experiments.selector.run_selector`
 ``out/seed_<s>/``. The first seed's ``selector.json``, ``model.zip`` and
 ``learning_curve.png`` are copied to ``out/`` (what a single-seed run writes there), with
 ``"seeds"``: every run's seed, folder, training time and held-out first-pick success.
+``out/held_out_curve.csv`` and ``.png`` are every run's held-out first-pick success after each
+rollout (:mod:`classifiers.experiments.selector.curve`'s layout and figure).
 ``out/scores.parquet`` holds each run's action probabilities for every candidate of every
 held-out object, in the layout of :mod:`classifiers.experiments.candidate_scores` (method ``"rl"``).
 """
@@ -14,6 +16,7 @@ from __future__ import annotations
 
 import json
 import shutil
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +27,7 @@ from classifiers.experiments.selector.data import check_grip_table
 from grip_env.config import Config
 
 METHOD = "rl"
+CURVE_TABLE, CURVE_FIGURE = "held_out_curve.csv", "held_out_curve.png"
 _COPIED = ("model.zip", "model.json", "learning_curve.png")
 
 
@@ -81,7 +85,28 @@ def run_selectors(
     first = {**first, "training": training, "seeds": runs, "scores": SCORES_FILE}
     (out / REPORT_FILE).write_text(json.dumps(first, indent=2))
     write_scores(list(scores), out / SCORES_FILE)
+    write_held_out_curves(reports, seeds, out)
     return first
+
+
+def write_held_out_curves(reports: Sequence[dict[str, Any]], seeds: Sequence[int],
+                          out: Path) -> Path:  # fmt: skip
+    """Every seed's held-out curve (scored after each rollout) as ``held_out_curve.csv``
+    (:data:`~classifiers.experiments.selector.curve.CURVE_COLUMNS`, variant ``"rl"``) and its
+    figure ``held_out_curve.png``, with best-Q_C's and the classifiers' first picks as lines."""
+    from classifiers.experiments.selector.curve import CURVE_COLUMNS, plot_curves
+
+    rows = [(METHOD, seed, step, value, None, report["training"]["seconds"])
+            for seed, report in zip(seeds, reports, strict=True)
+            for step, value in report["training"].get("held_out_curve", [])]  # fmt: skip
+    frame = pd.DataFrame(rows, columns=list(CURVE_COLUMNS))
+    frame.to_csv(out / CURVE_TABLE, index=False)
+    policies = reports[0]["policies"]
+    lines = {name: policies[name]["success_rate"]["mean"] for name in policies
+             if name == "best_qc" or name.startswith("classifier_")}  # fmt: skip
+    if len(frame):
+        plot_curves(frame, out / CURVE_FIGURE, lines)
+    return out / CURVE_TABLE
 
 
 def _seed_run(table: pd.DataFrame, out: Path, config: Config, seed: int, policy: str,

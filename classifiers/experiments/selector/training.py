@@ -16,9 +16,11 @@ policy's deterministic first pick on the held-out objects (the ones ``selector.j
 logs it to TensorBoard as ``eval/held_out_first_pick_success``, beside the constant
 ``eval/best_qc`` and ``eval/oracle`` of the same objects.
 
-``config.selector.reward`` chooses what a pick earns: ``"success"`` (the environment's 0/1 draw)
-or ``"robustness"`` (:class:`RobustnessReward`: the picked grip's recorded ``robustness_mean``
-divided by ``sim.reference_level_g``, so 1 means holding the reference level on average).
+``config.selector.reward`` chooses what a pick earns: ``"success"`` (the environment's 0/1 draw),
+``"expected_success"`` (:class:`ExpectedSuccessReward`: the picked grip's recorded success rate,
+the expectation of that draw: a variance-reduction baseline) or ``"robustness"``
+(:class:`RobustnessReward`: the picked grip's recorded ``robustness_mean`` divided by
+``sim.reference_level_g``, so 1 means holding the reference level on average).
 """
 
 from __future__ import annotations
@@ -79,12 +81,42 @@ class RobustnessReward(gymnasium.Wrapper):
         return observation, float(reward), terminated, truncated, info
 
 
+class ExpectedSuccessReward(gymnasium.Wrapper):
+    """Replace a valid pick's 0/1 reward by its expectation: the grip's recorded success rate.
+
+    A variance-reduction baseline (Rao-Blackwellisation of the replayed Bernoulli draw): every
+    policy's expected return is unchanged, since the environment draws success with exactly this
+    probability, but a pick no longer earns 1 or 0 by the luck of one trial, so the policy
+    gradient is far less noisy. It needs recorded outcomes (replay) and one attempt an episode
+    (with more, whether the episode goes on is itself the draw it averages out).
+    """
+
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        """The wrapped step with the pick's recorded success rate as its reward."""
+        observation, reward, terminated, truncated, info = self.env.step(action)
+        if not info.get("invalid_action"):
+            rate = info.get("success_rate")
+            if rate is None:
+                raise ValueError("selector.reward 'expected_success' needs recorded success "
+                                 "rates (the replay backend)")  # fmt: skip
+            reward = rate
+        return observation, float(reward), terminated, truncated, info
+
+
+#: Rewards that need recorded outcomes, hence the replay backend.
+RECORDED_REWARDS = ("robustness", "expected_success")
+
+
 def check_reward(config: Config, live: bool) -> str:
-    """The configured reward; robustness needs recorded outcomes (replay)."""
+    """The configured reward; robustness and expected success need recorded outcomes (replay),
+    and expected success one attempt an episode."""
     reward = config.selector.reward
-    if reward == "robustness" and live:
-        raise ValueError("selector.reward 'robustness' needs the replay backend (live trials "
+    if reward in RECORDED_REWARDS and live:
+        raise ValueError(f"selector.reward {reward!r} needs the replay backend (live trials "
                          "report success only)")  # fmt: skip
+    if reward == "expected_success" and config.selector.max_attempts > 1:
+        raise ValueError("selector.reward 'expected_success' needs selector.max_attempts 1, got "
+                         f"{config.selector.max_attempts}")  # fmt: skip
     return reward
 
 
@@ -98,13 +130,15 @@ def make_selector_env(
     """``n_envs`` monitored ``GripSelect-v0`` copies in a DummyVecEnv (replay, or live if None),
     rewarded as ``config.selector.reward`` says."""
 
-    robust = check_reward(config, data is None) == "robustness"
+    reward = check_reward(config, data is None)
 
     def factory(rank: int) -> Any:
         def build() -> gymnasium.Env:
             env = gymnasium.make(ENV_ID, data=data, config=config, split=split)
-            if robust:
+            if reward == "robustness":
                 env = RobustnessReward(env, data, config.sim.reference_level_g)
+            elif reward == "expected_success":
+                env = ExpectedSuccessReward(env)
             env.reset(seed=seed + rank)
             return Monitor(env)
 
@@ -129,9 +163,11 @@ def make_selector_model(
     rollout = settings.rollout_steps if timesteps is None else min(settings.rollout_steps,
                                                                    timesteps)
     n_steps = max(16, rollout // env.num_envs)
+    policy_kwargs = {"context": settings.context} if policy == "set" else None
     return MaskablePPO(
         policy_class,
         env,
+        policy_kwargs=policy_kwargs,
         learning_rate=settings.learning_rate,
         n_steps=n_steps,
         batch_size=min(settings.batch_size, n_steps * env.num_envs),
