@@ -47,7 +47,8 @@ def answers_preamble(answers: dict[str, Any]) -> str:
 
 def answer_sentences(answers: dict[str, Any]) -> list[str]:
     """The three questions and their answers (Markdown), in the order the study asks them."""
-    return [_learned_pick(answers), _hand_measures(answers), _rl_selector(answers)]
+    return [_learned_pick(answers), _hand_measures(answers), _rl_selector(answers),
+            _image(answers)]
 
 
 def strong_methods(answers: dict[str, Any]) -> list[str]:
@@ -90,6 +91,55 @@ def _rl_selector(answers: dict[str, Any]) -> str:
     best = answers.get("best_supervised")
     against_best = f" and {_compare(answers, 'rl', best, f'`{best}`')}" if best else ""
     return f"{question} The RL selector {_compare(answers, 'rl', 'best_qc', _QC)}{against_best}."
+
+
+#: How the image models are named in the answer.
+_SHOWN = {"cnn": "the image alone (`cnn`)", "cnn_measures": "the image with the measures "
+          "(`cnn_measures`)"}
+
+
+def _image(answers: dict[str, Any]) -> str:
+    """The fourth answer: does the image hold what the measures miss? One sentence on the
+    image-with-measures model (the image alone beside it), then its picks."""
+    question = "**Do the twelve measures capture what the grip's image holds?**"
+    image = answers.get("image")
+    if not image or not image.get("models"):
+        return f"{question} Not answered: the image stage did not run."
+    joined = "cnn_measures" if "cnn_measures" in image["models"] else image["models"][0]
+    auc = image["auc"][joined]
+    problem = unjudgeable(auc, auc.get("objects"), _SPAN)
+    reference = f"`{image['reference']}` on the twelve measures"
+    if problem:
+        verdict = (f"Not answered: {_SHOWN.get(joined, joined)} against {reference} changes "
+                   f"ROC-AUC by {signed(auc)}, no verdict ({problem})")
+    elif auc["ci"][0] > 0:
+        verdict = (f"No: they miss something worth {auc['mean']:+.3f} ROC-AUC: "
+                   f"{_SHOWN.get(joined, joined)} **beats** {reference} ({signed(auc)})")
+    else:
+        verdict = (f"Yes, as far as this network can tell: {_SHOWN.get(joined, joined)} "
+                   f"**{relation(auc['ci'])}** {reference} ({signed(auc)})")
+    alone = [f"{_SHOWN.get(n, n)} {_auc_relation(image['auc'][n])} it ({signed(image['auc'][n])})"
+             for n in image["models"] if n != joined]  # fmt: skip
+    picks = {"picks": image.get("picks", {}), "ranked_objects": answers.get("ranked_objects", 0)}
+    method = f"classifier_{joined}"
+    at_picking = (f"; at picking, `{joined}` {_compare(picks, method, 'ranker_lambdarank', '`lambdarank`')}"
+                  f" and {_compare(picks, method, 'best_qc', _QC)}")  # fmt: skip
+    return f"{question} {verdict}{'; ' + '; '.join(alone) if alone else ''}{at_picking}."
+
+
+def _auc_relation(auc: dict[str, Any]) -> str:
+    problem = unjudgeable(auc, auc.get("objects"), _SPAN)
+    return f"(no verdict: {problem}) against" if problem else f"**{relation(auc['ci'])}**"
+
+
+def image_family_rows(answers: dict[str, Any]) -> list[dict[str, Any]]:
+    """The image models' top-1 differences by family, as table rows (family, comparison,
+    difference with its interval, objects)."""
+    image = answers.get("image") or {}
+    return [{"family": family, "comparison": name, "difference": signed(row),
+             "objects": row["objects"]}
+            for family, found in image.get("families", {}).items()
+            for name, row in found.items()]  # fmt: skip
 
 
 def _compare(answers: dict[str, Any], method: str, versus: str, shown: str) -> str:

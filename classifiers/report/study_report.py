@@ -24,6 +24,7 @@ from classifiers.report.answers import (
     strong_methods,
 )
 from classifiers.report.document import Report, frame_of_intervals
+from classifiers.report.image_section import image_section
 from classifiers.report.judge import (
     FEW_OBJECTS,
     SPANS,
@@ -68,6 +69,7 @@ def write_report(out: Path, config: Config, table: pd.DataFrame,
     _classifier_section(report, out)
     _regression_section(report, out)
     _ablation_section(report, out)
+    image_section(report, out)
     _selector_section(report, out)
     _benchmark_section(report, out)
     power_section(report, out)

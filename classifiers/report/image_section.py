@@ -1,0 +1,73 @@
+"""The report's section on the image models (the study's ``images/`` stage): their grouped CV
+beside the measures' learner, the paired differences, the picks by family, which measure the
+network's score resembles, and its occlusion maps."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from classifiers.report.answers import image_family_rows, read_answers
+from classifiers.report.document import Report, frame_of_intervals
+
+RESULT = Path("images") / "images.json"
+SHOWN = ["roc_auc", "balanced_accuracy", "brier", "top1_success"]
+#: The figures of the stage, with their captions.
+FIGURES = (
+    ("occlusion.png", "Occlusion maps of the image-only network on held-out grips (its most and "
+                      "least confident): how much its score drops when a patch of the image is "
+                      "hidden."),
+)
+
+
+def image_section(report: Report, out: Path) -> None:
+    """The section, or "Not run." when the study has no image stage result."""
+    report.heading("Image models: what the twelve measures miss")
+    path = out / RESULT
+    result = json.loads(path.read_text()) if path.is_file() else None
+    if not result or "cv" not in result:
+        report.text(f"Not run{': ' + result['skipped'] if result else ''}.")
+        return
+    cv = result["cv"]
+    report.table(frame_of_intervals(cv["models"], SHOWN),
+                 caption="Image models and the measures' learner on the same grouped folds "
+                         "(mean and 95% interval).")
+    report.table(frame_of_intervals(cv["paired_difference"], SHOWN),
+                 caption=f"Paired difference against {cv['reference']} on the twelve measures "
+                         f"(same folds and seeds).")
+    report.text(fit_time_line(cv["fit_seconds"], cv["n_grips"], cv["folds"]))
+    rows = image_family_rows(read_answers(out) or {})
+    if rows:
+        report.table(pd.DataFrame(rows), caption="Top-1 success difference on the held-out "
+                                                 "objects of each family (paired bootstrap).")
+    report.text(resemblance_line(result.get("resemblance")))
+    for name, caption in FIGURES:
+        if (out / "images" / name).exists():
+            report.figure(f"images/{name}", caption)
+
+
+def fit_time_line(seconds: dict[str, dict[str, Any]], grips: int, folds: int) -> str:
+    """One sentence: each model's mean and longest fit of a training fold."""
+    shown = ", ".join(f"{name} {found['mean']:.1f} s (longest {found['max']:.1f} s)"
+                      for name, found in seconds.items())  # fmt: skip
+    return (f"Fit time of a training fold (about {round(grips * (folds - 1) / folds):,} grips, "
+            f"one thread): {shown}.")
+
+
+def resemblance_line(resemblance: dict[str, Any] | None) -> str:
+    """For the paper's authors: which measure the image network's score resembles, if any."""
+    if not resemblance or resemblance.get("closest") is None:
+        return "The image network's resemblance to the measures was not computed."
+    rho = resemblance["spearman"]
+    closest = resemblance["closest"]
+    others = ", ".join(f"{m} {r:+.2f}" for m, r in sorted(rho.items(), key=lambda kv: -abs(kv[1]))
+                       [1:4])  # fmt: skip
+    strength = abs(rho[closest])
+    resembles = ("resembles" if strength >= 0.5 else "resembles none closely; the nearest is"
+                 if strength < 0.3 else "resembles in part")  # fmt: skip
+    return (f"Which measure the image network resembles: its score ({resemblance['model']}, on "
+            f"the {resemblance['grips']:,} held-out grips) {resembles} {closest} (Spearman "
+            f"{rho[closest]:+.2f}; next {others}).")
