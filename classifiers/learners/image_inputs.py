@@ -16,7 +16,6 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from sklearn.base import BaseEstimator, TransformerMixin, clone
-from sklearn.utils import Tags
 from sklearn.utils.validation import check_is_fitted
 
 from classifiers.learners.baselines import ColumnSelector
@@ -49,12 +48,6 @@ class ImageInputs(TransformerMixin, BaseEstimator):
     def __init__(self, images: BaseEstimator | None = None, measures: Sequence[str] = ()):
         self.images = images
         self.measures = measures
-
-    def __sklearn_tags__(self) -> Tags:
-        tags = super().__sklearn_tags__()
-        tags.input_tags.two_d_array = False
-        tags.input_tags.dataframe = True
-        return tags
 
     def fit(self, X: pd.DataFrame, y: Any = None) -> ImageInputs:
         """Fit the image transformer on ``X`` and record the image shape."""

@@ -1,0 +1,161 @@
+"""The convolutional evaluator (classifiers/learners/cnn.py) and its table step (image_inputs.py).
+
+The grip images here are a throwaway toy (:class:`BarImages`: one bright column at a grip's
+``bar`` position), so that what the network must learn is known: the real images are
+``GripImages``' and are tested with it.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from sklearn.base import BaseEstimator, TransformerMixin, clone
+from sklearn.metrics import roc_auc_score
+from sklearn.pipeline import Pipeline
+from sklearn.utils.estimator_checks import parametrize_with_checks
+
+from classifiers.learners.cnn import CNNClassifier, CNNRegressor
+from classifiers.learners.image_inputs import ImageInputs
+
+SIDE = 10
+
+
+class BarImages(TransformerMixin, BaseEstimator):
+    """A toy image of each grip: ``side`` × ``side``, one bright column at ``bar``."""
+
+    def __init__(self, side: int = SIDE):
+        self.side = side
+
+    def fit(self, X: pd.DataFrame, y=None) -> BarImages:
+        self.fitted_ = True
+        return self
+
+    def transform(self, X: pd.DataFrame) -> np.ndarray:
+        images = np.zeros((len(X), 1, self.side, self.side), np.float32)
+        images[np.arange(len(X)), 0, :, X["bar"].to_numpy(int) % self.side] = 1.0
+        return images
+
+
+def toy_grips(n: int = 600, seed: int = 0) -> pd.DataFrame:
+    """Grips whose bar lies left (holds) or right (fails) of the middle, unless S1 < 0."""
+    rng = np.random.default_rng(seed)
+    bar = rng.integers(0, SIDE, size=n)
+    s1 = rng.normal(size=n)
+    table = pd.DataFrame({"bar": bar, "S1": s1, "S2": rng.normal(size=n)})
+    table["image_rule"] = bar < SIDE // 2
+    table["success"] = table["image_rule"] & (s1 > 0)
+    return table
+
+
+def pipeline(measures: tuple[str, ...] = (), seed: int = 0, **params) -> Pipeline:
+    network = CNNClassifier((1, SIDE, SIDE), n_measures=len(measures), random_state=seed,
+                            **{"max_epochs": 40, **params})
+    return Pipeline([("select", ImageInputs(BarImages(), measures)), ("model", network)])
+
+
+def test_the_network_learns_a_rule_written_in_the_image():
+    train, test = toy_grips(600, 0), toy_grips(300, 1)
+    model = pipeline().fit(train, train["image_rule"])
+    auc = roc_auc_score(test["image_rule"], model.predict_proba(test)[:, 1])
+    assert auc > 0.99
+    assert (model.predict(test) == test["image_rule"]).mean() > 0.95
+
+
+def test_the_measures_join_the_image_where_the_rule_needs_both():
+    """Success needs the bar on the left and S1 > 0: the image alone cannot see S1."""
+    train, test = toy_grips(800, 0), toy_grips(400, 1)
+    alone = pipeline().fit(train, train["success"])
+    joined = pipeline(("S1", "S2")).fit(train, train["success"])
+    auc_alone = roc_auc_score(test["success"], alone.decision_function(test))
+    auc_joined = roc_auc_score(test["success"], joined.decision_function(test))
+    assert auc_joined > 0.97 and auc_joined > auc_alone + 0.1
+
+
+def test_same_seed_same_model_another_seed_another():
+    train = toy_grips(300, 0)
+    first = pipeline(seed=3, max_epochs=5).fit(train, train["success"]).predict_proba(train)
+    again = pipeline(seed=3, max_epochs=5).fit(train, train["success"]).predict_proba(train)
+    other = pipeline(seed=4, max_epochs=5).fit(train, train["success"]).predict_proba(train)
+    np.testing.assert_array_equal(first, again)
+    assert not np.array_equal(first, other)
+
+
+def test_decision_function_orders_as_the_probability_and_a_grip_scores_alone():
+    train = toy_grips(300, 0)
+    model = pipeline(max_epochs=5).fit(train, train["success"])
+    score, proba = model.decision_function(train), model.predict_proba(train)[:, 1]
+    np.testing.assert_allclose(1.0 / (1.0 + np.exp(-score)), proba, rtol=1e-9)
+    np.testing.assert_allclose(model.decision_function(train.iloc[:7]), score[:7], rtol=1e-12)
+
+
+def test_a_saved_image_model_reloads_and_predicts_the_same(tmp_path, monkeypatch):
+    import classifiers.learners.image_inputs as image_inputs
+    from classifiers.learners.persistence import load_model, save_model
+
+    monkeypatch.setattr(image_inputs, "default_images", BarImages)
+    train = toy_grips(300, 0)
+    model = pipeline(("S1",), max_epochs=5).fit(train, train["success"])
+    save_model(model, tmp_path, "cnn_measures", {"dataset_sha256": "abc"})
+    loaded, info = load_model(tmp_path, "cnn_measures")
+    np.testing.assert_array_equal(loaded.predict_proba(train), model.predict_proba(train))
+    assert info["columns"] == ["S1"] and info["inputs"]["image_shape"] == [1, SIDE, SIDE]
+    assert sorted(p.suffix for p in tmp_path.iterdir()) == [".json", ".pt"]
+
+
+def test_a_saved_model_names_no_other_image_code(tmp_path, monkeypatch):
+    import json
+
+    import classifiers.learners.image_inputs as image_inputs
+    from classifiers.learners.persistence import load_model, save_model
+
+    monkeypatch.setattr(image_inputs, "default_images", BarImages)
+    train = toy_grips(200, 0)
+    save_model(pipeline(max_epochs=2).fit(train, train["success"]), tmp_path, "cnn")
+    meta = tmp_path / "cnn.json"
+    info = json.loads(meta.read_text())
+    meta.write_text(json.dumps({**info, "inputs": {**info["inputs"], "images": "os.system"}}))
+    with pytest.raises(ValueError, match="names the image transformer 'os.system'"):
+        load_model(tmp_path, "cnn")
+
+
+def test_images_of_another_size_are_refused_with_both_shapes():
+    train = toy_grips(200, 0)
+    model = pipeline(max_epochs=2).fit(train, train["success"])
+    model.named_steps["select"].images_ = BarImages(side=12)
+    with pytest.raises(ValueError, match=r"fitted on images of shape \(1, 10, 10\).*\(1, 12, 12\)"):
+        model.predict_proba(train)
+
+
+def test_the_network_refuses_rows_that_are_not_its_image_and_measures():
+    X = np.zeros((20, 50), np.float32)
+    y = np.arange(20) % 2 == 0
+    with pytest.raises(ValueError, match=r"images of shape \(1, 10, 10\).*n_features=50"):
+        CNNClassifier((1, 10, 10)).fit(X, y)
+    with pytest.raises(ValueError, match="'image_shape' parameter of CNNClassifier"):
+        CNNClassifier((1, 0, 50)).fit(X, y)
+    with pytest.raises(ValueError, match="'conv_channels' parameter of CNNRegressor"):
+        CNNRegressor(conv_channels=(8, 0)).fit(X, y.astype(float))
+    with pytest.raises(ValueError, match="'n_measures' parameter"):
+        CNNClassifier(n_measures=-1).fit(X, y)
+
+
+def test_the_table_step_takes_the_grip_table_only():
+    train = toy_grips(50, 0)
+    step = ImageInputs(BarImages(), ("S1",)).fit(train)
+    assert step.transform(train).shape == (50, SIDE * SIDE + 1)
+    with pytest.raises(ValueError, match="DataFrame"):
+        step.transform(train.to_numpy())
+    with pytest.raises(ValueError, match=r"columns \['C9'\] are not in the table"):
+        ImageInputs(BarImages(), ("C9",)).fit(train).transform(train)
+    assert clone(step).get_params()["measures"] == ("S1",)
+
+
+FAST = {"max_epochs": 30, "learning_rate": 0.03}
+
+
+@pytest.mark.slow
+@parametrize_with_checks([CNNClassifier(**FAST), CNNRegressor(**FAST),
+                          CNNClassifier(n_measures=1, **FAST)])
+def test_the_networks_pass_scikit_learn_estimator_checks(estimator, check):
+    check(estimator)
