@@ -109,10 +109,10 @@ class _ConvNet(_TorchMLP):
         learning_rate: float = 1e-3,
         weight_decay: float = 1e-4,
         dropout: float = 0.0,
-        batch_size: int = 128,
-        max_epochs: int = 60,
+        batch_size: int = 256,
+        max_epochs: int = 30,
         validation_fraction: float = 0.15,
-        patience: int = 8,
+        patience: int = 5,
         random_state: int | None = None,
     ):
         super().__init__(hidden_layer_sizes, learning_rate=learning_rate,
