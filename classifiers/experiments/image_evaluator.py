@@ -16,11 +16,11 @@ convolutional network on the grip's image (``cnn``), or on the image and the twe
   leaderboard (:mod:`classifiers.experiments.answers`);
 - correlates the first seed's ``cnn`` score of every held-out grip with each measure (Spearman):
   which measure, if any, the network's judgement resembles;
-- draws the occlusion maps of that network on a handful of held-out grips
-  (``images/occlusion.png``).
+- computes the occlusion maps of that network on a handful of held-out grips
+  (``images/occlusion.npz``; the report draws them).
 
 The grips' images need the contours they were planned on: the stage reads them from the
-dataset's objects table (:func:`classifiers.learners.images.attach_contours`).
+dataset's objects table (:func:`classifiers.learners.grip_images.attach_contours`).
 """
 
 from __future__ import annotations
@@ -35,6 +35,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 from sklearn.base import BaseEstimator
+from sklearn.pipeline import Pipeline
 
 from classifiers.evaluation.cross_validation import (
     CLASSIFICATION,
@@ -62,7 +63,7 @@ from grip_env.dataset.split import split_table
 
 RESULT_FILE = "images.json"
 SCORES_FILE = "scores.parquet"
-OCCLUSION_FIGURE = "occlusion.png"
+OCCLUSION_FILE = "occlusion.npz"
 #: Held-out grips whose occlusion maps are drawn: the network's most and least confident picks.
 OCCLUDED_GRIPS = 6
 #: The seconds each fit took, a column of the per-fold rows beside the metrics.
@@ -71,7 +72,7 @@ FIT_SECONDS = "fit_seconds"
 
 def with_contours(table: pd.DataFrame, data_dir: Path) -> pd.DataFrame:
     """``table`` with each grip's planned-on contour within the image models' reach."""
-    from classifiers.learners.images import attach_contours
+    from classifiers.learners.grip_images import attach_contours
     from grip_env.dataset import read_objects
 
     return attach_contours(table, read_objects(Path(data_dir)))
@@ -138,7 +139,7 @@ def held_out_image_scores(grips: pd.DataFrame, config: Config) -> tuple[pd.DataF
             for seed, method in runs]  # fmt: skip
     fitted = run_all(_fit_and_score, jobs, len(train), learning.workers)
     scores = _score_table(candidates, stacked, runs, [score for _, score in fitted])
-    return scores, fitted[0][0]
+    return scores, fitted[0][0]  # the first seed's first image model
 
 
 def _fit_and_score(model: BaseEstimator, train: pd.DataFrame, labels: np.ndarray,
@@ -171,7 +172,7 @@ def image_study(grips: pd.DataFrame, out_dir: Path, config: Config,
                 families: dict[str, str] | None = None) -> dict[str, Any]:  # fmt: skip
     """Run the stage on a grip table that carries its contours (``families``: object id →
     family, recorded for the held-out objects, whose picks the answers compare by family);
-    writes ``out_dir``'s ``images.json``, ``scores.parquet`` and ``occlusion.png``; returns the
+    writes ``out_dir``'s ``images.json``, ``scores.parquet`` and ``occlusion.npz``; returns the
     JSON content."""
     learning = config.learning
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -189,20 +190,30 @@ def image_study(grips: pd.DataFrame, out_dir: Path, config: Config,
                           if oid in (families or {})}  # fmt: skip
     result["resemblance"] = {"model": learning.image_models[0], "seed": learning.seed,
                              **measure_resemblance(model, held_out)}  # fmt: skip
-    result["occlusion"] = draw_occlusion(model, occluded_grips(model, held_out),
-                                         out_dir / OCCLUSION_FIGURE)  # fmt: skip
+    if not model[0].measures:  # the maps hide pixels: of a network that reads the image alone
+        result["occlusion"] = occlusion_record(model, occluded_grips(model, held_out),
+                                               out_dir / OCCLUSION_FILE)  # fmt: skip
     (out_dir / RESULT_FILE).write_text(json.dumps(result, indent=2))
     return result
 
 
-def draw_occlusion(model: BaseEstimator, grips: pd.DataFrame, path: Path) -> dict[str, Any]:
-    """The occlusion maps of ``model`` on ``grips`` (one column a grip: its image, its map), as
-    ``path``; returns which grips and their scores."""
-    from classifiers.learners.images import plot_occlusion
+def occlusion_record(model: Pipeline, grips: pd.DataFrame, path: Path) -> dict[str, Any]:
+    """The occlusion maps (:func:`classifiers.learners.occlusion.occlusion_maps`) of an image-only
+    ``model`` on ``grips``, written to ``path`` (``.npz``: ``images``, ``maps``, ``titles``,
+    ``channels``; the report draws them); returns which grips and their scores."""
+    from classifiers.learners.occlusion import occlusion_maps
 
-    plot_occlusion(model, grips, path)
-    return {"figure": path.name, "grip_ids": grips["grip_id"].astype(str).tolist(),
-            "scores": ranking_score(model, grips).round(4).tolist()}  # fmt: skip
+    inputs, network = model[0], model[-1]
+    images = np.asarray(inputs.images_.transform(grips), dtype=np.float32)
+    maps = occlusion_maps(lambda batch: network.predict_proba(batch.reshape(len(batch), -1))[:, 1],
+                          images)  # fmt: skip
+    probability = network.predict_proba(images.reshape(len(images), -1))[:, 1]
+    titles = [f"{row.object_id}\n{'held' if row.success else 'slipped'}, P={p:.2f}"
+              for row, p in zip(grips.itertuples(), probability, strict=True)]  # fmt: skip
+    np.savez_compressed(path, images=images, maps=maps, titles=np.array(titles),
+                        channels=np.array(list(inputs.images_.channels)))  # fmt: skip
+    return {"file": path.name, "grip_ids": grips["grip_id"].astype(str).tolist(),
+            "p_success": probability.round(4).tolist()}
 
 
 def run_image_study(table: pd.DataFrame, data_dir: Path, out_dir: Path,

@@ -37,7 +37,7 @@ from classifiers.learners.torch_mlp import (
 )
 
 #: The trunk's default widths (output channels of each stride-2 convolution), head and grid.
-CONV_CHANNELS = (16, 32, 32)
+CONV_CHANNELS = (8, 16, 32)
 HEAD_SIZES = (64,)
 POOLED = 4
 

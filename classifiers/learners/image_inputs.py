@@ -1,7 +1,7 @@
 """The first step of an image model: the grip table → one flat row per grip (image, measures).
 
 :class:`ImageInputs` renders each grip's image with its ``images`` transformer (a
-:class:`~classifiers.learners.images.GripImages`, or anything that maps a grip table to a float
+:class:`~classifiers.learners.grip_images.GripImages`, or anything that maps a grip table to a float
 array of shape ``(n, C, H, W)``), flattens it, and appends the table's ``measures`` columns: the
 row :class:`~classifiers.learners.cnn.CNNClassifier` reads. It plays the part the
 :class:`~classifiers.learners.baselines.ColumnSelector` plays for the feature learners: a model
@@ -23,9 +23,15 @@ from classifiers.learners.baselines import ColumnSelector
 
 def default_images() -> BaseEstimator:
     """The grip images of the registry's image models, at their default settings."""
-    from classifiers.learners.images import GripImages
+    from classifiers.learners.grip_images import GripImages
 
     return GripImages()
+
+
+def image_shape(images: BaseEstimator) -> tuple[int, int, int]:
+    """(channels, height, width) of the images a ``GripImages`` draws, from its settings."""
+    size = int(images.size_px)
+    return len(tuple(images.channels)), size, size
 
 
 class ImageInputs(TransformerMixin, BaseEstimator):
@@ -35,7 +41,7 @@ class ImageInputs(TransformerMixin, BaseEstimator):
     Parameters
     ----------
     images : transformer of the grip table to images ``(n, C, H, W)``; None: the default
-        :class:`~classifiers.learners.images.GripImages`.
+        :class:`~classifiers.learners.grip_images.GripImages`.
     measures : table columns appended after the image (none: the image alone).
 
     Attributes

@@ -58,7 +58,7 @@ from classifiers.learners.baselines import (
     RankingRegressor,
 )
 from classifiers.learners.cnn import CNNClassifier, CNNRegressor
-from classifiers.learners.image_inputs import ImageInputs, default_images
+from classifiers.learners.image_inputs import ImageInputs, default_images, image_shape
 from classifiers.learners.svm import PlattSVC, SampledSVR
 from classifiers.learners.threads import OneThreadHGBClassifier, OneThreadHGBRegressor
 from classifiers.learners.torch_mlp import TorchMLPClassifier, TorchMLPRegressor
@@ -140,7 +140,7 @@ def _image_pipeline(name: str, seed: int, features: tuple[str, ...], regressor: 
     measures = features if IMAGE_MODELS[name] else ()
     images = default_images()
     network = (CNNRegressor if regressor else CNNClassifier)(
-        images.image_shape(), n_measures=len(measures), random_state=seed)
+        image_shape(images), n_measures=len(measures), random_state=seed)
     return Pipeline([("select", ImageInputs(images, measures)), ("model", network)])
 
 

@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from classifiers.report.answers import image_family_rows, read_answers
@@ -15,15 +16,15 @@ from classifiers.report.document import Report, frame_of_intervals
 
 RESULT = Path("images") / "images.json"
 SHOWN = ["roc_auc", "balanced_accuracy", "brier", "top1_success"]
-#: The figures of the stage, with their captions.
-FIGURES = (
-    ("occlusion.png", "Occlusion maps of the image-only network on held-out grips (its most and "
-                      "least confident): how much its score drops when a patch of the image is "
-                      "hidden."),
-)
+OCCLUSION = Path("images") / "occlusion.npz"
+OCCLUSION_CAPTION = ("Occlusion maps of the image-only network on held-out grips (the three it "
+                     "scores highest, then the three lowest): above, each grip's image (grey "
+                     "object, blue fingers' approach, red contacts, thumb force up); below, the "
+                     "drop in its predicted success when an 8-pixel grey square hides the "
+                     "pixels (red: hiding them lowers it).")
 
 
-def image_section(report: Report, out: Path) -> None:
+def image_section(report: Report, out: Path, fig_dir: Path) -> None:
     """The section, or "Not run." when the study has no image stage result."""
     report.heading("Image models: what the twelve measures miss")
     path = out / RESULT
@@ -44,9 +45,21 @@ def image_section(report: Report, out: Path) -> None:
         report.table(pd.DataFrame(rows), caption="Top-1 success difference on the held-out "
                                                  "objects of each family (paired bootstrap).")
     report.text(resemblance_line(result.get("resemblance")))
-    for name, caption in FIGURES:
-        if (out / "images" / name).exists():
-            report.figure(f"images/{name}", caption)
+    if (out / OCCLUSION).is_file():
+        path = draw_occlusion(out / OCCLUSION, fig_dir / "occlusion.png")
+        report.figure(str(path.relative_to(out)), OCCLUSION_CAPTION)
+
+
+def draw_occlusion(record: Path, path: Path) -> Path:
+    """The occlusion figure of the stage's record (its images, maps and titles) as ``path``."""
+    from classifiers.report.grip_images import occlusion_figure
+    from grip_env.drawing import save_figure
+
+    with np.load(record) as found:
+        figure = occlusion_figure(found["images"], found["maps"], found["titles"].tolist(),
+                                  found["channels"].tolist())  # fmt: skip
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return save_figure(figure, path, dpi=110)
 
 
 def fit_time_line(seconds: dict[str, dict[str, Any]], grips: int, folds: int) -> str:

@@ -69,7 +69,7 @@ def write_report(out: Path, config: Config, table: pd.DataFrame,
     _classifier_section(report, out)
     _regression_section(report, out)
     _ablation_section(report, out)
-    image_section(report, out)
+    image_section(report, out, fig_dir)
     _selector_section(report, out)
     _benchmark_section(report, out)
     power_section(report, out)
