@@ -67,7 +67,7 @@ OCCLUSION_FILE = "occlusion.npz"
 #: Held-out grips whose occlusion maps are drawn: the network's most and least confident picks.
 OCCLUDED_GRIPS = 6
 #: The seconds each fit took, a column of the per-fold rows beside the metrics.
-FIT_SECONDS = "fit_seconds"
+FIT_SECONDS, FIT_CPU_SECONDS = "fit_seconds", "fit_cpu_seconds"
 
 
 def with_contours(table: pd.DataFrame, data_dir: Path) -> pd.DataFrame:
@@ -79,17 +79,20 @@ def with_contours(table: pd.DataFrame, data_dir: Path) -> pd.DataFrame:
 
 
 def _timed_metrics(model: BaseEstimator, test: pd.DataFrame) -> dict[str, float]:
-    return {**fold_metrics(model, test), FIT_SECONDS: float(getattr(model, "fit_seconds_", np.nan))}
+    return {**fold_metrics(model, test), FIT_SECONDS: model.fit_seconds_,
+            FIT_CPU_SECONDS: model.fit_cpu_seconds_}
 
 
 def timed(model: BaseEstimator) -> BaseEstimator:
-    """``model`` with its fit timed (``model.fit_seconds_`` after each fit)."""
+    """``model`` with its fit timed: ``model.fit_seconds_`` (wall) and ``fit_cpu_seconds_`` (this
+    process's CPU: on a busy machine, what the fit itself cost) after each fit."""
     fit = model.fit
 
     def timed_fit(X: Any, y: Any, **kwargs: Any) -> BaseEstimator:
-        start = time.perf_counter()
+        start, cpu = time.perf_counter(), time.process_time()
         fit(X, y, **kwargs)
         model.fit_seconds_ = time.perf_counter() - start
+        model.fit_cpu_seconds_ = time.process_time() - cpu
         return model
 
     model.fit = timed_fit  # type: ignore[method-assign]
@@ -101,7 +104,8 @@ def image_cv(grips: pd.DataFrame, config: Config) -> tuple[pd.DataFrame, list[st
     and the model names, the reference (``learning.ablation_model``) last."""
     learning = config.learning
     names = [*learning.image_models, learning.ablation_model]
-    task = replace(CLASSIFICATION, metrics=(*CLASSIFICATION.metrics, FIT_SECONDS),
+    task = replace(CLASSIFICATION, metrics=(*CLASSIFICATION.metrics, FIT_SECONDS,
+                                            FIT_CPU_SECONDS),
                    make=lambda name, seed, features: timed(make_model(name, seed, features)),
                    score=_timed_metrics)  # fmt: skip
     return cross_validate(grips, task, names, FEATURES, learning), names
@@ -113,21 +117,25 @@ def summarise_cv(per_fold: pd.DataFrame, names: list[str], folds: int) -> dict[s
     by_model = {name: frame.drop(columns="model") for name, frame in per_fold.groupby("model")}
     reference = names[-1]
     seconds = {name: {"mean": float(frame[FIT_SECONDS].mean()),
-                      "max": float(frame[FIT_SECONDS].max()), "folds": len(frame)}
+                      "max": float(frame[FIT_SECONDS].max()),
+                      "cpu_mean": float(frame[FIT_CPU_SECONDS].mean()),
+                      "cpu_max": float(frame[FIT_CPU_SECONDS].max()), "folds": len(frame)}
                for name, frame in by_model.items()}  # fmt: skip
     return {
         "reference": reference,
-        "models": summarise(per_fold.drop(columns=FIT_SECONDS), folds),
+        "models": summarise(per_fold.drop(columns=[FIT_SECONDS, FIT_CPU_SECONDS]), folds),
         "paired_difference": {name: paired_difference(by_model[name], by_model[reference], folds)
                               for name in names[:-1]},  # fmt: skip
         "fit_seconds": seconds,
     }
 
 
-def held_out_image_scores(grips: pd.DataFrame, config: Config) -> tuple[pd.DataFrame, Any]:
+def held_out_image_scores(grips: pd.DataFrame,
+                          config: Config) -> tuple[pd.DataFrame, Any, dict[str, float]]:
     """Every image model fitted with each training seed on the split's training objects,
     scoring each held-out object's candidates (:mod:`classifiers.experiments.candidate_scores`'
-    table, methods ``classifier_<name>``); and the first seed's ``cnn`` (or first image model)."""
+    table, methods ``classifier_<name>``); the first seed's ``cnn`` (or first image model); and
+    each run's CPU seconds (fit and scores)."""
     learning = config.learning
     train, _ = split_table(grips, learning)
     candidates = held_out_candidates(grips, config)
@@ -138,14 +146,19 @@ def held_out_image_scores(grips: pd.DataFrame, config: Config) -> tuple[pd.DataF
     jobs = [(make_model(method.removeprefix("classifier_"), seed), train, labels, stacked)
             for seed, method in runs]  # fmt: skip
     fitted = run_all(_fit_and_score, jobs, len(train), learning.workers)
-    scores = _score_table(candidates, stacked, runs, [score for _, score in fitted])
-    return scores, fitted[0][0]  # the first seed's first image model
+    scores = _score_table(candidates, stacked, runs, [score for _, score, _ in fitted])
+    cpu = {f"{method} seed {seed}": seconds
+           for (seed, method), (_, _, seconds) in zip(runs, fitted, strict=True)}  # fmt: skip
+    return scores, fitted[0][0], cpu  # the first seed's first image model
 
 
 def _fit_and_score(model: BaseEstimator, train: pd.DataFrame, labels: np.ndarray,
-                   rows: pd.DataFrame) -> tuple[BaseEstimator, np.ndarray]:  # fmt: skip
+                   rows: pd.DataFrame) -> tuple[BaseEstimator, np.ndarray, float]:  # fmt: skip
+    """The fitted model, its scores of ``rows`` and the CPU seconds both took."""
+    cpu = time.process_time()
     model.fit(train, labels)
-    return model, ranking_score(model, rows)
+    score = ranking_score(model, rows)
+    return model, score, time.process_time() - cpu
 
 
 def measure_resemblance(model: BaseEstimator, held_out: pd.DataFrame) -> dict[str, Any]:
@@ -181,8 +194,9 @@ def image_study(grips: pd.DataFrame, out_dir: Path, config: Config,
               "cv": {**summarise_cv(per_fold, names, learning.folds),
                      **cv_description(grips, FEATURES, learning)}}  # fmt: skip
     start = time.perf_counter()
-    scores, model = held_out_image_scores(grips, config)
+    scores, model, cpu = held_out_image_scores(grips, config)
     result["held_out_seconds"] = time.perf_counter() - start
+    result["held_out_cpu_seconds"] = cpu
     write_scores(scores, out_dir / SCORES_FILE)
     _, held_out = split_table(grips, learning)
     result["families"] = {oid: (families or {})[oid]
