@@ -159,3 +159,75 @@ FAST = {"max_epochs": 30, "learning_rate": 0.03}
                           CNNClassifier(n_measures=1, **FAST)])
 def test_the_networks_pass_scikit_learn_estimator_checks(estimator, check):
     check(estimator)
+
+
+# --------------------------------------------------------------- on a dataset generated for real
+@pytest.fixture(scope="module")
+def saved_cnn(generated_dataset_dir, tmp_path_factory) -> tuple:
+    """``cnn`` fitted (a few epochs) on the generated dataset's grips and saved."""
+    from classifiers.learners.grip_images import load_with_contours
+    from classifiers.learners.models import make_model
+    from classifiers.learners.persistence import save_model
+
+    grips = load_with_contours(generated_dataset_dir)
+    model = make_model("cnn", seed=0).set_params(model__max_epochs=3)
+    model.fit(grips, grips["success"].to_numpy(bool))
+    folder = tmp_path_factory.mktemp("cnn") / "models"
+    save_model(model, folder, "cnn", {"dataset_sha256": "x"})
+    return folder, model, grips
+
+
+def test_predict_scores_a_dataset_with_a_saved_image_model(saved_cnn, generated_dataset_dir,
+                                                           tmp_path):
+    from cli_runs import cli
+
+    folder, model, grips = saved_cnn
+    out = tmp_path / "p.parquet"
+    code, output = cli("predict", "--model", folder / "cnn.json", "--data",
+                       generated_dataset_dir, "--out", out)
+    assert code == 0, output
+    table = pd.read_parquet(out)
+    assert table["grip_id"].tolist() == grips["grip_id"].tolist()
+    np.testing.assert_allclose(table["p_success"], model.predict_proba(grips)[:, 1])
+
+
+def test_predict_refuses_a_model_whose_images_are_of_another_size(saved_cnn,
+                                                                  generated_dataset_dir,
+                                                                  tmp_path):
+    """A model file whose image settings draw 64-pixel images for a network of 48: one line."""
+    import json
+    import shutil
+
+    from cli_runs import assert_refused, cli
+
+    folder, _, _ = saved_cnn
+    edited = tmp_path / "models"
+    shutil.copytree(folder, edited)
+    meta = edited / "cnn.json"
+    info = json.loads(meta.read_text())
+    info["inputs"]["params"]["size_px"] = 64
+    meta.write_text(json.dumps(info))
+    out = tmp_path / "p.parquet"
+    code, output = cli("predict", "--model", meta, "--data", generated_dataset_dir, "--out", out)
+    assert_refused(code, output, "fitted on images of shape (3, 48, 48)", "(3, 64, 64)")
+    assert not out.exists()
+
+
+def test_the_regressor_learns_a_graded_outcome_written_in_the_image():
+    """The robustness use: a target that grows with the bar's position."""
+    train, test = toy_grips(600, 0), toy_grips(300, 1)
+    model = Pipeline([("select", ImageInputs(BarImages())),
+                      ("model", CNNRegressor((1, SIDE, SIDE), random_state=0, max_epochs=40))])
+    model.fit(train, train["bar"].to_numpy(float))
+    predicted = model.predict(test)
+    assert np.corrcoef(predicted, test["bar"])[0, 1] > 0.95
+
+
+def test_the_registry_builds_both_tasks_from_the_default_images():
+    from classifiers.learners.models import make_model, make_regressor
+
+    classifier, regressor = make_model("cnn_measures", seed=2), make_regressor("cnn", seed=2)
+    assert isinstance(classifier[-1], CNNClassifier) and isinstance(regressor[-1], CNNRegressor)
+    assert classifier[-1].image_shape == (3, 48, 48) and classifier[-1].n_measures == 12
+    assert classifier[0].measures[0] == "S1" and regressor[0].measures == ()
+    assert classifier[-1].random_state == 2

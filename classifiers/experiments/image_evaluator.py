@@ -49,6 +49,7 @@ from classifiers.evaluation.cross_validation import (
     summarise,
 )
 from classifiers.experiments.ablation import paired_difference
+from classifiers.experiments.benchmark.provenance import training_record
 from classifiers.experiments.candidate_scores import (
     _score_table,
     held_out_candidates,
@@ -134,8 +135,8 @@ def held_out_image_scores(grips: pd.DataFrame,
                           config: Config) -> tuple[pd.DataFrame, Any, dict[str, float]]:
     """Every image model fitted with each training seed on the split's training objects,
     scoring each held-out object's candidates (:mod:`classifiers.experiments.candidate_scores`'
-    table, methods ``classifier_<name>``); the first seed's ``cnn`` (or first image model); and
-    each run's CPU seconds (fit and scores)."""
+    table, methods ``classifier_<name>``); each image model fitted with ``learning.seed``, by
+    name; and each run's CPU seconds (fit and scores)."""
     learning = config.learning
     train, _ = split_table(grips, learning)
     candidates = held_out_candidates(grips, config)
@@ -149,7 +150,10 @@ def held_out_image_scores(grips: pd.DataFrame,
     scores = _score_table(candidates, stacked, runs, [score for _, score, _ in fitted])
     cpu = {f"{method} seed {seed}": seconds
            for (seed, method), (_, _, seconds) in zip(runs, fitted, strict=True)}  # fmt: skip
-    return scores, fitted[0][0], cpu  # the first seed's first image model
+    first = {method.removeprefix("classifier_"): model
+             for (seed, method), (model, _, _) in zip(runs, fitted, strict=True)
+             if seed == learning.seed}  # fmt: skip
+    return scores, first, cpu
 
 
 def _fit_and_score(model: BaseEstimator, train: pd.DataFrame, labels: np.ndarray,
@@ -159,6 +163,24 @@ def _fit_and_score(model: BaseEstimator, train: pd.DataFrame, labels: np.ndarray
     model.fit(train, labels)
     score = ranking_score(model, rows)
     return model, score, time.process_time() - cpu
+
+
+def save_models(models: dict[str, Pipeline], grips: pd.DataFrame, folder: Path,
+                config: Config) -> None:
+    """Each image model fitted on the split's training objects, saved as ``folder/<name>``
+    (torch weights and JSON; ``trained_on`` names its objects, so ``grip-env benchmark`` takes
+    it)."""
+    from classifiers.learners.grip_images import CONTOUR_COLUMN
+    from classifiers.learners.persistence import dataset_checksum, save_model
+
+    learning = config.learning
+    checksum = dataset_checksum(grips.drop(columns=CONTOUR_COLUMN))
+    train, _ = split_table(grips, learning)
+    trained_on = training_record(train[GROUP_COLUMN], checksum, split="train",
+                                 test_fraction=learning.test_fraction, seed=learning.seed)
+    for name, model in models.items():
+        save_model(model, folder, name, {"features": list(model[0].measures), "seed": learning.seed,
+                                         "dataset_sha256": checksum, "trained_on": trained_on})
 
 
 def measure_resemblance(model: BaseEstimator, held_out: pd.DataFrame) -> dict[str, Any]:
@@ -194,10 +216,12 @@ def image_study(grips: pd.DataFrame, out_dir: Path, config: Config,
               "cv": {**summarise_cv(per_fold, names, learning.folds),
                      **cv_description(grips, FEATURES, learning)}}  # fmt: skip
     start = time.perf_counter()
-    scores, model, cpu = held_out_image_scores(grips, config)
+    scores, models, cpu = held_out_image_scores(grips, config)
     result["held_out_seconds"] = time.perf_counter() - start
     result["held_out_cpu_seconds"] = cpu
     write_scores(scores, out_dir / SCORES_FILE)
+    save_models(models, grips, out_dir / "models", config)
+    model = models[learning.image_models[0]]
     _, held_out = split_table(grips, learning)
     result["families"] = {oid: (families or {})[oid]
                           for oid in held_out[GROUP_COLUMN].astype(str).unique()

@@ -58,9 +58,9 @@ def predict(
 
         fitted, info = load_saved_model(directory, name)
         grips = load(data)
-        if "inputs" in info:  # an image model: it draws each grip's planned-on contour
-            grips = with_contours(grips, data)
-        table = predictions(fitted, info, grips)
+        # an image model draws each grip's planned-on contour, from the objects table
+        shown = with_contours(grips, data) if "inputs" in info else grips
+        table = predictions(fitted, info, shown)
         _write(table, out)
     typer.echo(f"wrote {out}: {len(table)} grips of {table['object_id'].nunique()} objects, "
                f"{table.columns[2]} from model {name}{_in_sample_note(info, grips)}")
