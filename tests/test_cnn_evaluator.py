@@ -231,3 +231,17 @@ def test_the_registry_builds_both_tasks_from_the_default_images():
     assert classifier[-1].image_shape == (3, 48, 48) and classifier[-1].n_measures == 12
     assert classifier[0].measures[0] == "S1" and regressor[0].measures == ()
     assert classifier[-1].random_state == 2
+
+
+def test_the_report_names_the_closest_measure_and_the_fit_cost():
+    from classifiers.report.image_section import fit_time_line, resemblance_line
+
+    rho = {"S1": 0.1, "C1": -0.62, "C4": 0.4, "G2": 0.05}
+    line = resemblance_line({"model": "cnn", "grips": 2500, "spearman": rho, "closest": "C1"})
+    assert "resembles C1 (Spearman -0.62; next C4 +0.40, S1 +0.10, G2 +0.05)" in line
+    weak = resemblance_line({"model": "cnn", "grips": 2500, "closest": "S1",
+                             "spearman": {"S1": 0.2, "C1": -0.1}})
+    assert "resembles none closely; the nearest is S1" in weak
+    line = fit_time_line({"cnn": {"mean": 40.0, "max": 50.0, "cpu_mean": 20.0, "cpu_max": 25.5}},
+                         10_000, 5)
+    assert "about 8,000 grips" in line and "cnn 20.0 s CPU (longest 25.5 s; wall 40.0 s)" in line

@@ -32,7 +32,8 @@ QUICK_OVERRIDES: dict[str, dict[str, Any]] = {
     "dataset": {"trials": 2, "max_grips_per_object": 8},
     "learning": {"folds": 2, "repeats": 1, "models": ("logreg", "knn", "rank_qc", "random"),
                  "regressors": ("ridge", "rank_qc", "rank_qg", "random"),
-                 "rankers": ("lambdarank", "rank_qc", "random"), "seeds": 2},
+                 "rankers": ("lambdarank", "rank_qc", "random"), "seeds": 2,
+                 "image_models": ("cnn",)},
     "selector": {"timesteps": 512, "max_candidates": 16, "seeds": 2},
 }
 STAGE_FILE = "stage.json"

@@ -118,8 +118,8 @@ def _image(answers: dict[str, Any]) -> str:
     else:
         verdict = (f"Yes, as far as this network can tell: {_SHOWN.get(joined, joined)} "
                    f"**{relation(auc['ci'])}** {reference} ({signed(auc)})")
-    alone = [f"{_SHOWN.get(n, n)} {_auc_relation(image['auc'][n])} it ({signed(image['auc'][n])})"
-             for n in image["models"] if n != joined]  # fmt: skip
+    alone = [_against_it(_SHOWN.get(n, n), image["auc"][n]) for n in image["models"]
+             if n != joined]  # fmt: skip
     picks = {"picks": image.get("picks", {}), "ranked_objects": answers.get("ranked_objects", 0)}
     method = f"classifier_{joined}"
     at_picking = (f"; at picking, `{joined}` {_compare(picks, method, 'ranker_lambdarank', '`lambdarank`')}"
@@ -127,9 +127,12 @@ def _image(answers: dict[str, Any]) -> str:
     return f"{question} {verdict}{'; ' + '; '.join(alone) if alone else ''}{at_picking}."
 
 
-def _auc_relation(auc: dict[str, Any]) -> str:
+def _against_it(shown: str, auc: dict[str, Any]) -> str:
+    """``the image alone (`cnn`) **beats** it (+0.010 [...])``, or its numbers without a verdict."""
     problem = unjudgeable(auc, auc.get("objects"), _SPAN)
-    return f"(no verdict: {problem}) against" if problem else f"**{relation(auc['ci'])}**"
+    if problem:
+        return f"{shown} against it: {signed(auc)}, no verdict ({problem})"
+    return f"{shown} **{relation(auc['ci'])}** it ({signed(auc)})"
 
 
 def image_family_rows(answers: dict[str, Any]) -> list[dict[str, Any]]:

@@ -63,11 +63,12 @@ def draw_occlusion(record: Path, path: Path) -> Path:
 
 
 def fit_time_line(seconds: dict[str, dict[str, Any]], grips: int, folds: int) -> str:
-    """One sentence: each model's mean and longest fit of a training fold."""
-    shown = ", ".join(f"{name} {found['mean']:.1f} s (longest {found['max']:.1f} s)"
-                      for name, found in seconds.items())  # fmt: skip
-    return (f"Fit time of a training fold (about {round(grips * (folds - 1) / folds):,} grips, "
-            f"one thread): {shown}.")
+    """One sentence: each model's CPU seconds a fit of a training fold (mean, longest), and the
+    wall time beside it (on a shared machine, CPU is what the fit costs)."""
+    shown = ", ".join(f"{name} {found['cpu_mean']:.1f} s CPU (longest {found['cpu_max']:.1f} s; "
+                      f"wall {found['mean']:.1f} s)" for name, found in seconds.items())
+    return (f"Fit of a training fold (about {round(grips * (folds - 1) / folds):,} grips, one "
+            f"thread): {shown}.")
 
 
 def resemblance_line(resemblance: dict[str, Any] | None) -> str:
