@@ -99,12 +99,12 @@ def image_answers(board: dict[str, Any], images: dict[str, Any],
     """The image stage's answer: each image model's paired ROC-AUC difference to the measures'
     learner (``"auc"``), and its top-1 success against lambdarank and best-Q_C over every
     held-out object (``"picks"``) and each family's (``"families"``); None without the stage."""
-    cv = images.get("cv")
-    if not cv:
-        return None
     models = images.get("models", [])
+    if not models:
+        return None
+    cv = images.get("cv") or {}
     auc = {name: {**cv["paired_difference"][name]["roc_auc"], "objects": cv.get("n_objects")}
-           for name in models}  # fmt: skip
+           for name in models if name in cv.get("paired_difference", {})}  # fmt: skip
     present = set(board.get("methods", {}))
     pairs = [(f"classifier_{name}", versus) for name in models for versus in (LAMBDARANK, REFERENCE)
              if {f"classifier_{name}", versus} <= present]  # fmt: skip
@@ -116,7 +116,7 @@ def image_answers(board: dict[str, Any], images: dict[str, Any],
                 if by_family.get(str(row["object_id"])) == family]  # fmt: skip
         if pairs and rows:
             families[family] = pick_differences({"per_object": rows}, pairs, seed)
-    return {"reference": cv["reference"], "models": models, "auc": auc, "picks": picks,
+    return {"reference": cv.get("reference"), "models": models, "auc": auc, "picks": picks,
             "families": families, "resemblance": images.get("resemblance")}
 
 

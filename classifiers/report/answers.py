@@ -106,10 +106,12 @@ def _image(answers: dict[str, Any]) -> str:
     if not image or not image.get("models"):
         return f"{question} Not answered: the image stage did not run."
     joined = "cnn_measures" if "cnn_measures" in image["models"] else image["models"][0]
-    auc = image["auc"][joined]
-    problem = unjudgeable(auc, auc.get("objects"), _SPAN)
+    auc = image["auc"].get(joined, {})
+    problem = unjudgeable(auc, auc.get("objects"), _SPAN) if auc else "no cross-validation"
     reference = f"`{image['reference']}` on the twelve measures"
-    if problem:
+    if not auc:
+        verdict = "Not answered: the image stage's cross-validation did not run"
+    elif problem:
         verdict = (f"Not answered: {_SHOWN.get(joined, joined)} against {reference} changes "
                    f"ROC-AUC by {signed(auc)}, no verdict ({problem})")
     elif auc["ci"][0] > 0:
@@ -119,7 +121,7 @@ def _image(answers: dict[str, Any]) -> str:
         verdict = (f"Yes, as far as this network can tell: {_SHOWN.get(joined, joined)} "
                    f"**{relation(auc['ci'])}** {reference} ({signed(auc)})")
     alone = [_against_it(_SHOWN.get(n, n), image["auc"][n]) for n in image["models"]
-             if n != joined]  # fmt: skip
+             if n != joined and n in image["auc"]]  # fmt: skip
     picks = {"picks": image.get("picks", {}), "ranked_objects": answers.get("ranked_objects", 0)}
     method = f"classifier_{joined}"
     at_picking = (f"; at picking, `{joined}` {_compare(picks, method, 'ranker_lambdarank', '`lambdarank`')}"
