@@ -133,6 +133,12 @@ def test_the_image_answer_is_worded_from_the_image_stage(tmp_path):
     assert "the image alone (`cnn`) **is not distinguishable from** it (-0.010 [-0.040, " \
            "+0.020])" in sentence
     assert "at picking, `cnn_measures` **beats** `lambdarank`" in sentence
+    wide = {**image, "auc": {**image["auc"], "cnn_measures": {"mean": 0.08, "ci": [-0.19, 0.36],
+                                                                "objects": 40}}}
+    assert "Not answered: the image with the measures (`cnn_measures`) against `hgb` on the " \
+           "twelve measures changes ROC-AUC by +0.080 [-0.190, +0.360], an interval that " \
+           "allows the image a gain of up to +0.360" in answer_sentences({**answers,
+                                                                          "image": wide})[3]
     same = {**image, "auc": {**image["auc"], "cnn_measures": {"mean": 0.0, "ci": [-0.02, 0.02],
                                                                 "objects": 40}}}
     assert "Yes, as far as this network can tell: the image with the measures (`cnn_measures`) " \

@@ -93,6 +93,9 @@ def _rl_selector(answers: dict[str, Any]) -> str:
     return f"{question} The RL selector {_compare(answers, 'rl', 'best_qc', _QC)}{against_best}."
 
 
+#: The smallest ROC-AUC gain the image answer treats as something the measures miss (the
+#: study's target half-width): "yes, they capture it" needs the interval below it.
+WORTH_STATING = 0.03
 #: How the image models are named in the answer.
 _SHOWN = {"cnn": "the image alone (`cnn`)", "cnn_measures": "the image with the measures "
           "(`cnn_measures`)"}
@@ -117,9 +120,13 @@ def _image(answers: dict[str, Any]) -> str:
     elif auc["ci"][0] > 0:
         verdict = (f"No: they miss something worth {auc['mean']:+.3f} ROC-AUC: "
                    f"{_SHOWN.get(joined, joined)} **beats** {reference} ({signed(auc)})")
-    else:
+    elif auc["ci"][1] <= WORTH_STATING:
         verdict = (f"Yes, as far as this network can tell: {_SHOWN.get(joined, joined)} "
                    f"**{relation(auc['ci'])}** {reference} ({signed(auc)})")
+    else:
+        verdict = (f"Not answered: {_SHOWN.get(joined, joined)} against {reference} changes "
+                   f"ROC-AUC by {signed(auc)}, an interval that allows the image a gain of up "
+                   f"to {auc['ci'][1]:+.3f}")
     alone = [_against_it(_SHOWN.get(n, n), image["auc"][n]) for n in image["models"]
              if n != joined and n in image["auc"]]  # fmt: skip
     picks = {"picks": image.get("picks", {}), "ranked_objects": answers.get("ranked_objects", 0)}
