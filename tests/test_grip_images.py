@@ -4,13 +4,15 @@ channels at the contacts, the cache, bad input, scikit-learn composition, and oc
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
+import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from sklearn.base import clone
+from sklearn.base import BaseEstimator, clone
 from sklearn.linear_model import LogisticRegression
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import FunctionTransformer
@@ -27,9 +29,10 @@ from classifiers.learners.grip_images import (
 )
 from classifiers.learners.occlusion import occlusion_maps, patch_masks
 from grip_env.columns import CONTACTS, FORCES
+from grip_env.objects import PlanarObject
 from grip_env.objects.shapes import ellipse, rectangle, star
 
-STANDARD = "grip_env/data/standard"
+STANDARD = str(Path(__file__).resolve().parents[1] / "grip_env" / "data" / "standard")
 
 
 def _grip(hand=(0.0, 0.0), yaw=math.pi / 2, contacts=None, forces=None, object_id="box"):
@@ -117,6 +120,12 @@ def test_the_raster_fills_the_polygon_s_area():
         filled = raster.mask.sum() * raster.cell_mm**2
         assert abs(filled - area) <= perimeter * raster.cell_mm
         assert not raster.mask[[0, -1]].any() and not raster.mask[:, [0, -1]].any()
+        # points agree with the exact polygon (shapely) but within a cell's diagonal of its edge
+        points = np.random.default_rng(0).uniform(-80, 80, size=(20_000, 2))
+        exact = PlanarObject(contour).contains(points)
+        edge = shapely.distance(shapely.LinearRing(contour), shapely.points(points))
+        far = edge > raster.cell_mm * math.sqrt(2)
+        np.testing.assert_array_equal(raster.contains(*points.T)[far], exact[far])
 
 
 # ------------------------------------------------------------------------- invariance
@@ -202,7 +211,7 @@ def test_missing_contours_are_named():
     with pytest.raises(ValueError, match=r"planned_contour.*attach_contours"):
         GripImages().fit(grips)
     assert GripImages(channels=("contacts",)).transform(grips).shape == (1, 1, 48, 48)
-    with pytest.raises(ValueError, match="no contour column"):
+    with pytest.raises(ValueError, match=r"no contour column \(perceived_contour or contour\)"):
         attach_contours(grips, pd.DataFrame({"object_id": ["box"], "area": [1.0]}))
     with pytest.raises(ValueError, match=r"1 objects .*\['box'\]"):
         attach_contours(grips, pd.DataFrame({"object_id": ["other"],
@@ -213,6 +222,19 @@ def test_missing_contours_are_named():
     broken = pd.DataFrame([_grip()]).assign(hand_yaw=np.nan)
     with pytest.raises(ValueError, match=r"\['hand_yaw'\]"):
         GripImages(channels=("contacts",)).transform(broken)
+
+
+def test_a_run_on_the_render_needs_every_perceived_contour():
+    objects = pd.DataFrame({"object_id": ["box", "unused"],
+                            "contour": [rectangle(40, 20).tolist(), None],
+                            "perceived_contour": [None, None]})
+    grips = pd.DataFrame([_grip()])
+    # an object without grips needs no contour; the true one serves a run on the true objects
+    assert attach_contours(grips, objects)[CONTOUR_COLUMN].iloc[0].shape == (4, 2)
+    with pytest.raises(ValueError, match="object 'box' has no perceived contour"):
+        attach_contours(grips, objects, on_render=True)
+    with pytest.raises(ValueError, match=r"no contour column \(perceived_contour\)"):
+        attach_contours(grips, objects.drop(columns="perceived_contour"), on_render=True)
 
 
 def test_the_perceived_contour_is_preferred_where_stored():
@@ -241,8 +263,14 @@ def test_it_clones_and_composes_in_a_pipeline():
 
 
 # --------------------------------------------------------------------- the real dataset
-def test_the_standard_dataset_s_grips_have_images():
-    grips = load_with_contours(STANDARD).groupby("object_id").head(2)
+@pytest.fixture(scope="module")
+def standard_grips() -> pd.DataFrame:
+    """The standard dataset's grips with their contours."""
+    return load_with_contours(STANDARD)
+
+
+def test_the_standard_dataset_s_grips_have_images(standard_grips):
+    grips = standard_grips.groupby("object_id").head(2)
     cells = grips[CONTOUR_COLUMN].to_numpy()
     assert len({id(c) for c in cells}) == grips["object_id"].nunique() == 510
     images = GripImages().transform(grips)
@@ -251,6 +279,17 @@ def test_the_standard_dataset_s_grips_have_images():
     assert (dots.sum(axis=(1, 2)) >= 3).all() and (approach.sum(axis=(1, 2)) > 30).all()
     # the contacts lie on the outline: partly on the silhouette
     assert ((silhouette * dots).sum(axis=(1, 2)) > 0).all()
+    # the planner kept every finger's approach clear of the planned contour (sampled on its
+    # centre line and edges): away from the contacts the strips and the silhouette meet in a
+    # few partial pixels at most; drawn with the fingers on the wrong side, they cross it
+    near = dots > 0
+    for _ in range(2):
+        near = near | np.roll(near, 1, 1) | np.roll(near, -1, 1)
+        near = near | np.roll(near, 1, 2) | np.roll(near, -1, 2)
+    crossing = (silhouette * approach * ~near).sum(axis=(1, 2))
+    assert np.quantile(crossing, 0.99) <= 1.0 and crossing.max() <= 3.0
+    wrong_side = (silhouette[:, ::-1] * approach * ~near).sum(axis=(1, 2))
+    assert np.quantile(wrong_side, 0.9) > 10.0
 
 
 @pytest.mark.slow
@@ -295,7 +334,161 @@ def test_occlusion_reads_predict_proba_and_checks_its_input():
     images = np.ones((2, 1, 32, 32), dtype=np.float32)
     np.testing.assert_allclose(occlusion_maps(Model(), images, fill=0.0),
                                occlusion_maps(_region_model, images, fill=0.0))
+    np.testing.assert_array_equal(occlusion_maps(_region_model, images, fill=[0.0]),
+                                  occlusion_maps(_region_model, images, fill=0.0))
+    # the default grey is each channel's mean over its image: on a uniform image hiding changes
+    # nothing, and an image's map is the same alone as among others
+    assert not occlusion_maps(_region_model, images).any()
+    mixed = np.random.default_rng(1).uniform(size=(3, 1, 32, 32)).astype(np.float32)
+    np.testing.assert_array_equal(occlusion_maps(_region_model, mixed)[1:2],
+                                  occlusion_maps(_region_model, mixed[1:2]))
+    with pytest.raises(ValueError, match="fill"):
+        occlusion_maps(_region_model, images, fill="grey")
     with pytest.raises(ValueError, match="patch_px"):
         occlusion_maps(_region_model, images, patch_px=40)
     with pytest.raises(ValueError, match=r"\(n, C, H, W\)"):
         occlusion_maps(_region_model, images[0])
+
+
+def test_a_contour_column_read_from_parquet_draws_the_same(tmp_path):
+    """A table written with its contours and read back (cells: object arrays of points)."""
+    table = _table([_grip(yaw=0.2), _grip(yaw=1.0)], {"box": star(5, 50, 20)})
+    as_lists = table.assign(**{CONTOUR_COLUMN: [c.tolist() for c in table[CONTOUR_COLUMN]]})
+    as_lists.to_parquet(tmp_path / "grips.parquet")  # Arrow writes lists, not 2-D arrays
+    read = pd.read_parquet(tmp_path / "grips.parquet")
+    assert read[CONTOUR_COLUMN].iloc[0].dtype == object
+    assert GripImages().transform(read).tobytes() == GripImages().transform(table).tobytes()
+    broken = read.assign(**{CONTOUR_COLUMN: [[[0.0, 0.0]], [[1.0, 2.0, 3.0]]]})
+    with pytest.raises(ValueError, match="planned_contour of row 0 is not a contour"):
+        GripImages().transform(broken)
+
+
+def test_copies_of_a_contour_are_drawn_as_one_object():
+    contour = star(5, 50, 20)
+    table = pd.DataFrame([_grip(yaw=0.1 * k) for k in range(4)]).assign(
+        **{CONTOUR_COLUMN: [contour.copy() for _ in range(4)]})
+    clear_image_cache()
+    copies = GripImages().transform(table)
+    assert len(gi._CACHE.entries) == 1
+    shared = _table([_grip(yaw=0.1 * k) for k in range(4)], {"box": contour})
+    assert GripImages().transform(shared).tobytes() == copies.tobytes()
+
+
+# ----------------------------------------------------------------------------- figures
+def test_the_figures_show_each_grip_with_its_label(tmp_path, standard_grips):
+    import json
+
+    from classifiers.report.grip_images import choose_grips, grip_images_figure, occlusion_figure
+    from classifiers.report.study_report import _grip_images
+
+    chosen = choose_grips(standard_grips, count=6, seed=3)
+    assert chosen["success"].tolist() == [True] * 3 + [False] * 3
+    assert chosen["object_id"].is_unique
+    fig = grip_images_figure(chosen)
+    titles = [ax.get_title() for ax in fig.axes]
+    assert len(titles) == 6 and titles[0].startswith(chosen["object_id"].iloc[0] + "\nsuccess")
+    assert "failure: held in" in titles[-1] and titles[-1].endswith(" g")
+    images = GripImages().transform(chosen.head(2))
+    maps = occlusion_maps(lambda x: x[:, 0].mean(axis=(1, 2)), images)
+    assert len(occlusion_figure(images, maps, ["a", "b"]).axes) == 5  # 2 x 2 and a colour bar
+    # the study report draws it from the dataset its data.json names, and skips it without one
+    (tmp_path / "data.json").write_text(json.dumps({"dataset": STANDARD}))
+    table = standard_grips.drop(columns=CONTOUR_COLUMN)
+    path = _grip_images(table, tmp_path / "figures" / "grip_images.png", tmp_path)
+    assert path is not None and path.stat().st_size > 10_000
+    assert _grip_images(table, tmp_path / "x.png", tmp_path / "elsewhere") is None
+
+
+def test_the_command_line_reports_them_as_bad_input():
+    """Each is a ``raise`` of ours, so a command ends with one ``error:`` line and exit 2, also
+    when scikit-learn's pipeline calls the transformer."""
+    from grip_env.cli.errors import is_input_error
+
+    table = _table([_grip()], {"box": rectangle(40, 20)})
+    bare = pd.DataFrame([_grip()])
+    pipeline = Pipeline([("images", GripImages()), ("flat", FunctionTransformer())])
+    for call in (lambda: GripImages(mm_per_px=4.0).fit(table), lambda: pipeline.fit(bare),
+                 lambda: attach_contours(bare, pd.DataFrame({"object_id": ["box"]}))):
+        with pytest.raises(ValueError) as caught:
+            call()
+        assert is_input_error(caught.value), caught.value
+
+
+def test_occlusion_of_a_grip_pipeline_and_where_its_maps_lie():
+    """A pipeline whose model reads only the contacts channel: hiding the contacts is all that
+    lowers its prediction, so every map's positive part lies on or next to them."""
+    from classifiers.learners.occlusion import grip_occlusion_maps, map_shares
+
+    def contacts_only(images):
+        p = images[:, 1].mean(axis=(1, 2)) * 50
+        return np.stack([1 - p, p], axis=1)
+
+    contours = {"box": rectangle(40, 25), "star": star(5, 50, 20)}
+    table = _table([_grip(yaw=0.4 * k, object_id=name) for k in range(2) for name in contours],
+                   contours)
+    model = Pipeline([("images", GripImages()), ("model", _Proba(contacts_only))]).fit(table)
+    images, maps = grip_occlusion_maps(model, table, patch_px=4, stride_px=2)
+    assert images.shape == (4, 3, 48, 48) and maps.shape == (4, 48, 48)
+    shares = map_shares(maps, images)
+    np.testing.assert_allclose(shares.sum(axis=1), 1.0)
+    # a square spreads its drop over the pixels it hid: within 3 pixels of a contact's disc
+    near = images[:, 1] > 0
+    for _ in range(3):
+        near = near | np.roll(near, 1, 1) | np.roll(near, -1, 1)
+        near = near | np.roll(near, 1, 2) | np.roll(near, -1, 2)
+    assert (maps > 0).any(axis=(1, 2)).all() and not (maps[~near] > 0).any()
+    assert (shares.idxmax(axis=1) == "contacts").all()
+    with pytest.raises(ValueError, match="GripImages step"):
+        grip_occlusion_maps(Pipeline([("model", _Proba(contacts_only))]), table)
+    from classifiers.report.grip_images import grip_occlusion_figure
+
+    figure = grip_occlusion_figure(model, table.assign(success=[True, False] * 2), patch_px=4)
+    expected = contacts_only(images[:1])[0, 1]
+    assert len(figure.axes) == 9  # 2 x 4 and a colour bar
+    assert figure.axes[0].get_title() == f"box\nsuccess\npredicted {expected:.2f}"
+
+
+class _Proba(BaseEstimator):
+    """A stand-in model of images with ``predict_proba``."""
+
+    def __init__(self, function=None):
+        self.function = function
+
+    def fit(self, X, y=None):
+        self.fitted_ = True
+        return self
+
+    def predict_proba(self, images):
+        return self.function(images)
+
+
+def test_the_cache_keeps_within_its_bound():
+    cache = gi._ImageCache(max_bytes=250)
+    for k in range(5):
+        cache.put(bytes([k]), np.full(100, k, dtype=np.uint8))
+    assert list(cache.entries) == [bytes([3]), bytes([4])] and cache.bytes == 200
+    assert cache.get(bytes([3]))[0] == 3 and cache.get(bytes([0])) is None
+    cache.put(bytes([5]), np.zeros(100, dtype=np.uint8))  # 4 was used least recently
+    assert list(cache.entries) == [bytes([3]), bytes([5])]
+
+
+_DRAW_IN_ANOTHER_PROCESS = """
+import hashlib, sys
+from classifiers.learners.grip_images import GripImages, load_with_contours
+grips = load_with_contours(sys.argv[1]).iloc[::97]
+print(hashlib.sha256(GripImages().transform(grips).tobytes()).hexdigest())
+"""
+
+
+def test_another_process_draws_the_same_bits(standard_grips):
+    import hashlib
+    import os
+    import subprocess
+    import sys
+
+    clear_image_cache()
+    here = hashlib.sha256(GripImages().transform(standard_grips.iloc[::97]).tobytes()).hexdigest()
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parents[1])}
+    there = subprocess.run([sys.executable, "-c", _DRAW_IN_ANOTHER_PROCESS, STANDARD], env=env,
+                           capture_output=True, text=True, check=True).stdout.strip()
+    assert there == here

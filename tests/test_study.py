@@ -57,7 +57,8 @@ def test_quick_study_reports_and_a_rerun_recomputes_only_what_changed(tmp_path):
         assert section in report
     assert "Not run." not in report and "Stage provenance" in report
     assert (out / "report.html").read_text().startswith("<!doctype html>")
-    for figure in ("gallery", "feature_distributions", "correlations", "success_by_Q_C"):
+    for figure in ("gallery", "grip_images", "feature_distributions", "correlations",
+                   "success_by_Q_C"):
         with Image.open(out / "figures" / f"{figure}.png") as image:
             assert image.size[0] > 300 and image.size[1] > 200
     metrics = json.loads((out / "classifiers" / "metrics.json").read_text())

@@ -9,8 +9,8 @@ image, so fingers 1 and 2 close from the top and the thumb from the bottom; hand
 The scale is fixed in millimetres per pixel and must show the hand's whole reach
 (:data:`HAND_REACH_MM` from the centre), so the hand's own size is in the picture.
 
-Channels (:data:`CHANNELS`), each the covered fraction of a pixel (``SUPERSAMPLE``² samples a
-pixel, so a value is a multiple of 1/``SUPERSAMPLE``²):
+Channels (:data:`CHANNELS`), each the covered fraction of a pixel (``SUPERSAMPLE ** 2`` samples
+a pixel, so a value is a multiple of ``1 / SUPERSAMPLE ** 2``):
 
 - ``silhouette``: the object;
 - ``contacts``: discs of ``CONTACT_RADIUS_PX`` pixels at the three planned contacts P1..P3;
@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import threading
 from collections import OrderedDict
 from collections.abc import Sequence
 from pathlib import Path
@@ -60,46 +61,54 @@ CACHE_BYTES = 256 * 2**20  #: the in-memory cache's bound (least recently used o
 _CHUNK = 256  #: grips drawn at once (bounds the sample arrays to a few tens of MB)
 
 
-def attach_contours(grips: pd.DataFrame, objects: pd.DataFrame) -> pd.DataFrame:
+def attach_contours(grips: pd.DataFrame, objects: pd.DataFrame,
+                    on_render: bool | None = None) -> pd.DataFrame:
     """``grips`` with :data:`CONTOUR_COLUMN`: each grip's planned contour, one read-only (V, 2)
     float64 array per object shared by all its grips (11,202 references, 510 arrays).
 
     The contour is the objects table's ``perceived_contour`` where it is stored (the grips were
     planned on the render), else its ``contour`` (they were planned on the true one).
+    ``on_render=True`` (the run planned on the render, as its manifest says) requires the
+    perceived contour of every object; None takes what is stored. The column is for memory:
+    Arrow writes its cells as lists (``[c.tolist() for c in column]``), not as 2-D arrays, and
+    such a table read back draws the same images.
 
     Raises:
-        ValueError: the objects table has neither contour column or no ``object_id``, or an
-            object of ``grips`` is not in it.
+        ValueError: naming what is missing: the ``object_id`` column, the objects table's contour
+            columns, an object of ``grips`` in it, or an object's (perceived) contour.
     """
-    contours = object_contours(objects)
-    ids = grips["object_id"].astype(str) if "object_id" in grips else None
-    if ids is None:
-        raise ValueError("the grip table has no object_id column to attach contours by")
+    if "object_id" not in grips or "object_id" not in objects:
+        raise ValueError("grip images attach contours by object_id: the grip table or the "
+                         "objects table has no object_id column")
+    ids = grips["object_id"].astype(str)
+    wanted = objects[objects["object_id"].astype(str).isin(set(ids))]
+    contours = object_contours(wanted, on_render)
     missing = sorted(set(ids) - set(contours))
     if missing:
         raise ValueError(f"no contour for {len(missing)} objects of the grip table in the objects "
                          f"table (first: {missing[:3]})")
     names = list(contours)
     shared = np.empty(len(names), dtype=object)
-    for k, name in enumerate(names):
+    for k, name in enumerate(names):  # one cell per object, not per grip
         shared[k] = contours[name]
-    column = shared[pd.Index(names).get_indexer(ids)]
-    return grips.assign(**{CONTOUR_COLUMN: column})
+    return grips.assign(**{CONTOUR_COLUMN: shared[pd.Index(names).get_indexer(ids)]})
 
 
-def object_contours(objects: pd.DataFrame) -> dict[str, NDArray[np.float64]]:
-    """Object id -> the contour its grips were planned on (read-only (V, 2) mm)."""
-    if "object_id" not in objects:
-        raise ValueError("the objects table has no object_id column")
-    columns = [name for name in ("perceived_contour", "contour") if name in objects]
+def object_contours(objects: pd.DataFrame, on_render: bool | None = None
+                    ) -> dict[str, NDArray[np.float64]]:
+    """Object id -> the contour its grips were planned on (read-only (V, 2) mm); see
+    :func:`attach_contours`."""
+    accepted = ["perceived_contour"] if on_render else ["perceived_contour", "contour"]
+    columns = [name for name in accepted if name in objects]
     if not columns:
-        raise ValueError("the objects table has no contour column (perceived_contour or contour): "
+        raise ValueError(f"the objects table has no contour column ({' or '.join(accepted)}): "
                          "grip images need the contour each grip was planned on")
     found = {}
     for row in objects[["object_id", *columns]].itertuples(index=False):
         stored = [c for c in row[1:] if c is not None and len(c) >= 3]
         if not stored:
-            raise ValueError(f"object {row[0]!r} has no contour in the objects table")
+            which = "perceived contour" if on_render else "contour"
+            raise ValueError(f"object {row[0]!r} has no {which} in the objects table")
         contour = np.array([list(point) for point in stored[0]], dtype=np.float64)
         contour.flags.writeable = False
         found[str(row[0])] = contour
@@ -107,11 +116,15 @@ def object_contours(objects: pd.DataFrame) -> dict[str, NDArray[np.float64]]:
 
 
 def load_with_contours(path: str | Path, **load_options: Any) -> pd.DataFrame:
-    """A dataset's grip table (:func:`grip_env.dataset.load`) with :data:`CONTOUR_COLUMN`."""
+    """A dataset's grip table (:func:`grip_env.dataset.load`) with :data:`CONTOUR_COLUMN`, the
+    perceived contours required when the manifest says the run planned on the render."""
     from grip_env.dataset import load, read_objects
 
     grips = load(path, **load_options)
-    return attach_contours(grips, read_objects(Path(path)))
+    config = grips.attrs["manifest"].get("config", {})
+    on_render = (config.get("perception", {}).get("source") == "render"
+                 or bool(config.get("uncertainty", {}).get("perceived_contour")))
+    return attach_contours(grips, read_objects(Path(path)), on_render)
 
 
 class GripImages(TransformerMixin, BaseEstimator):
@@ -189,7 +202,9 @@ def grip_images(grips: pd.DataFrame, size_px: int = 48, mm_per_px: float = 5.0,
             cached = _draw(values[rows], contour, size_px, mm_per_px, channels)
             _CACHE.put(key, cached)
         counts[rows] = cached
-    return counts.astype(np.float32) / np.float32(SUPERSAMPLE**2)
+    images = counts.astype(np.float32)
+    images *= np.float32(1.0 / SUPERSAMPLE**2)  # a power of two: exact
+    return images
 
 
 # ------------------------------------------------------------------------------- the table
@@ -220,15 +235,26 @@ def _contour_groups(grips: pd.DataFrame, channels: tuple[str, ...]
     if "silhouette" not in channels:
         return np.zeros(len(grips), dtype=np.intp), [None]
     cells = grips[CONTOUR_COLUMN].to_numpy(dtype=object)
-    addresses = np.fromiter(map(id, cells), dtype=np.int64, count=len(cells))
-    groups, _ = pd.factorize(addresses)
-    first_rows = np.unique(groups, return_index=True)[1]
-    return groups.astype(np.intp), [_checked_contour(cells[row], row) for row in first_rows]
+    # rows sharing one array share a group at once; equal copies are merged by their bytes
+    shared, first_rows = _groups_of(np.fromiter(map(id, cells), dtype=np.int64, count=len(cells)))
+    contours = [_checked_contour(cells[row], row) for row in first_rows]
+    merged, first = _groups_of(np.array([hashlib.sha256(c.tobytes()).hexdigest() + str(c.shape)
+                                         for c in contours]))
+    return merged[shared], [contours[k] for k in first]
+
+
+def _groups_of(keys: NDArray[Any]) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """Each key's group (numbered in order of first appearance) and each group's first index."""
+    groups, _ = pd.factorize(keys)
+    return groups.astype(np.intp), np.unique(groups, return_index=True)[1]
 
 
 def _checked_contour(cell: Any, row: int) -> NDArray[np.float64]:
+    """A cell as a (V, 2) float64 contour: an array, a list of [x, y] or, as pandas reads
+    Parquet, an object array of points; ValueError naming the row otherwise."""
     try:
-        contour = np.asarray(cell, dtype=np.float64)
+        points = list(cell) if isinstance(cell, np.ndarray) and cell.dtype == object else cell
+        contour = np.ascontiguousarray(points, dtype=np.float64)
     except (TypeError, ValueError):
         contour = np.empty((0,))
     if contour.ndim != 2 or contour.shape[1] != 2 or len(contour) < 3 \
@@ -240,30 +266,37 @@ def _checked_contour(cell: Any, row: int) -> NDArray[np.float64]:
 
 # ------------------------------------------------------------------------------ the cache
 class _ImageCache:
-    """Least-recently-used images of object groups, bounded by :data:`CACHE_BYTES`."""
+    """Least-recently-used images of object groups, bounded by :data:`CACHE_BYTES`; safe to
+    share between threads."""
 
     def __init__(self, max_bytes: int) -> None:
         self.max_bytes = max_bytes
         self.entries: OrderedDict[bytes, NDArray[np.uint8]] = OrderedDict()
         self.bytes = 0
+        self.lock = threading.Lock()
 
     def get(self, key: bytes) -> NDArray[np.uint8] | None:
-        found = self.entries.get(key)
-        if found is not None:
-            self.entries.move_to_end(key)
-        return found
+        with self.lock:
+            found = self.entries.get(key)
+            if found is not None:
+                self.entries.move_to_end(key)
+            return found
 
     def put(self, key: bytes, counts: NDArray[np.uint8]) -> None:
         counts.flags.writeable = False
-        self.entries[key] = counts
-        self.bytes += counts.nbytes
-        while self.bytes > self.max_bytes and len(self.entries) > 1:
-            _, dropped = self.entries.popitem(last=False)
-            self.bytes -= dropped.nbytes
+        with self.lock:
+            if key in self.entries:
+                return
+            self.entries[key] = counts
+            self.bytes += counts.nbytes
+            while self.bytes > self.max_bytes and len(self.entries) > 1:
+                _, dropped = self.entries.popitem(last=False)
+                self.bytes -= dropped.nbytes
 
     def clear(self) -> None:
-        self.entries.clear()
-        self.bytes = 0
+        with self.lock:
+            self.entries.clear()
+            self.bytes = 0
 
 
 _CACHE = _ImageCache(CACHE_BYTES)
@@ -412,6 +445,7 @@ class SilhouetteRaster:
         """Whether points (world mm, any shape) fall in a filled cell."""
         return self._lookup(self._cells(x, 0), self._cells(y, 1))
 
+
     def contains_grid(self, hand: _HandFrames, u: NDArray[np.float64], v: NDArray[np.float64]
                       ) -> NDArray[np.bool_]:
         """(n, H*s, W*s): whether each grip's samples fall in a filled cell."""
@@ -425,18 +459,22 @@ class SilhouetteRaster:
     def _cells(self, coordinate: NDArray[np.float64], axis: int) -> NDArray[np.float64]:
         return np.floor((np.asarray(coordinate, float) - self.origin[axis]) / self.cell_mm)
 
-    def _lookup(self, col: NDArray[np.float64], row: NDArray[np.float64]) -> NDArray[np.bool_]:
+    def _lookup(self, col: NDArray[np.floating], row: NDArray[np.floating]) -> NDArray[np.bool_]:
         # the border cells are empty, so a point off the grid reads the nearest border cell
         rows, cols = self.mask.shape
-        col = np.clip(col, 0, cols - 1).astype(np.intp)
-        row = np.clip(row, 0, rows - 1).astype(np.intp)
-        return self.mask.ravel()[row * cols + col]
+        np.clip(col, 0, cols - 1, out=col)
+        np.clip(row, 0, rows - 1, out=row)
+        row *= cols
+        row += col  # a whole number below 2**24: exact in float32
+        return np.take(self.mask.ravel(), row.astype(np.int32))
 
 
 def silhouette_raster(contour: NDArray[np.float64], cell_mm: float = RASTER_MM
                       ) -> SilhouetteRaster:
     """Fill ``contour`` (a closed polygon, (V, 2) mm) on a grid of ``cell_mm`` cells covering it
-    with an empty cell to spare all round: a scanline fill, vectorised over rows and edges."""
+    with an empty cell to spare all round: a scanline fill, vectorised over rows and edges.
+    Cells are coarsened for a contour more than a metre across, to at most 4,000 a side."""
+    cell_mm = max(cell_mm, float(np.ptp(contour, axis=0).max()) / 4000.0)
     low = np.floor(contour.min(axis=0) / cell_mm) - 1
     high = np.ceil(contour.max(axis=0) / cell_mm) + 1
     cols, rows = (high - low).astype(int)
@@ -449,6 +487,7 @@ def silhouette_raster(contour: NDArray[np.float64], cell_mm: float = RASTER_MM
     x = a[:, 0] + (y[row] - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
     # a cell is inside when an odd number of crossings lie left of its centre
     first_col = np.clip(np.ceil((x - origin[0]) / cell_mm - 0.5), 0, cols).astype(np.intp)
-    toggles = np.bincount(row * (cols + 1) + first_col, minlength=rows * (cols + 1))
-    mask = (np.cumsum(toggles.reshape(rows, cols + 1), axis=1)[:, :cols] % 2).astype(bool)
+    toggles = np.bincount(row * (cols + 1) + first_col, minlength=rows * (cols + 1)) % 2
+    parity = np.bitwise_xor.accumulate(toggles.astype(np.uint8).reshape(rows, cols + 1), axis=1)
+    mask = parity[:, :cols].astype(bool)
     return SilhouetteRaster(mask, origin, cell_mm)

@@ -9,8 +9,10 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 from numpy.typing import NDArray
+from sklearn.pipeline import Pipeline
 
 from classifiers.learners.grip_images import CHANNELS, GripImages
+from classifiers.learners.occlusion import grip_occlusion_maps
 from grip_env.drawing import save_figure
 
 #: Each channel's colour in a composite (RGB, added over a white ground).
@@ -35,7 +37,7 @@ def choose_grips(grips: pd.DataFrame, count: int = 8, seed: int = 0) -> pd.DataF
     """A seeded choice of ``count`` grips from distinct objects, half held and half slipped
     (``success``), held first."""
     rng = np.random.default_rng(seed)
-    one_per_object = grips.loc[rng.permutation(len(grips))].drop_duplicates("object_id")
+    one_per_object = grips.iloc[rng.permutation(len(grips))].drop_duplicates("object_id")
     held = one_per_object[one_per_object["success"].astype(bool)]
     slipped = one_per_object[~one_per_object["success"].astype(bool)]
     half = count // 2
@@ -59,6 +61,8 @@ def grip_images_figure(grips: pd.DataFrame, transformer: GripImages | None = Non
     fig.suptitle(f"What the image evaluator sees: {transformer.size_px} px at "
                  f"{transformer.mm_per_px:g} mm/px, palm centre at (0, 0), thumb force up; "
                  "grey object, blue fingers' approach, red contacts", fontsize=8)
+    fig.supxlabel("hand x (mm)", fontsize=8)
+    fig.supylabel("hand y: the thumb's force (mm)", fontsize=8)
     fig.tight_layout()
     return fig
 
@@ -73,20 +77,34 @@ def occlusion_figure(images: NDArray[np.floating], maps: NDArray[np.floating],
                      titles: Sequence[str], channels: Sequence[str] = CHANNELS) -> Figure:
     """Each image beside its occlusion map (drop in predicted success when a patch is greyed):
     red where hiding the pixels lowers the prediction, blue where it raises it."""
-    fig = Figure(figsize=(2.2 * len(images), 4.6))
+    fig = Figure(figsize=(2.6 * len(images) + 0.8, 5.4), layout="constrained")
     axes = fig.subplots(2, len(images), squeeze=False)
     limit = float(np.max(np.abs(maps))) or 1.0
     for k, (image, drop, title) in enumerate(zip(images, maps, titles, strict=True)):
         axes[0, k].imshow(composite(image, channels), interpolation="nearest")
-        axes[0, k].set_title(title, fontsize=7)
+        axes[0, k].set_title(title, fontsize=6.5)
         shown = axes[1, k].imshow(drop, cmap="RdBu_r", vmin=-limit, vmax=limit)
         axes[1, k].imshow(image[list(channels).index("silhouette")] if "silhouette" in channels
                           else np.zeros(drop.shape), cmap="Greys", alpha=0.15)
         for ax in axes[:, k]:
             ax.set_xticks([])
             ax.set_yticks([])
+    axes[0, 0].set_ylabel("the grip's image", fontsize=8)
+    axes[1, 0].set_ylabel("occlusion map", fontsize=8)
     fig.colorbar(shown, ax=axes[1, :].tolist(), shrink=0.8, label="drop in P(success)")
     return fig
+
+
+def grip_occlusion_figure(pipeline: Pipeline, grips: pd.DataFrame, **options: object) -> Figure:
+    """:func:`occlusion_figure` of ``grips`` under a fitted ``pipeline`` that starts by drawing
+    them (:func:`~classifiers.learners.occlusion.grip_occlusion_maps`, with ``options``), each
+    titled with its label and the pipeline's predicted success."""
+    images, maps = grip_occlusion_maps(pipeline, grips, **options)
+    predicted = np.asarray(pipeline.predict_proba(grips))[:, 1]
+    titles = [f"{_label(grip)}\npredicted {p:.2f}"
+              for (_, grip), p in zip(grips.iterrows(), predicted, strict=True)]
+    drawer = next(step for _, step in pipeline.steps if isinstance(step, GripImages))
+    return occlusion_figure(images, maps, titles, tuple(drawer.channels))
 
 
 def _panels(count: int, columns: int) -> Figure:
@@ -99,9 +117,10 @@ def _panels(count: int, columns: int) -> Figure:
 
 
 def _label(grip: pd.Series) -> str:
-    outcome = "held" if bool(grip["success"]) else "slipped"
-    rate = (f" {grip['success_rate']:.0%}" if "success_rate" in grip
+    """Object, label and how the label came about: "success: held in 80% of trials, 96 g"."""
+    outcome = "success" if bool(grip["success"]) else "failure"
+    rate = (f": held in {grip['success_rate']:.0%} of trials" if "success_rate" in grip
             and pd.notna(grip["success_rate"]) else "")
-    robust = (f", {grip['robustness_mean']:.2f} g" if "robustness_mean" in grip
+    robust = (f", {grip['robustness_mean']:.0f} g" if "robustness_mean" in grip
               and pd.notna(grip["robustness_mean"]) else "")
     return f"{grip['object_id']}\n{outcome}{rate}{robust}"

@@ -15,6 +15,7 @@ from typing import Any
 import pandas as pd
 import yaml
 
+from classifiers.learners.grip_images import attach_contours
 from classifiers.report import analysis, figures
 from classifiers.report.answer_figures import ALT_TEXT, draw_answer_figures
 from classifiers.report.answers import (
@@ -25,6 +26,7 @@ from classifiers.report.answers import (
 )
 from classifiers.report.document import Report, frame_of_intervals
 from classifiers.report.image_section import image_section
+from classifiers.report.grip_images import choose_grips, draw_grip_images
 from classifiers.report.judge import (
     FEW_OBJECTS,
     SPANS,
@@ -173,10 +175,35 @@ def _dataset_section(report: Report, table: pd.DataFrame, objects: list[PlanarOb
                   "the mean robustness. Axes in mm. Dots: contacts; arrows: real finger forces; "
                   "dashed: finger lines to their spread axes; square: palm centre; × C_G, * C_C "
                   "(paper's Fig. 15).")
+    path = _grip_images(table, fig_dir / GRIP_IMAGES_FILE, fig_dir.parent)
+    if path is not None:
+        report.figure(_rel(path, report_root=fig_dir.parent),
+                      "What the image evaluator sees: eight grips (four labelled success, four "
+                      "failure, each of another object) drawn in their hand's frame, the palm at "
+                      "the centre and the thumb's force up; grey: the silhouette the grips were "
+                      "planned on, blue: the fingers' approach, red: the contacts.")
 
 
 #: The gallery's file in the report's figures folder.
 GALLERY_FILE = "gallery.png"
+#: The figure of grips' images, beside it.
+GRIP_IMAGES_FILE = "grip_images.png"
+
+
+def _grip_images(table: pd.DataFrame, path: Path, out: Path) -> Path | None:
+    """Eight of the study's grips as the image evaluator sees them, when its dataset's objects
+    table is found (``out/data.json`` names the dataset); else None."""
+    from grip_env.dataset.catalog import read_objects
+
+    found = _json(out / "data.json") or {}
+    folder = Path(found.get("dataset", out / "dataset"))
+    if not (folder / "objects.parquet").is_file():
+        return None
+    objects = read_objects(folder)
+    present = table[table["object_id"].isin(set(objects["object_id"]))]
+    if present.empty:
+        return None
+    return draw_grip_images(attach_contours(choose_grips(present, 8, seed=0), objects), path)
 
 
 def _gallery(table: pd.DataFrame, objects: list[PlanarObject], path: Path, out: Path) -> Path:
