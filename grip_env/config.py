@@ -296,6 +296,12 @@ class LearningConfig(_Section):
         min_length=1,
         description="learning-to-rank models (a group: one object's grips) trained and compared",
     )
+    image_models: tuple[str, ...] = Field(
+        ("cnn", "cnn_measures"),
+        description="convolutional models of the grip image (cnn) and of the image with the "
+        "twelve measures (cnn_measures) the study's image stage sets beside ablation_model; "
+        "empty: no image stage",
+    )
     seeds: int = Field(
         4, ge=1, le=100,
         description="training seeds (seed, seed+1, ...) of every learner scored on the held-out "

@@ -17,7 +17,7 @@ from classifiers.experiments.benchmark.leaderboard import build_leaderboard
 from classifiers.report.answers import answer_sentences
 
 
-def _board(seed: int = 3) -> dict:
+def _board(seed: int = 3, extra: dict | None = None) -> dict:
     """A leaderboard of 30 held-out objects (4 degenerate): lambdarank picks about 0.1 better than
     best-Q_C on every object, best-Q_G 0.05 better with noise, the RL selector as best-Q_C with
     noise, random 0.15 worse."""
@@ -27,7 +27,7 @@ def _board(seed: int = 3) -> dict:
                            *(f"success_at_{k}" for k in range(1, 6))), 0.5)  # fmt: skip
     shifts = {"best_qc": (0.0, 0.0, 1), "best_qg": (0.05, 0.05, 1), "random": (-0.15, 0.0, 1),
               "oracle": (0.3, 0.0, 1), "ranker_lambdarank": (0.1, 0.05, 2),
-              "classifier_knn": (0.0, 0.1, 2), "rl": (0.0, 0.1, 2)}
+              "classifier_knn": (0.0, 0.1, 2), "rl": (0.0, 0.1, 2), **(extra or {})}
     rows = []
     for method, (shift, noise, runs) in shifts.items():
         for run in range(runs):
@@ -80,7 +80,8 @@ def test_the_answers_are_worded_from_their_intervals(tmp_path):
             "paired_difference": {"hgb": {"roc_auc": {"mean": -0.09, "ci": [-0.12, -0.07]}}}}}}))
     answers = study_answers(tmp_path, seed=3)
     assert answers["best_supervised"] == "ranker_lambdarank"
-    learned, hand, rl = answer_sentences(answers)
+    learned, hand, rl, image = answer_sentences(answers)
+    assert image.endswith("Not answered: the image stage did not run.")
     picks = answers["picks"]
     lambdarank = picks["ranker_lambdarank - best_qc"]
     assert lambdarank["ci"][0] > 0  # 0.1 better on every object, give or take 0.05
@@ -101,6 +102,48 @@ def test_the_answers_are_worded_from_their_intervals(tmp_path):
                                          "objects": 40}}
     assert "changes ROC-AUC by +0.000 [+0.000, +0.000], no verdict (its interval has zero " \
            "width" in answer_sentences(flat)[1]
+
+
+def test_the_image_answer_is_worded_from_the_image_stage(tmp_path):
+    """cnn_measures picks 0.2 better than best-Q_C on every object (lambdarank 0.1), and its
+    ROC-AUC interval lies above the measures' learner's: the measures miss something."""
+    board = _board(extra={"classifier_cnn_measures": (0.2, 0.05, 2),
+                          "classifier_cnn": (0.1, 0.1, 2)})
+    (tmp_path / "benchmark").mkdir()
+    (tmp_path / "benchmark" / "leaderboard.json").write_text(json.dumps(board))
+    (tmp_path / "images").mkdir()
+    families = {f"o{i:02d}": "mesh" if i < 12 else "procedural" for i in range(30)}
+    (tmp_path / "images" / "images.json").write_text(json.dumps({
+        "models": ["cnn", "cnn_measures"], "families": families,
+        "cv": {"reference": "hgb", "n_objects": 40, "paired_difference": {
+            "cnn": {"roc_auc": {"mean": -0.01, "ci": [-0.04, 0.02]}},
+            "cnn_measures": {"roc_auc": {"mean": 0.05, "ci": [0.03, 0.07]}}}}}))
+    answers = study_answers(tmp_path, seed=3)
+    image = answers["image"]
+    assert set(image["picks"]) == {f"classifier_{m} - {v}" for m in ("cnn", "cnn_measures")
+                                   for v in ("ranker_lambdarank", "best_qc")}
+    versus = image["picks"]["classifier_cnn_measures - ranker_lambdarank"]
+    assert versus["estimate"] == pytest.approx(0.1, abs=0.03) and versus["objects"] == 30
+    assert {f: rows["classifier_cnn_measures - best_qc"]["objects"]
+            for f, rows in image["families"].items()} == {"mesh": 12, "procedural": 18}
+    sentence = answer_sentences(answers)[3]
+    assert "No: they miss something worth +0.050 ROC-AUC: the image with the measures " \
+           "(`cnn_measures`) **beats** `hgb` on the twelve measures (+0.050 [+0.030, +0.070])" \
+           in sentence
+    assert "the image alone (`cnn`) **is not distinguishable from** it (-0.010 [-0.040, " \
+           "+0.020])" in sentence
+    assert "at picking, `cnn_measures` **beats** `lambdarank`" in sentence
+    wide = {**image, "auc": {**image["auc"], "cnn_measures": {"mean": 0.08, "ci": [-0.19, 0.36],
+                                                                "objects": 40}}}
+    assert "Not answered: the image with the measures (`cnn_measures`) against `hgb` on the " \
+           "twelve measures changes ROC-AUC by +0.080 [-0.190, +0.360], an interval that " \
+           "allows the image a gain of up to +0.360" in answer_sentences({**answers,
+                                                                          "image": wide})[3]
+    same = {**image, "auc": {**image["auc"], "cnn_measures": {"mean": 0.0, "ci": [-0.02, 0.02],
+                                                                "objects": 40}}}
+    assert "Yes, as far as this network can tell: the image with the measures (`cnn_measures`) " \
+           "**is not distinguishable from** `hgb`" in answer_sentences({**answers,
+                                                                          "image": same})[3]
 
 
 def test_every_answer_figure_is_drawn_from_the_results(tmp_path):

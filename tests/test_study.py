@@ -52,7 +52,8 @@ def test_quick_study_reports_and_a_rerun_recomputes_only_what_changed(tmp_path):
     report = (out / "report.md").read_text()
     for section in ("## Dataset", "## Features and outcomes", "## Grasp ranks against",
                     "## Classifiers", "## Ablation", "## RL selector", "## Leaderboard",
-                    "## Parameters", "## Planning on the rendered contour against the true one"):
+                    "## Parameters", "## Planning on the rendered contour against the true one",
+                    "## Image models: what the twelve measures miss"):
         assert section in report
     assert "Not run." not in report and "Stage provenance" in report
     assert (out / "report.html").read_text().startswith("<!doctype html>")
@@ -85,7 +86,7 @@ def test_quick_study_reports_and_a_rerun_recomputes_only_what_changed(tmp_path):
     assert "ablation: reusing" in again.output and "calibration: reusing" in again.output
     assert "benchmark: learning changed, recomputing" in again.output
     assert (out / "benchmark" / "leaderboard.json").exists()
-    assert "perception: reusing" in again.output
+    assert "perception: reusing" in again.output and "images: reusing" in again.output
     metrics = json.loads((out / "classifiers" / "metrics.json").read_text())
     assert list(metrics["models"]) == [*QUICK_MODELS, "svm"]
     assert "| svm |" in (out / "report.md").read_text()

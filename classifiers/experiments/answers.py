@@ -5,6 +5,10 @@
 2. Do the hand measures matter? The ablation's ROC-AUC without C1–C6 against all twelve, and, at
    picking, best-Q_G (whose index leaves the hand measures out) against best-Q_C.
 3. Does the RL selector beat best-Q_C, and does it match the best supervised method?
+4. Do the twelve measures capture what the grip's image holds? The image stage's paired ROC-AUC
+   of each image model (``cnn``, ``cnn_measures``) against the measures' learner, and, at
+   picking, each image model against lambdarank and best-Q_C, over all held-out objects and by
+   family (meshes, procedural and named shapes).
 
 A pick's comparison is the difference of top-1 success (the pick's recorded success rate),
 paired over every held-out object with the leaderboard's stratified bootstrap: the same resamples
@@ -28,6 +32,8 @@ ANSWERS_FILE = "answers.json"
 #: Method name prefixes of the supervised learners on the leaderboard.
 SUPERVISED = ("classifier_", "regressor_", "ranker_")
 RL, BEST_QG = "rl", "best_qg"
+#: The leaderboard method the image models are compared with at picking, beside best-Q_C.
+LAMBDARANK = "ranker_lambdarank"
 #: The leaderboard's bootstrap of top-1 success (:func:`study_benchmark`'s reps; its seed is
 #: ``learning.seed + 1``).
 REPS = 2000
@@ -72,6 +78,7 @@ def study_answers(out: Path, seed: int) -> dict[str, Any]:
     return {"best_supervised": best, "reference": REFERENCE, "ranked_objects": ranked,
             "skipped": board.get("skipped"), "picks": picks,
             "hand_measures": hand_difference(_json(out / "ablation" / "ablation.json")),
+            "image": image_answers(board, _json(out / "images" / "images.json"), seed),
             "leaderboard_dataset_sha256": board.get("split", {}).get("dataset_sha256")}  # fmt: skip
 
 
@@ -85,6 +92,32 @@ def hand_difference(ablation: dict[str, Any]) -> dict[str, Any] | None:
         return None
     return {"model": model, "mean": block["mean"], "ci": block["ci"],
             "objects": ablation.get("cv", {}).get("n_objects")}
+
+
+def image_answers(board: dict[str, Any], images: dict[str, Any],
+                  seed: int) -> dict[str, Any] | None:  # fmt: skip
+    """The image stage's answer: each image model's paired ROC-AUC difference to the measures'
+    learner (``"auc"``), and its top-1 success against lambdarank and best-Q_C over every
+    held-out object (``"picks"``) and each family's (``"families"``); None without the stage."""
+    models = images.get("models", [])
+    if not models:
+        return None
+    cv = images.get("cv") or {}
+    auc = {name: {**cv["paired_difference"][name]["roc_auc"], "objects": cv.get("n_objects")}
+           for name in models if name in cv.get("paired_difference", {})}  # fmt: skip
+    present = set(board.get("methods", {}))
+    pairs = [(f"classifier_{name}", versus) for name in models for versus in (LAMBDARANK, REFERENCE)
+             if {f"classifier_{name}", versus} <= present]  # fmt: skip
+    picks = pick_differences(board, pairs, seed) if pairs else {}
+    families: dict[str, Any] = {}
+    by_family = images.get("families", {})
+    for family in sorted(set(by_family.values())):
+        rows = [row for row in board.get("per_object", [])
+                if by_family.get(str(row["object_id"])) == family]  # fmt: skip
+        if pairs and rows:
+            families[family] = pick_differences({"per_object": rows}, pairs, seed)
+    return {"reference": cv.get("reference"), "models": models, "auc": auc, "picks": picks,
+            "families": families, "resemblance": images.get("resemblance")}
 
 
 def write_answers(out: str | Path, seed: int) -> Path:

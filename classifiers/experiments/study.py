@@ -32,7 +32,8 @@ QUICK_OVERRIDES: dict[str, dict[str, Any]] = {
     "dataset": {"trials": 2, "max_grips_per_object": 8},
     "learning": {"folds": 2, "repeats": 1, "models": ("logreg", "knn", "rank_qc", "random"),
                  "regressors": ("ridge", "rank_qc", "rank_qg", "random"),
-                 "rankers": ("lambdarank", "rank_qc", "random"), "seeds": 2},
+                 "rankers": ("lambdarank", "rank_qc", "random"), "seeds": 2,
+                 "image_models": ("cnn",)},
     "selector": {"timesteps": 512, "max_candidates": 16, "seeds": 2},
 }
 STAGE_FILE = "stage.json"
@@ -81,6 +82,21 @@ def _selector(run: StudyRun) -> object:
     return run_selectors(run.table, run.out / "selector", run.config)
 
 
+def _images(run: StudyRun) -> object:
+    if not run.config.learning.image_models:
+        return _skipped(run.out / IMAGES.result, "learning.image_models is empty")
+    from classifiers.experiments.image_evaluator import run_image_study
+
+    return run_image_study(run.table, run.data_dir, run.out / "images", run.config)
+
+
+def _skipped(path: Path, reason: str) -> dict[str, str]:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    result = {"skipped": reason}
+    path.write_text(json.dumps(result, indent=2))
+    return result
+
+
 def _benchmark(run: StudyRun) -> object:
     from classifiers.experiments.benchmark import study_benchmark
     from classifiers.report.leaderboard import write_leaderboard_markdown
@@ -122,8 +138,13 @@ def _perception(run: StudyRun) -> object:
     return run_perception_effect(run.config, run.data_dir, run.out / "perception")
 
 
+#: The image models beside the measures' learner (:mod:`classifiers.experiments.image_evaluator`).
+IMAGES = Stage("images", ("learning.image_models", "learning.ablation_model", "learning.folds",
+                          "learning.repeats", "learning.seed", "learning.seeds",
+                          "learning.test_fraction", "selector.max_candidates"),
+               "images/images.json", _images)
 #: The study's stages, in the order they run (the selector's baselines are the classifiers'
-#: learners; the benchmark reads both stages' scores).
+#: learners; the benchmark reads the classifiers', the image models' and the selector's scores).
 STAGES: tuple[Stage, ...] = (
     Stage("classifiers", ("learning", "selector.max_candidates", "sim.ramp_levels_g",
                           "sim.ramp_ratio"), "classifiers/metrics.json", _classifiers),
@@ -131,6 +152,7 @@ STAGES: tuple[Stage, ...] = (
                        "learning.seed"), "ablation/ablation.json", _ablation),
     Stage("selector", ("learning.models", "learning.seed", "learning.test_fraction", "selector",
                        "sim"), "selector/selector.json", _selector),
+    IMAGES,
     Stage("benchmark", ("learning", "selector", "sim", "grasp.mu"),
           "benchmark/leaderboard.json", _benchmark),
     Stage("calibration", ("grasp", "objects", "perception", "synthesis", "sim", "uncertainty",
@@ -302,11 +324,12 @@ def run_stage(stage: Stage, run: StudyRun) -> dict[str, float]:
 
 def check_learner_names(config: Config) -> None:
     """ValueError naming the ``learning`` key whose model name no registry knows."""
-    from classifiers.learners.models import MODEL_NAMES, REGRESSOR_NAMES
+    from classifiers.learners.models import IMAGE_MODEL_NAMES, MODEL_NAMES, REGRESSOR_NAMES
     from classifiers.learners.ranking import RANKER_NAMES
 
     learning = config.learning
     for key, names, known in (("models", learning.models, MODEL_NAMES),
+                              ("image_models", learning.image_models, IMAGE_MODEL_NAMES),
                               ("ablation_model", (learning.ablation_model,), MODEL_NAMES),
                               ("regressors", learning.regressors, REGRESSOR_NAMES),
                               ("rankers", learning.rankers, RANKER_NAMES)):  # fmt: skip

@@ -19,6 +19,13 @@ early stopping on a seeded 15 % validation split of the training grips: the seed
 grips stop the boosting, so "hgb" is a stochastic learner whose seeds give different models. It
 runs on one thread (:class:`~classifiers.learners.threads.OneThreadHGBClassifier`, 13x faster here).
 
+"cnn" and "cnn_measures" (:data:`IMAGE_MODELS`, in both registries but not in
+:data:`MODEL_NAMES`, whose learners read the measures alone) are the image models: each grip's
+image (:class:`~classifiers.learners.image_inputs.ImageInputs` and its ``GripImages``; the table
+must carry the grips' contours) through a small convolutional network
+(:mod:`classifiers.learners.cnn`), with, for "cnn_measures", the features joined after its
+convolutional trunk.
+
 ``make_regressor(name, seed, features)`` is the same for the regression task (predicting a grip's
 ``robustness_mean``): "svr" (RBF ``SVR`` on standardised features,
 :class:`~classifiers.learners.svm.SampledSVR`), "mlp_torch"
@@ -50,6 +57,8 @@ from classifiers.learners.baselines import (
     RankingClassifier,
     RankingRegressor,
 )
+from classifiers.learners.cnn import CNNClassifier, CNNRegressor
+from classifiers.learners.image_inputs import ImageInputs, default_images, image_shape
 from classifiers.learners.svm import PlattSVC, SampledSVR
 from classifiers.learners.threads import OneThreadHGBClassifier, OneThreadHGBRegressor
 from classifiers.learners.torch_mlp import TorchMLPClassifier, TorchMLPRegressor
@@ -120,12 +129,30 @@ _REGRESSORS: dict[str, Entry] = {
 REGRESSOR_NAMES = tuple(_REGRESSORS)
 
 
+#: The image models (:mod:`classifiers.learners.cnn`): name → whether the twelve measures (or the
+#: features given) are joined to the image. Registered for both tasks, not in MODEL_NAMES.
+IMAGE_MODELS = {"cnn": False, "cnn_measures": True}
+IMAGE_MODEL_NAMES = tuple(IMAGE_MODELS)
+
+
+def _image_pipeline(name: str, seed: int, features: tuple[str, ...], regressor: bool) -> Pipeline:
+    """The grip images (and the measures, for ``cnn_measures``), then the convolutional net."""
+    measures = features if IMAGE_MODELS[name] else ()
+    images = default_images()
+    network = (CNNRegressor if regressor else CNNClassifier)(
+        image_shape(images), n_measures=len(measures), random_state=seed)
+    return Pipeline([("select", ImageInputs(images, measures)), ("model", network)])
+
+
 def _pipeline(registry: dict[str, Entry], kind: str, name: str, seed: int,
               features: Sequence[str]) -> Pipeline:
     """``registry[name]``'s pipeline: its column selection, then its steps for ``seed``."""
     features = check_features(features)
+    if name in IMAGE_MODELS:
+        return _image_pipeline(name, seed, features, registry is _REGRESSORS)
     if name not in registry:
-        raise ValueError(f"unknown {kind} name {name!r}; known: {list(registry)}")
+        raise ValueError(f"unknown {kind} name {name!r}; known: "
+                         f"{[*registry, *IMAGE_MODEL_NAMES]}")
     columns, steps = registry[name]
     return Pipeline([("select", ColumnSelector(columns or features)), *steps(seed)])
 

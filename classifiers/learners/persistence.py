@@ -6,8 +6,10 @@ checksum, anything the caller adds) plus either
 - ``name.skops`` for scikit-learn pipelines (``skops.io``; on load, only the types of
   :data:`TRUSTED_TYPES` (this package's estimators) and scikit-learn's own internals
   (``sklearn.*``: calibrators, KD-trees, optimisers) are accepted beyond skops' defaults), or
-- ``name.pt`` for the torch MLP: the network's ``state_dict`` (loaded with ``weights_only=True``),
-  rebuilt with its JSON parameters, or
+- ``name.pt`` for the torch MLP and the convolutional image models: the network's ``state_dict``
+  (loaded with ``weights_only=True``), rebuilt with its JSON parameters (an image model's first
+  step, :class:`~classifiers.learners.image_inputs.ImageInputs`, from its JSON ``inputs``: the
+  image transformer's parameters, the measures and the image shape), or
 - ``name.txt`` for the lambdarank ranker (``format: lightgbm_text``, written by
   :meth:`~classifiers.learners.ranking.GroupedRanker.save`): LightGBM's own text model, rebuilt
   with its JSON parameters.
@@ -31,6 +33,8 @@ import torch
 from sklearn.pipeline import Pipeline
 
 from classifiers.learners.baselines import ColumnSelector
+from classifiers.learners.cnn import CNNClassifier, CNNRegressor
+from classifiers.learners.image_inputs import ImageInputs
 from classifiers.learners.torch_mlp import TorchMLPClassifier, TorchMLPRegressor
 
 TRUSTED_TYPES = frozenset(
@@ -46,7 +50,8 @@ TRUSTED_TYPES = frozenset(
         "classifiers.learners.svm.SampledSVR",
     }
 )
-_TORCH_MODELS = {cls.__name__: cls for cls in (TorchMLPClassifier, TorchMLPRegressor)}
+_TORCH_MODELS = {cls.__name__: cls for cls in (TorchMLPClassifier, TorchMLPRegressor,
+                                                CNNClassifier, CNNRegressor)}
 #: Where the trusted types lived before classifiers/ was laid out by kind: a model saved then
 #: names them so, and still loads.
 LEGACY_MODULES = {"classifiers.baselines": "classifiers.learners.baselines",
@@ -72,6 +77,8 @@ def save_model(
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
     selector, estimator = model[0], model[-1]
+    if isinstance(selector, ImageInputs):
+        return _save_image_model(model, directory, name, metadata)
     if not isinstance(selector, ColumnSelector):
         raise ValueError(f"model {name!r} must start with a ColumnSelector step")
     import skops.io as sio  # here, not at import: skops' import walks all of scikit-learn
@@ -85,6 +92,23 @@ def save_model(
     else:
         sio.dump(model, directory / f"{name}.skops")
         info |= {"format": "skops", "params": _jsonable(estimator.get_params(deep=False))}
+    path = directory / f"{name}.json"
+    path.write_text(json.dumps(info, indent=2, sort_keys=True))
+    return path
+
+
+def _save_image_model(model: Pipeline, directory: Path, name: str,
+                      metadata: dict[str, Any] | None) -> Path:
+    """An image model: its network's ``state_dict`` and, in the JSON, its first step's
+    settings (:meth:`ImageInputs.settings`)."""
+    inputs, estimator = model[0], model[-1]
+    if len(model) != 2 or type(estimator).__name__ not in _TORCH_MODELS:
+        raise ValueError(f"model {name!r}: an image model is ImageInputs then a torch network")
+    torch.save(estimator.state_dict(), directory / f"{name}.pt")
+    info = {"name": name, "columns": list(inputs.measures), **(metadata or {}),
+            "format": "torch_state_dict", "estimator": type(estimator).__name__,
+            "params": _jsonable(estimator.get_params()), "fitted": estimator.fitted_metadata(),
+            "inputs": inputs.settings()}  # fmt: skip
     path = directory / f"{name}.json"
     path.write_text(json.dumps(info, indent=2, sort_keys=True))
     return path
@@ -130,8 +154,11 @@ def load_model(directory: str | Path, name: str) -> tuple[Any, dict[str, Any]]:
         if kind not in _TORCH_MODELS:
             raise ValueError(f"{meta_path}: unknown torch estimator {kind!r}")
         estimator = _TORCH_MODELS[kind].from_state_dict(info["params"], info["fitted"], state)
-        selector = ColumnSelector(tuple(info["columns"]))
-        selector.n_features_out_ = len(selector.columns)
+        if "inputs" in info:
+            selector = ImageInputs.from_settings(info["inputs"])
+        else:
+            selector = ColumnSelector(tuple(info["columns"]))
+            selector.n_features_out_ = len(selector.columns)
         return Pipeline([("select", selector), ("model", estimator)]), info
     if info.get("format") == "skops":
         import skops.io as sio

@@ -47,7 +47,8 @@ def answers_preamble(answers: dict[str, Any]) -> str:
 
 def answer_sentences(answers: dict[str, Any]) -> list[str]:
     """The three questions and their answers (Markdown), in the order the study asks them."""
-    return [_learned_pick(answers), _hand_measures(answers), _rl_selector(answers)]
+    return [_learned_pick(answers), _hand_measures(answers), _rl_selector(answers),
+            _image(answers)]
 
 
 def strong_methods(answers: dict[str, Any]) -> list[str]:
@@ -90,6 +91,67 @@ def _rl_selector(answers: dict[str, Any]) -> str:
     best = answers.get("best_supervised")
     against_best = f" and {_compare(answers, 'rl', best, f'`{best}`')}" if best else ""
     return f"{question} The RL selector {_compare(answers, 'rl', 'best_qc', _QC)}{against_best}."
+
+
+#: The smallest ROC-AUC gain the image answer treats as something the measures miss (the
+#: study's target half-width): "yes, they capture it" needs the interval below it.
+WORTH_STATING = 0.03
+#: How the image models are named in the answer.
+_SHOWN = {"cnn": "the image alone (`cnn`)", "cnn_measures": "the image with the measures "
+          "(`cnn_measures`)"}
+
+
+def _image(answers: dict[str, Any]) -> str:
+    """The fourth answer: does the image hold what the measures miss? One sentence on the
+    image-with-measures model (the image alone beside it), then its picks."""
+    question = "**Do the twelve measures capture what the grip's image holds?**"
+    image = answers.get("image")
+    if not image or not image.get("models"):
+        return f"{question} Not answered: the image stage did not run."
+    joined = "cnn_measures" if "cnn_measures" in image["models"] else image["models"][0]
+    auc = image["auc"].get(joined, {})
+    problem = unjudgeable(auc, auc.get("objects"), _SPAN) if auc else "no cross-validation"
+    reference = f"`{image['reference']}` on the twelve measures"
+    if not auc:
+        verdict = "Not answered: the image stage's cross-validation did not run"
+    elif problem:
+        verdict = (f"Not answered: {_SHOWN.get(joined, joined)} against {reference} changes "
+                   f"ROC-AUC by {signed(auc)}, no verdict ({problem})")
+    elif auc["ci"][0] > 0:
+        verdict = (f"No: they miss something worth {auc['mean']:+.3f} ROC-AUC: "
+                   f"{_SHOWN.get(joined, joined)} **beats** {reference} ({signed(auc)})")
+    elif auc["ci"][1] <= WORTH_STATING:
+        verdict = (f"Yes, as far as this network can tell: {_SHOWN.get(joined, joined)} "
+                   f"**{relation(auc['ci'])}** {reference} ({signed(auc)})")
+    else:
+        verdict = (f"Not answered: {_SHOWN.get(joined, joined)} against {reference} changes "
+                   f"ROC-AUC by {signed(auc)}, an interval that allows the image a gain of up "
+                   f"to {auc['ci'][1]:+.3f}")
+    alone = [_against_it(_SHOWN.get(n, n), image["auc"][n]) for n in image["models"]
+             if n != joined and n in image["auc"]]  # fmt: skip
+    picks = {"picks": image.get("picks", {}), "ranked_objects": answers.get("ranked_objects", 0)}
+    method = f"classifier_{joined}"
+    at_picking = (f"; at picking, `{joined}` {_compare(picks, method, 'ranker_lambdarank', '`lambdarank`')}"
+                  f" and {_compare(picks, method, 'best_qc', _QC)}")  # fmt: skip
+    return f"{question} {verdict}{'; ' + '; '.join(alone) if alone else ''}{at_picking}."
+
+
+def _against_it(shown: str, auc: dict[str, Any]) -> str:
+    """``the image alone (`cnn`) **beats** it (+0.010 [...])``, or its numbers without a verdict."""
+    problem = unjudgeable(auc, auc.get("objects"), _SPAN)
+    if problem:
+        return f"{shown} against it: {signed(auc)}, no verdict ({problem})"
+    return f"{shown} **{relation(auc['ci'])}** it ({signed(auc)})"
+
+
+def image_family_rows(answers: dict[str, Any]) -> list[dict[str, Any]]:
+    """The image models' top-1 differences by family, as table rows (family, comparison,
+    difference with its interval, objects)."""
+    image = answers.get("image") or {}
+    return [{"family": family, "comparison": name, "difference": signed(row),
+             "objects": row["objects"]}
+            for family, found in image.get("families", {}).items()
+            for name, row in found.items()]  # fmt: skip
 
 
 def _compare(answers: dict[str, Any], method: str, versus: str, shown: str) -> str:

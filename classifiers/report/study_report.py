@@ -25,6 +25,7 @@ from classifiers.report.answers import (
     strong_methods,
 )
 from classifiers.report.document import Report, frame_of_intervals
+from classifiers.report.image_section import image_section
 from classifiers.report.grip_images import choose_grips, draw_grip_images
 from classifiers.report.judge import (
     FEW_OBJECTS,
@@ -71,6 +72,7 @@ def write_report(out: Path, config: Config, table: pd.DataFrame,
     _classifier_section(report, out)
     _regression_section(report, out)
     _ablation_section(report, out)
+    image_section(report, out, fig_dir)
     _selector_section(report, out)
     _benchmark_section(report, out)
     power_section(report, out)

@@ -58,7 +58,9 @@ def predict(
 
         fitted, info = load_saved_model(directory, name)
         grips = load(data)
-        table = predictions(fitted, info, grips)
+        # an image model draws each grip's planned-on contour, from the objects table
+        shown = with_contours(grips, data) if "inputs" in info else grips
+        table = predictions(fitted, info, shown)
         _write(table, out)
     typer.echo(f"wrote {out}: {len(table)} grips of {table['object_id'].nunique()} objects, "
                f"{table.columns[2]} from model {name}{_in_sample_note(info, grips)}")
@@ -123,6 +125,14 @@ def load_saved_model(directory: Path, name: str) -> tuple[Any, dict[str, Any]]:
         reason = " ".join(str(exc).split())[:300]
         raise ValueError(f"cannot load model {directory / name}: {type(exc).__name__}: "
                          f"{reason}") from None
+
+
+def with_contours(grips: pd.DataFrame, data: Path) -> pd.DataFrame:
+    """The grips with the contours they were planned on, from the dataset's objects table."""
+    from classifiers.learners.grip_images import attach_contours
+    from grip_env.dataset import read_objects
+
+    return attach_contours(grips, read_objects(data))
 
 
 def predictions(model: Any, info: dict[str, Any], grips: pd.DataFrame) -> pd.DataFrame:

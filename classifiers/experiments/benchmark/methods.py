@@ -43,7 +43,7 @@ from grip_env.envs.observation import CandidateSet
 SCORE_COLUMNS = ("method", "seed", "object_id", "candidate", "score")
 BASELINES = ("best_qc", "best_qg", "epsilon", "random", "oracle")
 HIDDEN_COLUMNS = (*OUTCOMES, *ROBUSTNESS)
-SCORE_FILES = ("classifiers/scores.parquet", "selector/scores.parquet")
+SCORE_FILES = ("classifiers/scores.parquet", "images/scores.parquet", "selector/scores.parquet")
 #: Learned-model names that are the baselines again (rank_qc is best_qc with calibrated units,
 #: random a sampled stand-in for the exact random pick): left out of a study's leaderboard.
 DUPLICATES = ("_rank_qc", "_rank_qg", "_random")
