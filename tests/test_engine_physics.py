@@ -58,11 +58,7 @@ def test_pybullets_held_box_slips_at_coulombs_load_on_its_own_normal_forces():
     assert abs(result.error) < 0.02, result
 
 
-MUJOCO_LIFT = pytest.mark.xfail(strict=True, reason="MuJoCo's arm drive (h kv = 10 joint inertias, "
-                                "outside its contact solve) chatters at its force limit during the "
-                                "lift and shakes the box out of place: BENCHMARKS.md, 'Why MuJoCo "
-                                "drops grips at the lift'")
-LIFT_ENGINES = ["pybullet", pytest.param("mujoco", marks=[MUJOCO_LIFT, *ENGINES[1].marks])]
+LIFT_ENGINES = ENGINES
 
 
 def _lift_of_held_box(engine: str) -> tuple[object, list[float]]:
@@ -103,7 +99,8 @@ def test_the_held_box_stays_in_place_through_the_lift(engine):
 @pytest.mark.parametrize("engine", LIFT_ENGINES)
 def test_the_lift_drive_stays_inside_its_force_limit(engine):
     """The lift (60 mm in 0.25 s) asks the arm for the hand's weight and a few newtons more; a drive
-    at its limit is fighting something else."""
+    at its limit is fighting something else (MuJoCo's drives outside the contact solve chattered
+    at +-400 N: BENCHMARKS.md, 'Why MuJoCo drops grips at the lift')."""
     from grip_env.sim.hand import Hand
 
     _, forces = _lift_of_held_box(engine)

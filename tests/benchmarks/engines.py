@@ -21,6 +21,7 @@ import platform
 import time
 from datetime import UTC, datetime
 
+import numpy as np
 import pandas as pd
 
 from grip_env.config import Config
@@ -59,6 +60,7 @@ def cost(grips: int, seed: int) -> None:
         planned = _as_planned(chosen, kept_grips(check.task), check.task.object_id)
         work.append((check.task.obj, planned, check.task.config))
     outcomes = {}
+    servo_peaks = _record_servo_peaks() if "mujoco" in ENGINES else []
     print("| engine | trials | steps | CPU s | ms / trial | µs / step | held | success |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     for engine in ENGINES:
@@ -72,10 +74,35 @@ def cost(grips: int, seed: int) -> None:
         print(f"| {engine} | {len(table)} | {steps} | {seconds:.2f} | "
               f"{1e3 * seconds / len(table):.0f} | {1e6 * seconds / steps:.0f} | "
               f"{int(table['held'].sum())} | {int(table['success'].sum())} |")
+    if servo_peaks:
+        peaks = np.array([p for p, _ in servo_peaks])
+        print(f"\nMuJoCo's arm servos (x, y, z N; wrist N m), largest force in a trial: median "
+              f"{np.round(np.median(peaks, axis=0), 1).tolist()}, max "
+              f"{np.round(peaks.max(axis=0), 1).tolist()}; substeps over the force limit: "
+              f"{sum(n for _, n in servo_peaks)} in {len(peaks)} worlds")
+    if len(ENGINES) < 2:
+        return
     a, b = (outcomes[e] for e in ENGINES)
     print(f"\nsuccess alike in {int((a['success'] == b['success']).sum())} of {len(a)} trials; "
           f"held alike in {int((a['held'] == b['held']).sum())}")
     print(f"{datetime.now(UTC):%Y-%m-%d %H:%M} UTC, {platform.processor() or platform.machine()}")
+
+
+def _record_servo_peaks() -> list[tuple[np.ndarray, int]]:
+    """Collect each MuJoCo world's largest arm servo forces and its substeps over the servos'
+    force limits when it closes (one world a trial)."""
+    from grip_env.sim.mujoco_world import MujocoWorld
+
+    found: list[tuple[np.ndarray, int]] = []
+    close = MujocoWorld.close
+
+    def recording_close(world: MujocoWorld) -> None:
+        if world._model is not None and len(world.servo_peak_n):
+            found.append((world.servo_peak_n.copy(), world.servo_over_limit))
+        close(world)
+
+    MujocoWorld.close = recording_close
+    return found
 
 
 def main() -> None:
