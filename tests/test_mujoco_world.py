@@ -174,6 +174,6 @@ def test_the_arms_servos_never_need_more_than_the_arms_force_in_a_trial():
 
     world = _servo_world_in_a_trial()
     limit = Hand.max_palm_force_n
-    assert world.servo_over_limit == 0
+    assert world.servos_within_limits()
     assert (world.servo_peak_n < [limit, limit, limit, limit * ARM_LEVER_M]).all()
     assert world.servo_peak_n[2] > 25.0  # the z axis carried the hand's weight (about 29 N)

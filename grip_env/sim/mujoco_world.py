@@ -24,8 +24,8 @@ convex hull, with no margin to erode), and the same mounted URDF through MuJoCo'
   motors: critically damped with ``SERVO_TIME_CONSTANT_S``, its reference moving at constant
   speed from the last target to the new one through each protocol step, led by twice the time
   constant times that speed (so a constant speed is tracked without lag). Its force is not
-  capped; ``servo_peak_n`` and ``servo_over_limit`` record whether it ever needed more than the
-  arm's limit (it does not in a trial, ``tests/test_mujoco_world.py``).
+  capped; ``servo_peak_n`` and ``servos_within_limits`` record whether it ever needed more than
+  the arm's limit (it does not in a trial, ``tests/test_mujoco_world.py``).
 * **The worm gear's stop** is the joint's lower limit (``joint_floors``) with a reference time of
   two timesteps, the stiffest MuJoCo recommends. MuJoCo limits have no force cap: the stop holds
   whatever load (Bullet's holds ``holds`` N·m).
@@ -109,10 +109,10 @@ class MujocoWorld:
         self._model: mujoco.MjModel | None = None
         self._saved: dict[int, mujoco.MjData] = {}
         self._saved_servos: dict[int, NDArray[np.float64]] = {}
+        self._addresses: dict[tuple[int, tuple[int, ...]], tuple[NDArray, NDArray]] = {}
         self._stale = False
         self._servo_names: list[str] = []  # the arm's joints, held by servo constraints
         self.servo_peak_n = np.zeros(0)  # the largest |force| each servo exerted so far
-        self.servo_over_limit = 0  # physics substeps in which a servo exceeded its force limit
 
     # ------------------------------------------------------------------ lifecycle
     def close(self) -> None:
@@ -133,23 +133,22 @@ class MujocoWorld:
         The arm's servos track a reference that moves at constant speed from the last target to
         the new one through the step, with that speed as their velocity reference."""
         m, d = self._compiled()
-        fraction = self._substep_fraction
+        fraction, servos, peak = self._substep_fraction, self._servo_rows, self.servo_peak_n
         for _ in range(steps):
             start, speed = self._servo_from, (self._servo_target - self._servo_from) / self.timestep
             lead = 2.0 * self._servo_time_constant * speed
-            for k in range(self.substeps):
-                m.eq_data[: len(start), 0] = start + fraction[k] * self.timestep * speed + lead
+            references = start + np.multiply.outer(fraction * self.timestep, speed) + lead
+            for reference in references:
+                m.eq_data[servos, 0] = reference
                 mujoco.mj_step(m, d)
-                self._watch_servos(d)
+                np.maximum(peak, np.abs(d.efc_force[servos]), out=peak)
             self._servo_from = self._servo_target.copy()
             d.xfrc_applied[:] = 0.0
         self._stale = True
 
-    def _watch_servos(self, d: mujoco.MjData) -> None:
-        """Record the servos' largest forces and whether they exceeded their limits."""
-        force = np.abs(d.efc_force[: len(self._servo_qpos)])
-        np.maximum(self.servo_peak_n, force, out=self.servo_peak_n)
-        self.servo_over_limit += bool((force > self._servo_limit).any())
+    def servos_within_limits(self) -> bool:
+        """Whether no arm servo ever exerted more than its force limit (the last commanded)."""
+        return bool((self.servo_peak_n <= self._servo_limit).all())
 
     # ------------------------------------------------------------------ bodies
     def add_table(self, friction: float = 0.5, half_size_mm: float = 500.0) -> Body:
@@ -381,23 +380,28 @@ class MujocoWorld:
 
     def joint_positions_velocities(self, body: int,
                                    joints: list[int]) -> tuple[list[float], list[float]]:
-        """Positions and velocities of ``joints``, as lists."""
-        m, d = self._compiled()
-        ids = [self._joint_id(body, j) for j in joints]
-        return d.qpos[m.jnt_qposadr[ids]].tolist(), d.qvel[m.jnt_dofadr[ids]].tolist()
+        """Positions and velocities of ``joints``, as lists (addresses cached: a per-step call)."""
+        _, d = self._compiled()
+        key = (body, tuple(joints))
+        if key not in self._addresses:
+            m = self._model
+            ids = [self._joint_id(body, j) for j in joints]
+            self._addresses[key] = (m.jnt_qposadr[ids].copy(), m.jnt_dofadr[ids].copy())
+        positions, velocities = self._addresses[key]
+        return d.qpos[positions].tolist(), d.qvel[velocities].tolist()
 
     def touching_links(self, body: int, other: int) -> set[int]:
         """The links of ``body`` in contact with ``other`` (in the last step)."""
         m, d = self._compiled()
-        links: set[int] = set()
-        uids, link_of = self._body_uid, self._body_link
-        for contact in d.contact[: d.ncon]:
-            a, b = m.geom_bodyid[contact.geom1], m.geom_bodyid[contact.geom2]
-            if uids[a] == body and uids[b] == other:
-                links.add(int(link_of[a]))
-            elif uids[b] == body and uids[a] == other:
-                links.add(int(link_of[b]))
-        return links
+        if not d.ncon:
+            return set()
+        bodies = m.geom_bodyid[d.contact.geom[: d.ncon]]  # (ncon, 2)
+        uids = self._body_uid[bodies]
+        first = (uids[:, 0] == body) & (uids[:, 1] == other)
+        second = (uids[:, 1] == body) & (uids[:, 0] == other)
+        links = np.concatenate([self._body_link[bodies[first, 0]],
+                                self._body_link[bodies[second, 1]]])
+        return set(links.tolist())
 
     def contact_normal_force_n(self, body: int, other: int) -> float:
         """The sum of the normal forces (N) of ``body``'s contacts with ``other`` in the last
@@ -528,6 +532,7 @@ class MujocoWorld:
         self._servo_target = self._data.qpos[self._servo_qpos].copy()
         self._servo_from = self._servo_target.copy()
         self._servo_limit = np.full(len(joints), np.inf)
+        self._servo_rows = slice(0, len(joints))
         self.servo_peak_n = np.zeros(len(joints))
         self._set_servo_stiffness(m)
 
@@ -539,7 +544,7 @@ class MujocoWorld:
         self._servo_time_constant = max(SERVO_TIME_CONSTANT_S, 2.0 * m.opt.timestep)
         m.eq_solref[:] = (self._servo_time_constant, 1.0)
         m.eq_solimp[:, :2] = m.eq_solimp[:, 1:2]
-        self._substep_fraction = (np.arange(self.substeps) / self.substeps).tolist()
+        self._substep_fraction = np.arange(self.substeps) / self.substeps
 
     def _index_bodies(self, m: mujoco.MjModel) -> None:
         self._body_ids: list[list[int]] = []

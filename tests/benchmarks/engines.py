@@ -78,8 +78,8 @@ def cost(grips: int, seed: int) -> None:
         peaks = np.array([p for p, _ in servo_peaks])
         print(f"\nMuJoCo's arm servos (x, y, z N; wrist N m), largest force in a trial: median "
               f"{np.round(np.median(peaks, axis=0), 1).tolist()}, max "
-              f"{np.round(peaks.max(axis=0), 1).tolist()}; substeps over the force limit: "
-              f"{sum(n for _, n in servo_peaks)} in {len(peaks)} worlds")
+              f"{np.round(peaks.max(axis=0), 1).tolist()}; worlds whose servos exceeded their force "
+              f"limit: {sum(n for _, n in servo_peaks)} of {len(peaks)}")
     if len(ENGINES) < 2:
         return
     a, b = (outcomes[e] for e in ENGINES)
@@ -98,7 +98,7 @@ def _record_servo_peaks() -> list[tuple[np.ndarray, int]]:
 
     def recording_close(world: MujocoWorld) -> None:
         if world._model is not None and len(world.servo_peak_n):
-            found.append((world.servo_peak_n.copy(), world.servo_over_limit))
+            found.append((world.servo_peak_n.copy(), int(not world.servos_within_limits())))
         close(world)
 
     MujocoWorld.close = recording_close
