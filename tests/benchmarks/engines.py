@@ -78,8 +78,8 @@ def cost(grips: int, seed: int) -> None:
         peaks = np.array([p for p, _ in servo_peaks])
         print(f"\nMuJoCo's arm servos (x, y, z N; wrist N m), largest force in a trial: median "
               f"{np.round(np.median(peaks, axis=0), 1).tolist()}, max "
-              f"{np.round(peaks.max(axis=0), 1).tolist()}; worlds whose servos exceeded their force "
-              f"limit: {sum(n for _, n in servo_peaks)} of {len(peaks)}")
+              f"{np.round(peaks.max(axis=0), 1).tolist()}; worlds whose servos exceeded their "
+              f"force limit: {sum(n for _, n in servo_peaks)} of {len(peaks)}")
     if len(ENGINES) < 2:
         return
     a, b = (outcomes[e] for e in ENGINES)
