@@ -265,8 +265,10 @@ def run_cases(config: Config, box: PlanarObject, grip: pd.DataFrame,
     """Every case in every engine (the config's other settings), in order; the held box is
     ``box`` held by ``grip`` (see :func:`held_box`)."""
     cases: list[Callable[[Config], CaseResult]] = [
-        tilted_plane, pushed_block, two_pad_squeeze, lambda c: held_box(c, box, grip)]
-    names = ("tilted plane", "pushed block", "two-pad squeeze", "held box")
+        tilted_plane, pushed_block, lambda c: two_pad_squeeze(c, compliant=False),
+        two_pad_squeeze, lambda c: held_box(c, box, grip)]
+    names = ("tilted plane", "pushed block", "two-pad squeeze (rigid pads)", "two-pad squeeze",
+             "held box")
     results = []
     for engine in engines:
         engine_config = config.override(sim={"engine": engine})
