@@ -129,7 +129,8 @@ def test_a_mujoco_outcome_does_not_depend_on_the_order_of_the_grips():
 
 
 def _servo_world_in_a_trial(obj_name: str = "rectangle") -> MujocoWorld:
-    """The MuJoCo world of one whole trial (approach to ramp) of ``obj_name``'s best grip."""
+    """The MuJoCo world of one whole trial (approach to ramp) of ``obj_name``'s best grip, its
+    servos watched."""
     from grip_env.planning.pipeline import candidates
     from grip_env.sim.trial import TrialScene, grip_plans
     from grip_env.sim.uncertainty import TrialNoise
@@ -167,11 +168,12 @@ def test_the_arms_servos_follow_their_targets_at_the_steps_speed():
 
 
 @pytest.mark.slow
-def test_the_arms_servos_never_need_more_than_the_arms_force_in_a_trial():
+def test_the_arms_servos_never_need_more_than_the_arms_force_in_a_trial(monkeypatch):
     """The arm's force limit (``Hand.max_palm_force_n``, its wrist's at ``ARM_LEVER_M``) is not
     imposed on MuJoCo's servo constraints; a whole trial shows it never binds."""
     from grip_env.sim.hand import ARM_LEVER_M
 
+    monkeypatch.setattr(MujocoWorld, "watch_servos", True)
     world = _servo_world_in_a_trial()
     limit = Hand.max_palm_force_n
     assert world.servos_within_limits()

@@ -88,8 +88,12 @@ class MujocoWorld:
     """A headless MuJoCo world; use as a context manager or ``close()``.
 
     Bodies are added first (``add_table``, ``add_object``, ``load_robot``); the model is compiled
-    at the first call that needs it, after which no body can be added.
+    at the first call that needs it, after which no body can be added. With ``watch_servos`` the
+    world records the arm servos' largest forces in every physics substep (``servo_peak_n``);
+    off by default, as it costs about a tenth of a trial.
     """
+
+    watch_servos: bool = False
 
     def __init__(self, timestep: float = 1.0 / 240.0, solver_iterations: int = 50) -> None:
         self.timestep = timestep
@@ -141,13 +145,15 @@ class MujocoWorld:
             for reference in references:
                 m.eq_data[servos, 0] = reference
                 mujoco.mj_step(m, d)
-                np.maximum(peak, np.abs(d.efc_force[servos]), out=peak)
+                if self.watch_servos:
+                    np.maximum(peak, np.abs(d.efc_force[servos]), out=peak)
             self._servo_from = self._servo_target.copy()
             d.xfrc_applied[:] = 0.0
         self._stale = True
 
     def servos_within_limits(self) -> bool:
-        """Whether no arm servo ever exerted more than its force limit (the last commanded)."""
+        """Whether no arm servo ever exerted more than its force limit (the last commanded), as
+        far as ``watch_servos`` watched."""
         return bool((self.servo_peak_n <= self._servo_limit).all())
 
     # ------------------------------------------------------------------ bodies

@@ -2,6 +2,7 @@
 
     python -m tests.benchmarks.engines --cases            # the analytic cases, both engines
     python -m tests.benchmarks.engines --grips 20 --seed 0  # cost on the standard dataset
+    python -m tests.benchmarks.engines --grips 20 --servo-peaks  # ... and the arm servos' forces
 
 ``--cases`` prints each case's critical load in each engine beside Coulomb's answer
 (``grip_env.sim.analytic``). ``--grips`` draws a seeded sample of the standard dataset's recorded
@@ -48,7 +49,7 @@ def cases() -> None:
               f"| {r.error:+.2%} | {r.detail} |")
 
 
-def cost(grips: int, seed: int) -> None:
+def cost(grips: int, seed: int, servo_peaks: bool = False) -> None:
     from grip_env.dataset.resimulation import _as_planned, _sample, kept_grips
     from grip_env.datasets import standard_path
     from grip_env.sim import run_trial_outcomes
@@ -60,7 +61,7 @@ def cost(grips: int, seed: int) -> None:
         planned = _as_planned(chosen, kept_grips(check.task), check.task.object_id)
         work.append((check.task.obj, planned, check.task.config))
     outcomes = {}
-    servo_peaks = _record_servo_peaks() if "mujoco" in ENGINES else []
+    servo_peaks = _record_servo_peaks() if servo_peaks and "mujoco" in ENGINES else []
     print("| engine | trials | steps | CPU s | ms / trial | µs / step | held | success |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     for engine in ENGINES:
@@ -102,6 +103,7 @@ def _record_servo_peaks() -> list[tuple[np.ndarray, int]]:
         close(world)
 
     MujocoWorld.close = recording_close
+    MujocoWorld.watch_servos = True
     return found
 
 
@@ -110,11 +112,13 @@ def main() -> None:
     parser.add_argument("--cases", action="store_true")
     parser.add_argument("--grips", type=int, default=0)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--servo-peaks", action="store_true",
+                        help="also record MuJoCo's arm servo forces (costs about a tenth)")
     args = parser.parse_args()
     if args.cases:
         cases()
     if args.grips:
-        cost(args.grips, args.seed)
+        cost(args.grips, args.seed, args.servo_peaks)
 
 
 if __name__ == "__main__":
