@@ -13,7 +13,7 @@ every contact's force turned out of its own frame) beside the object's weight, e
 penetration, and the finger joints.
 
 ``--finger-caps`` is a diagnostic, not the model (``set_finger_caps``). ``--grips N`` runs
-``tests.benchmarks.engines --grips N`` (MuJoCo's rows) instead of the trace. The arm's drives
+``tests.benchmarks.engines --grips N`` (both engines) instead of the trace. The arm's drives
 that this trace showed chattering (``--arm-stiffness``, ``--arm-constraint`` before label model
 ``mujoco-2026.12-servo``) are now servo constraints (``grip_env.sim.mujoco_world``).
 """
