@@ -26,7 +26,9 @@ MuJoCo's (``sim.engine: mujoco``):
   grips loose at the lift.
 - ``mujoco-2026.12-servo``: the arm's joints are servo constraints solved with the contacts
   (time constant ``SERVO_TIME_CONSTANT_S``, a reference moving at the step's speed), as Bullet
-  solves its motors; everything else as the draft.
+  solves its motors; everything else as the draft. Known defects, for the next: the worm-gear
+  stops give up to 8 mrad (MuJoCo's constants are not renewed after the rotor inertia is added)
+  and the pads are about five times the rubber's stiffness.
 """
 
 from __future__ import annotations
