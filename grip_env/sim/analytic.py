@@ -6,6 +6,10 @@ Coulomb's law:
 * ``tilted_plane``: a block on a plane tilted by theta slides when tan theta > mu (gravity is
   tilted instead of the plane: the same statics);
 * ``pushed_block``: a block pushed through its centre of mass slides at F = mu m g;
+* ``two_pad_squeeze``: a block squeezed between two of the hand's rubber pads (compliant free
+  blocks, each pressed on with F) slides out when the pull exceeds mu F per pad, 2 mu F in all
+  (the pads are held against the pull by half of it each; all three stand on a frictionless
+  table, which carries their weights and resists nothing sideways);
 * ``held_box``: a box held by the hand (the real trial up to the hold of a grip the caller
   planned, e.g. the default rectangle's best by Q_C; paper's mu = 0.4) slides
   out along the fingers when the pull plus its weight exceeds mu times the sum of the pads'
@@ -125,6 +129,72 @@ def pushed_block(config: Config, mu: float = 0.4) -> CaseResult:
     return CaseResult("pushed block", config.sim.engine, mu, found, "F / (m g)")
 
 
+#: The two-pad case: pads 40 mm by 20 mm beside the 40 mm block, pressed on with ``SQUEEZE_N``.
+SQUEEZE_N = 10.0
+PAD_KG = 0.2
+PAD_LEVER_M = 0.01  # from a pad's centre of mass to its face on the block
+
+
+def _pad(y0_mm: float) -> PlanarObject:
+    return PlanarObject.from_polygon([[-20, y0_mm], [20, y0_mm], [20, y0_mm + 20],
+                                      [-20, y0_mm + 20]], name="pad")
+
+
+def two_pad_squeeze(config: Config, mu: float = 0.4, compliant: bool = True) -> CaseResult:
+    """The pull (in squeezes) a block between two pads resists, against 2 mu; the pads are the
+    hand's rubber (``sim.pad_stiffness_n_per_m``, ``sim.pad_damping_n_s_per_m``) or rigid."""
+    sim = config.sim
+    squeeze = SQUEEZE_N
+
+    def slides(pulls: float) -> bool:
+        world = make_world(sim)
+        try:
+            world.add_table(friction=0.0)  # carries the weights, resists nothing sideways
+            block = world.add_object(BLOCK, BLOCK_THICKNESS_MM, BLOCK_KG, friction=mu,
+                                     tolerance_mm=config.objects.sim_tolerance_mm)
+            pads = [world.add_object(_pad(y0), BLOCK_THICKNESS_MM, PAD_KG, friction=1.0,
+                                     tolerance_mm=config.objects.sim_tolerance_mm)
+                    for y0 in (20.0, -40.0)]
+            for pad in pads if compliant else []:
+                world.set_contact_compliance(pad.uid, -1, sim.pad_stiffness_n_per_m,
+                                             sim.pad_damping_n_s_per_m)
+            pull = pulls * squeeze
+
+            def load(pulling: bool) -> None:
+                """Each pad pressed on along its own face's normal (squeezes fixed in the world
+                would turn the stack like a buckling column; two following the pads stay
+                opposite and in line) and held at its face against the pull."""
+                x = pull if pulling else 0.0
+                world.push(block.uid, np.array([x, 0.0, 0.0]))
+                for pad, side in zip(pads, (1.0, -1.0), strict=True):
+                    qx, qy, qz, qw = world.pose_floats_mm(pad.uid)[1]
+                    yaw = np.arctan2(2 * (qw * qz + qx * qy), 1 - 2 * (qy * qy + qz * qz))
+                    inward = side * squeeze * np.array([np.sin(yaw), -np.cos(yaw), 0.0])
+                    world.push(pad.uid, inward + np.array([-x / 2, 0.0, 0.0]))
+                    world.twist(pad.uid, np.array([0.0, 0.0, -side * PAD_LEVER_M * x / 2]))
+
+            def offset() -> float:
+                pad_x = [world.pose_floats_mm(pad.uid)[0][0] for pad in pads]
+                return world.pose_floats_mm(block.uid)[0][0] - float(np.mean(pad_x))
+
+            for _ in range(round(SETTLE_S / sim.timestep)):
+                load(False)
+                world.step()
+            start = offset()
+            for _ in range(round(SLIP_TIME_S / sim.timestep)):
+                load(True)
+                world.step()
+                if abs(offset() - start) > SLIP_MM:
+                    return True
+            return False
+        finally:
+            world.close()
+
+    found = critical_load(slides, mu, 3.0 * mu)
+    name = "two-pad squeeze" + ("" if compliant else " (rigid pads)")
+    return CaseResult(name, sim.engine, 2.0 * mu, found, "pull / F")
+
+
 class _Held(Exception):
     """Raised from the trial's ``held`` phase to stop it once the case is measured."""
 
@@ -195,11 +265,14 @@ def run_cases(config: Config, box: PlanarObject, grip: pd.DataFrame,
     """Every case in every engine (the config's other settings), in order; the held box is
     ``box`` held by ``grip`` (see :func:`held_box`)."""
     cases: list[Callable[[Config], CaseResult]] = [
-        tilted_plane, pushed_block, lambda c: held_box(c, box, grip)]
+        tilted_plane, pushed_block, lambda c: two_pad_squeeze(c, compliant=False),
+        two_pad_squeeze, lambda c: held_box(c, box, grip)]
+    names = ("tilted plane", "pushed block", "two-pad squeeze (rigid pads)", "two-pad squeeze",
+             "held box")
     results = []
     for engine in engines:
         engine_config = config.override(sim={"engine": engine})
-        for name, case in zip(("tilted plane", "pushed block", "held box"), cases, strict=True):
+        for name, case in zip(names, cases, strict=True):
             try:
                 results.append(case(engine_config))
             except ValueError as failed:

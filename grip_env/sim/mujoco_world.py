@@ -17,6 +17,15 @@ convex hull, with no margin to erode), and the same mounted URDF through MuJoCo'
   a position motor to ``gain (target - q) / dt``. Each is one actuator with a velocity gain of
   ``MOTOR_STIFFNESS`` times the joint's inertia per timestep (integrated implicitly:
   ``implicitfast``) and a force range of its torque.
+* **The arm's joints as servo constraints** (the gantry's ``ARM_JOINTS``): MuJoCo adds a drive's
+  implicit damping after the constraint solve (mujoco #3443), and the arm's drives, loaded by a
+  grip, chattered at their 400 N limit every substep and shook the object loose. Each arm joint
+  is instead held by a joint equality constraint solved with the contacts, as Bullet solves its
+  motors: critically damped with ``SERVO_TIME_CONSTANT_S``, its reference moving at constant
+  speed from the last target to the new one through each protocol step, led by twice the time
+  constant times that speed (so a constant speed is tracked without lag). Its force is not
+  capped; ``servo_peak_n`` and ``servos_within_limits`` record whether it ever needed more than
+  the arm's limit (it does not in a trial, ``tests/test_mujoco_world.py``).
 * **The worm gear's stop** is the joint's lower limit (``joint_floors``) with a reference time of
   two timesteps, the stiffest MuJoCo recommends. MuJoCo limits have no force cap: the stop holds
   whatever load (Bullet's holds ``holds`` N·m).
@@ -43,7 +52,7 @@ from numpy.typing import NDArray
 from grip_env.objects import PlanarObject
 from grip_env.objects.simulated import DEFAULT_TOLERANCE_MM
 from grip_env.sim.body import MM, Body
-from grip_env.sim.gantry import mounted_urdf
+from grip_env.sim.gantry import ARM_JOINTS, mounted_urdf
 
 #: Elliptic cones' ratio of frictional to normal impedance: 10 as in DexGraspBench and MuJoCo's
 #: docs' advice against slow slip (mujoco #3328 measured creep 10-30x lower than at 1).
@@ -61,6 +70,15 @@ PAD_PHASE_PER_STEP = 0.5
 #: The mass a pad's spring-damper is normalised by: the 80 g object its damping was derived for
 #: (``sim.pad_damping_n_s_per_m``).
 PAD_REFERENCE_MASS_KG = 0.08
+#: The arm's servo constraints' time constant (s, damping ratio 1). The idealised arm reaches its
+#: targets within its force (``Hand.max_palm_force_n``, 400 N), so its servo is the stiffest whose
+#: force never exceeds that limit in a trial: the approach asks the 3.3 kg the z axis carries for
+#: a 0.3 m/s step in speed, about 2 N s, which a servo of time constant T answers with about
+#: 2 N s / T (measured on 20 trials of the standard dataset: 1,097 N at 1.7 ms, 564 N at 3.3 ms,
+#: 299 N at 6.7 ms, the last never over the limit; the outcomes alike at all three). MuJoCo solves
+#: the servos with the contacts, as Bullet solves its motors; their references move at constant
+#: speed through a step, and that speed is their velocity reference.
+SERVO_TIME_CONSTANT_S = 1.0 / 150.0
 #: Bullet's default position gain of a position motor when none is given.
 DEFAULT_POSITION_GAIN = 0.1
 GRAVITY = (0.0, 0.0, -9.81)
@@ -70,8 +88,12 @@ class MujocoWorld:
     """A headless MuJoCo world; use as a context manager or ``close()``.
 
     Bodies are added first (``add_table``, ``add_object``, ``load_robot``); the model is compiled
-    at the first call that needs it, after which no body can be added.
+    at the first call that needs it, after which no body can be added. With ``watch_servos`` the
+    world records the arm servos' largest forces in every physics substep (``servo_peak_n``);
+    off by default, as it costs about a tenth of a trial.
     """
+
+    watch_servos: bool = False
 
     def __init__(self, timestep: float = 1.0 / 240.0, solver_iterations: int = 50) -> None:
         self.timestep = timestep
@@ -90,13 +112,18 @@ class MujocoWorld:
         self.substeps = 1
         self._model: mujoco.MjModel | None = None
         self._saved: dict[int, mujoco.MjData] = {}
+        self._saved_servos: dict[int, NDArray[np.float64]] = {}
+        self._addresses: dict[tuple[int, tuple[int, ...]], tuple[NDArray, NDArray]] = {}
         self._stale = False
+        self._servo_names: list[str] = []  # the arm's joints, held by servo constraints
+        self.servo_peak_n = np.zeros(0)  # the largest |force| each servo exerted so far
 
     # ------------------------------------------------------------------ lifecycle
     def close(self) -> None:
         """Release the model and its data (idempotent)."""
         self._model = None
         self._saved.clear()
+        self._saved_servos.clear()
 
     def __enter__(self) -> MujocoWorld:
         return self
@@ -105,13 +132,29 @@ class MujocoWorld:
         self.close()
 
     def step(self, steps: int = 1) -> None:
-        """Advance the simulation ``steps`` fixed steps; pushes and twists last one step."""
+        """Advance the simulation ``steps`` fixed steps; pushes and twists last one step.
+
+        The arm's servos track a reference that moves at constant speed from the last target to
+        the new one through the step, with that speed as their velocity reference."""
         m, d = self._compiled()
+        fraction, servos, peak = self._substep_fraction, self._servo_rows, self.servo_peak_n
         for _ in range(steps):
-            for _ in range(self.substeps):
+            start, speed = self._servo_from, (self._servo_target - self._servo_from) / self.timestep
+            lead = 2.0 * self._servo_time_constant * speed
+            references = start + np.multiply.outer(fraction * self.timestep, speed) + lead
+            for reference in references:
+                m.eq_data[servos, 0] = reference
                 mujoco.mj_step(m, d)
+                if self.watch_servos:
+                    np.maximum(peak, np.abs(d.efc_force[servos]), out=peak)
+            self._servo_from = self._servo_target.copy()
             d.xfrc_applied[:] = 0.0
         self._stale = True
+
+    def servos_within_limits(self) -> bool:
+        """Whether no arm servo ever exerted more than its force limit (the last commanded), as
+        far as ``watch_servos`` watched."""
+        return bool((self.servo_peak_n <= self._servo_limit).all())
 
     # ------------------------------------------------------------------ bodies
     def add_table(self, friction: float = 0.5, half_size_mm: float = 500.0) -> Body:
@@ -250,7 +293,10 @@ class MujocoWorld:
                 self._spec.add_exclude(bodyname1=prefix + ancestor, bodyname2=prefix + child)
                 ancestor = parents.get(ancestor)
         for name, kind, _ in joints:
-            if kind != "fixed":
+            if name in ARM_JOINTS:
+                self._servo_names.append(prefix + name)
+                self._spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=prefix + name)
+            elif kind != "fixed":
                 self._spec.add_actuator(name=prefix + name, target=prefix + name,
                                         trntype=mujoco.mjtTrn.mjTRN_JOINT,
                                         gaintype=mujoco.mjtGain.mjGAIN_FIXED,
@@ -303,6 +349,7 @@ class MujocoWorld:
         omega = math.sqrt(stiffness_n_per_m / PAD_REFERENCE_MASS_KG)
         self.substeps = max(self.substeps, math.ceil(omega * self.timestep / PAD_PHASE_PER_STEP))
         m.opt.timestep = self.timestep / self.substeps
+        self._set_servo_stiffness(m)
         geoms = self._link_geoms(body, link)
         m.geom_solref[geoms] = solref
         touched = np.isin(self._pair_geoms, geoms).any(axis=1)
@@ -314,6 +361,9 @@ class MujocoWorld:
         index = self._joint_id(body, joint)
         d.qpos[m.jnt_qposadr[index]] = float(position)
         d.qvel[m.jnt_dofadr[index]] = 0.0
+        if index in self._servo_of:  # the arm's servo starts from where it was put
+            self._servo_from[self._servo_of[index]] = float(position)
+            self._servo_target[self._servo_of[index]] = float(position)
         self._stale = True
 
     def velocity_motors(self, body: int, joints: list[int], speeds: list[float],
@@ -334,6 +384,11 @@ class MujocoWorld:
         m, d = self._compiled()
         position_gain = DEFAULT_POSITION_GAIN if gain is None else gain
         for joint, target, torque in zip(joints, targets, torques, strict=True):
+            servo = self._servo_of.get(self._joint_id(body, joint))
+            if servo is not None:  # the arm: a constraint solved with the contacts
+                self._servo_target[servo] = target
+                self._servo_limit[servo] = torque
+                continue
             act, velocity_gain = self._motor(body, joint)
             stiffness = velocity_gain * position_gain / self.timestep
             m.actuator_gainprm[act, 0] = stiffness
@@ -359,32 +414,39 @@ class MujocoWorld:
     def joint_states(
         self, body: int, joints: list[int]
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-        """Positions, velocities and applied motor torques of ``joints``."""
+        """Positions, velocities and applied motor torques of ``joints`` (an arm joint's: its
+        servo constraint's force in the last physics step)."""
         m, d = self._compiled()
         ids = [self._joint_id(body, j) for j in joints]
-        acts = [self._actuator[i] for i in ids]
+        forces = [float(d.efc_force[self._servo_of[i]]) if i in self._servo_of
+                  else float(d.actuator_force[self._actuator[i]]) for i in ids]
         return (d.qpos[m.jnt_qposadr[ids]].copy(), d.qvel[m.jnt_dofadr[ids]].copy(),
-                d.actuator_force[acts].copy())
+                np.array(forces))
 
     def joint_positions_velocities(self, body: int,
                                    joints: list[int]) -> tuple[list[float], list[float]]:
-        """Positions and velocities of ``joints``, as lists."""
-        m, d = self._compiled()
-        ids = [self._joint_id(body, j) for j in joints]
-        return d.qpos[m.jnt_qposadr[ids]].tolist(), d.qvel[m.jnt_dofadr[ids]].tolist()
+        """Positions and velocities of ``joints``, as lists (addresses cached: a per-step call)."""
+        _, d = self._compiled()
+        key = (body, tuple(joints))
+        if key not in self._addresses:
+            m = self._model
+            ids = [self._joint_id(body, j) for j in joints]
+            self._addresses[key] = (m.jnt_qposadr[ids].copy(), m.jnt_dofadr[ids].copy())
+        positions, velocities = self._addresses[key]
+        return d.qpos[positions].tolist(), d.qvel[velocities].tolist()
 
     def touching_links(self, body: int, other: int) -> set[int]:
         """The links of ``body`` in contact with ``other`` (in the last step)."""
         m, d = self._compiled()
-        links: set[int] = set()
-        uids, link_of = self._body_uid, self._body_link
-        for contact in d.contact[: d.ncon]:
-            a, b = m.geom_bodyid[contact.geom1], m.geom_bodyid[contact.geom2]
-            if uids[a] == body and uids[b] == other:
-                links.add(int(link_of[a]))
-            elif uids[b] == body and uids[a] == other:
-                links.add(int(link_of[b]))
-        return links
+        if not d.ncon:
+            return set()
+        bodies = m.geom_bodyid[d.contact.geom[: d.ncon]]  # (ncon, 2)
+        uids = self._body_uid[bodies]
+        first = (uids[:, 0] == body) & (uids[:, 1] == other)
+        second = (uids[:, 1] == body) & (uids[:, 0] == other)
+        links = np.concatenate([self._body_link[bodies[first, 0]],
+                                self._body_link[bodies[second, 1]]])
+        return set(links.tolist())
 
     def contact_normal_force_n(self, body: int, other: int) -> float:
         """The sum of the normal forces (N) of ``body``'s contacts with ``other`` in the last
@@ -406,17 +468,20 @@ class MujocoWorld:
         mujoco.mj_copyData(state, m, d)
         key = max(self._saved, default=-1) + 1
         self._saved[key] = state
+        self._saved_servos[key] = self._servo_from.copy()
         return key
 
     def restore(self, state: int) -> None:
         """Return the world to a saved state (model parameters, such as limits, stay)."""
         m, d = self._compiled()
         mujoco.mj_copyData(d, m, self._saved[state])
+        self._servo_from = self._saved_servos[state].copy()
         self._stale = True
 
     def forget(self, state: int) -> None:
         """Free a saved state."""
         self._saved.pop(state, None)
+        self._saved_servos.pop(state, None)
 
     def push(self, body: int, force_n: NDArray) -> None:
         """A world-frame force (N) through ``body``'s centre of mass, for the next step."""
@@ -492,12 +557,39 @@ class MujocoWorld:
         self._index_bodies(m)
         self._loaded_ranges = m.jnt_range.copy()
         self._actuator = {int(m.actuator_trnid[a, 0]): a for a in range(m.nu)}
+        self._index_servos(m)
         mujoco.mj_forward(m, self._data)
         full = np.zeros((m.nv, m.nv))
         mujoco.mj_fullM(m, self._data, full)
         inertia = np.diag(full)[m.jnt_dofadr[list(self._actuator)]]
         self._inertia = dict(zip(self._actuator, inertia, strict=True))
         self._update_pairs()
+
+    def _index_servos(self, m: mujoco.MjModel) -> None:
+        """The arm's servo constraints: equality ``k`` holds joint ``_servo_joint[k]``; their
+        constraint rows come first in every step (MuJoCo orders equalities first)."""
+        if m.neq != len(self._servo_names):
+            raise ValueError(f"expected only the arm's {len(self._servo_names)} servo "
+                             f"constraints, the model has {m.neq} equalities")
+        joints = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, n) for n in self._servo_names]
+        self._servo_of = {j: k for k, j in enumerate(joints)}
+        self._servo_qpos = m.jnt_qposadr[joints].astype(int)
+        self._servo_target = self._data.qpos[self._servo_qpos].copy()
+        self._servo_from = self._servo_target.copy()
+        self._servo_limit = np.full(len(joints), np.inf)
+        self._servo_rows = slice(0, len(joints))
+        self.servo_peak_n = np.zeros(len(joints))
+        self._set_servo_stiffness(m)
+
+    def _set_servo_stiffness(self, m: mujoco.MjModel) -> None:
+        """Critically damped servos of ``SERVO_TIME_CONSTANT_S``, with a constant impedance
+        (MuJoCo's damping over stiffness is then exactly twice the time constant, which the
+        reference's lead in ``step`` relies on)."""
+        # MuJoCo stiffens no constraint beyond two physics steps (its refsafe)
+        self._servo_time_constant = max(SERVO_TIME_CONSTANT_S, 2.0 * m.opt.timestep)
+        m.eq_solref[:] = (self._servo_time_constant, 1.0)
+        m.eq_solimp[:, :2] = m.eq_solimp[:, 1:2]
+        self._substep_fraction = np.arange(self.substeps) / self.substeps
 
     def _index_bodies(self, m: mujoco.MjModel) -> None:
         self._body_ids: list[list[int]] = []
@@ -574,4 +666,5 @@ def _urdf_joints(path: Path) -> tuple[list[tuple[str, str, str]], dict[str, str]
     return joints, parents  # type: ignore[return-value]
 
 
-__all__ = ["IMPRATIO", "MOTOR_STIFFNESS", "NOSLIP_ITERATIONS", "MujocoWorld"]
+__all__ = ["IMPRATIO", "MOTOR_STIFFNESS", "NOSLIP_ITERATIONS", "SERVO_TIME_CONSTANT_S",
+           "MujocoWorld"]

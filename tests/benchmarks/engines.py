@@ -2,6 +2,7 @@
 
     python -m tests.benchmarks.engines --cases            # the analytic cases, both engines
     python -m tests.benchmarks.engines --grips 20 --seed 0  # cost on the standard dataset
+    python -m tests.benchmarks.engines --grips 20 --servo-peaks  # ... and the arm servos' forces
 
 ``--cases`` prints each case's critical load in each engine beside Coulomb's answer
 (``grip_env.sim.analytic``). ``--grips`` draws a seeded sample of the standard dataset's recorded
@@ -21,6 +22,7 @@ import platform
 import time
 from datetime import UTC, datetime
 
+import numpy as np
 import pandas as pd
 
 from grip_env.config import Config
@@ -47,7 +49,7 @@ def cases() -> None:
               f"| {r.error:+.2%} | {r.detail} |")
 
 
-def cost(grips: int, seed: int) -> None:
+def cost(grips: int, seed: int, servo_peaks: bool = False) -> None:
     from grip_env.dataset.resimulation import _as_planned, _sample, kept_grips
     from grip_env.datasets import standard_path
     from grip_env.sim import run_trial_outcomes
@@ -59,6 +61,7 @@ def cost(grips: int, seed: int) -> None:
         planned = _as_planned(chosen, kept_grips(check.task), check.task.object_id)
         work.append((check.task.obj, planned, check.task.config))
     outcomes = {}
+    servo_peaks = _record_servo_peaks() if servo_peaks and "mujoco" in ENGINES else []
     print("| engine | trials | steps | CPU s | ms / trial | µs / step | held | success |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- |")
     for engine in ENGINES:
@@ -72,10 +75,36 @@ def cost(grips: int, seed: int) -> None:
         print(f"| {engine} | {len(table)} | {steps} | {seconds:.2f} | "
               f"{1e3 * seconds / len(table):.0f} | {1e6 * seconds / steps:.0f} | "
               f"{int(table['held'].sum())} | {int(table['success'].sum())} |")
+    if servo_peaks:
+        peaks = np.array([p for p, _ in servo_peaks])
+        print(f"\nMuJoCo's arm servos (x, y, z N; wrist N m), largest force in a trial: median "
+              f"{np.round(np.median(peaks, axis=0), 1).tolist()}, max "
+              f"{np.round(peaks.max(axis=0), 1).tolist()}; worlds whose servos exceeded their "
+              f"force limit: {sum(n for _, n in servo_peaks)} of {len(peaks)}")
+    if len(ENGINES) < 2:
+        return
     a, b = (outcomes[e] for e in ENGINES)
     print(f"\nsuccess alike in {int((a['success'] == b['success']).sum())} of {len(a)} trials; "
           f"held alike in {int((a['held'] == b['held']).sum())}")
     print(f"{datetime.now(UTC):%Y-%m-%d %H:%M} UTC, {platform.processor() or platform.machine()}")
+
+
+def _record_servo_peaks() -> list[tuple[np.ndarray, int]]:
+    """Collect each MuJoCo world's largest arm servo forces and its substeps over the servos'
+    force limits when it closes (one world a trial)."""
+    from grip_env.sim.mujoco_world import MujocoWorld
+
+    found: list[tuple[np.ndarray, int]] = []
+    close = MujocoWorld.close
+
+    def recording_close(world: MujocoWorld) -> None:
+        if world._model is not None and len(world.servo_peak_n):
+            found.append((world.servo_peak_n.copy(), int(not world.servos_within_limits())))
+        close(world)
+
+    MujocoWorld.close = recording_close
+    MujocoWorld.watch_servos = True
+    return found
 
 
 def main() -> None:
@@ -83,11 +112,13 @@ def main() -> None:
     parser.add_argument("--cases", action="store_true")
     parser.add_argument("--grips", type=int, default=0)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--servo-peaks", action="store_true",
+                        help="also record MuJoCo's arm servo forces (costs about a tenth)")
     args = parser.parse_args()
     if args.cases:
         cases()
     if args.grips:
-        cost(args.grips, args.seed)
+        cost(args.grips, args.seed, args.servo_peaks)
 
 
 if __name__ == "__main__":

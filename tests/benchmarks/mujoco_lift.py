@@ -2,9 +2,10 @@
 
     python -m tests.benchmarks.mujoco_lift --steps 8            # the held box's lift
     python -m tests.benchmarks.mujoco_lift --phase approach     # the same hand, in free air
-    python -m tests.benchmarks.mujoco_lift --arm-stiffness 0.3  # a diagnostic arm drive
-    python -m tests.benchmarks.mujoco_lift --arm-stiffness 0.3 --grips 20  # ... on 20 grips
-    python -m tests.benchmarks.mujoco_lift --arm-constraint 0.02 --grips 20  # arm as constraints
+    python -m tests.benchmarks.mujoco_lift --grips 20                # 20 grips' cost table
+    python -m tests.benchmarks.mujoco_lift --finger-caps --grips 20  # a diagnostic finger drive
+    python -m tests.benchmarks.mujoco_lift --pads                    # the pads' stiffness
+    python -m tests.benchmarks.mujoco_lift --renew-constants --pads  # ... with mj_setConst
 
 Runs the held box's trial (``tests.benchmarks.engines.held_box_grip``: the default rectangle's
 best grip by Q_C, no execution error) in MuJoCo and, from the named phase on, prints for each
@@ -13,13 +14,10 @@ arm's vertical (gantry z) drive, the vertical force the contacts put on the obje
 every contact's force turned out of its own frame) beside the object's weight, each contact's
 penetration, and the finger joints.
 
-``--arm-stiffness S`` is a diagnostic, not a model: it gives the arm's (gantry's) prismatic drives
-a velocity gain of S joint inertias per physics substep instead of ``MOTOR_STIFFNESS`` (h kv / I
-= S), the fingers' drives unchanged. ``--arm-constraint T`` is another: the arm's four joints (the
-gantry's three and the wrist) are held at their targets by joint equality constraints of time
-constant T s (damping ratio 1), which MuJoCo solves together with the contacts, instead of by
-drives (no force limit). ``--grips N`` then runs ``tests.benchmarks.engines --grips N`` under
-either instead of the trace.
+``--finger-caps`` and ``--renew-constants`` are diagnostics, not the model. ``--grips N`` runs
+``tests.benchmarks.engines --grips N`` (both engines) instead of the trace. The arm's drives
+that this trace showed chattering (``--arm-stiffness``, ``--arm-constraint`` before label model
+``mujoco-2026.12-servo``) are now servo constraints (``grip_env.sim.mujoco_world``).
 """
 
 from __future__ import annotations
@@ -38,54 +36,110 @@ from grip_env.sim.uncertainty import TrialNoise
 from tests.benchmarks.engines import cost, held_box_grip
 
 
-def set_arm_stiffness(stiffness: float) -> None:
-    """Give the prismatic (arm) drives of every ``MujocoWorld`` ``stiffness`` joint inertias per
-    substep of velocity gain (a diagnostic patch of ``MujocoWorld._motor``)."""
+def set_finger_caps() -> None:
+    """A diagnostic finger motor solved with the contacts: every velocity motor of every
+    ``MujocoWorld`` becomes a constant torque (its limit; no velocity gain, so nothing implicit)
+    and a speed cap, an upper joint limit that advances at the motor's speed from where the
+    joint is at each step's start (led by twice the limit's time constant times that speed, as
+    the arm's servos are): free, the joint rides the cap at the motor's speed; stalled, the cap
+    runs ahead within one step of it and the torque presses (Bullet's velocity motor at its
+    torque limit)."""
     import grip_env.sim.mujoco_world as mujoco_world
-
-    def motor(world, body: int, joint: int) -> tuple[int, float]:
-        index = world._joint_id(body, joint)
-        slide = world._model.jnt_type[index] == mujoco.mjtJoint.mjJNT_SLIDE
-        per_substep = stiffness if slide else mujoco_world.MOTOR_STIFFNESS
-        gain = per_substep * world._inertia[index] / world._model.opt.timestep
-        return world._actuator[index], float(gain)
-
-    mujoco_world.MujocoWorld._motor = motor
-
-
-def set_arm_constraint(time_constant_s: float) -> None:
-    """Hold the arm's joints of every ``MujocoWorld`` at their position targets by joint equality
-    constraints of ``time_constant_s`` instead of by drives (a diagnostic patch)."""
-    import grip_env.sim.mujoco_world as mujoco_world
-    from grip_env.sim.gantry import ARM_JOINTS
 
     world_class = mujoco_world.MujocoWorld
-    compile_model, drive = world_class._compile, world_class.position_motors
+    step, position_motors = world_class.step, world_class.position_motors
 
-    def compile_with_constraints(world) -> None:
-        for joint in world._spec.joints:
-            if joint.name.split("/")[-1] in ARM_JOINTS:
-                equality = world._spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=joint.name)
-                equality.solref = [time_constant_s, 1.0]
-        compile_model(world)
-        world._arm_equality = {int(j): k for k, j in enumerate(world._model.eq_obj1id)}
-
-    def position_motors(world, body, joints, targets, torques, gain=None) -> None:
-        m, _ = world._compiled()
-        driven = [k for k, j in enumerate(joints)
-                  if world._joint_id(body, j) not in world._arm_equality]
-        for joint, target in zip(joints, targets, strict=True):
+    def velocity_motors(world, body, joints, speeds, torques) -> None:
+        m, d = world._compiled()
+        caps = world.__dict__.setdefault("_caps", {})
+        for joint, speed, torque in zip(joints, speeds, torques, strict=True):
             index = world._joint_id(body, joint)
-            if index in world._arm_equality:
-                m.eq_data[world._arm_equality[index], 0] = target
-                act = world._actuator[index]
-                m.actuator_gainprm[act, 0], m.actuator_biasprm[act, :3] = 0.0, 0.0
-        if driven:
-            drive(world, body, [joints[k] for k in driven], [targets[k] for k in driven],
-                  [torques[k] for k in driven], gain)
+            act = world._actuator[index]
+            m.actuator_gainprm[act, 0], m.actuator_biasprm[act, :3] = 1.0, 0.0
+            m.actuator_forcerange[act] = (-torque, torque)
+            d.ctrl[act] = torque
+            m.jnt_solimp[index, 0] = m.jnt_solimp[index, 1]  # constant impedance: exact lead
+            caps[index] = float(speed)
 
-    world_class._compile = compile_with_constraints
-    world_class.position_motors = position_motors
+    def drive(world, body, joints, targets, torques, gain=None) -> None:
+        caps = world.__dict__.setdefault("_caps", {})
+        for joint in joints:
+            index = world._joint_id(body, joint)
+            if index in caps:
+                caps.pop(index)
+                world._model.jnt_range[index, 1] = world._loaded_ranges[index, 1]
+        position_motors(world, body, joints, targets, torques, gain)
+
+    def capped_step(world, steps: int = 1) -> None:
+        caps = world.__dict__.get("_caps")
+        if not caps:
+            step(world, steps)
+            return
+        m, d = world._compiled()
+        physics_step = mujoco.mj_step
+        for _ in range(steps):
+            starts = {index: float(d.qpos[m.jnt_qposadr[index]]) for index in caps}
+            sub = [0]
+
+            def substep(model, data, starts=starts, sub=sub) -> None:
+                for index, speed in caps.items():
+                    t = sub[0] * model.opt.timestep
+                    lead = 2.0 * model.jnt_solref[index, 0] * speed
+                    cap = starts[index] + speed * t + lead
+                    model.jnt_range[index, 1] = min(cap, world._loaded_ranges[index, 1])
+                sub[0] += 1
+                physics_step(model, data)
+
+            mujoco.mj_step = substep
+            try:
+                step(world, 1)
+            finally:
+                mujoco.mj_step = physics_step
+
+    world_class.velocity_motors = velocity_motors
+    world_class.position_motors = drive
+    world_class.step = capped_step
+
+
+def renew_constants() -> None:
+    """A diagnostic, not the model: renew MuJoCo's model constants (``mj_setConst`` on a scratch
+    ``MjData``: ``body_invweight0`` and ``dof_invweight0``, from which MuJoCo sizes every
+    constraint's softness) after ``add_axis_inertia`` and ``set_dynamics`` change inertias and
+    masses of the compiled model. Without it the worm-gear stops are as soft as for the bare
+    links (the rotor's inertia, 50 times theirs, is added after compiling)."""
+    import grip_env.sim.mujoco_world as mujoco_world
+
+    world_class = mujoco_world.MujocoWorld
+    for name in ("add_axis_inertia", "set_dynamics"):
+        method = getattr(world_class, name)
+
+        def renewing(world, *args, _method=method, **kwargs) -> None:
+            _method(world, *args, **kwargs)
+            mujoco.mj_setConst(world._model, mujoco.MjData(world._model))
+
+        setattr(world_class, name, renewing)
+
+
+def pad_stiffness_at_hold(config: Config) -> list[tuple[float, float]]:
+    """Each hand contact's penetration (mm) and normal force (N) on the held box after the
+    hold: their ratio is the pad's stiffness as MuJoCo simulates it."""
+    box, grip = held_box_grip(config)
+    found: list[tuple[float, float]] = []
+
+    def watch(name: str, scene: TrialScene) -> None:
+        if name != "held":
+            return
+        world = scene.world
+        m, d, wrench = world._model, world._data, np.empty(6)
+        for i, contact in enumerate(d.contact[: d.ncon]):
+            owners = set(world._body_uid[m.geom_bodyid[[contact.geom1, contact.geom2]]].tolist())
+            if owners == {scene.hand.uid, scene.object.uid}:
+                mujoco.mj_contactForce(m, d, i, wrench)
+                found.append((-1e3 * float(contact.dist), float(wrench[0])))
+
+    with TrialScene(box, config) as scene:
+        scene.run(grip_plans(grip)[0], TrialNoise((0.0, 0.0), 0.0, 0.4, 1.0), on_phase=watch)
+    return found
 
 
 def vertical_contact_force_n(world, uid: int) -> tuple[float, list[float]]:
@@ -152,19 +206,24 @@ def main() -> None:
     parser.add_argument("--phase", default="closed", choices=("approach", "closed"),
                         help="trace from the end of this phase (closed: the lift follows)")
     parser.add_argument("--steps", type=int, default=8, help="protocol steps to print")
-    parser.add_argument("--arm-stiffness", type=float, default=None,
-                        help="diagnostic: the arm drives' h kv / I (the model's: MOTOR_STIFFNESS)")
-    parser.add_argument("--arm-constraint", type=float, default=None,
-                        help="diagnostic: hold the arm's joints by equality constraints of this "
-                        "time constant (s)")
+    parser.add_argument("--finger-caps", action="store_true",
+                        help="diagnostic: the fingers' velocity motors as a torque and a speed cap "
+                        "solved with the contacts")
+    parser.add_argument("--renew-constants", action="store_true",
+                        help="diagnostic: mj_setConst after inertias and masses change")
+    parser.add_argument("--pads", action="store_true",
+                        help="print each pad contact's depth, force and stiffness at the hold")
     parser.add_argument("--grips", type=int, default=0,
                         help="run tests.benchmarks.engines --grips N --seed 0 instead")
     args = parser.parse_args()
-    if args.arm_stiffness is not None:
-        set_arm_stiffness(args.arm_stiffness)
-    if args.arm_constraint is not None:
-        set_arm_constraint(args.arm_constraint)
-    if args.grips:
+    if args.finger_caps:
+        set_finger_caps()
+    if args.renew_constants:
+        renew_constants()
+    if args.pads:
+        for depth, force in pad_stiffness_at_hold(Config().override(sim={"engine": "mujoco"})):
+            print(f"depth {depth:.4f} mm, normal force {force:.2f} N: {force / depth:.1f} kN/m")
+    elif args.grips:
         cost(args.grips, 0)
     else:
         trace(args.phase, args.steps)
