@@ -152,7 +152,7 @@ def _check_object(check: _ObjectCheck) -> tuple[bool, int, list[str]]:
     if not planned_alike:
         notes.append(f"{task.object_id}: the candidates planned again differ from the recorded")
     grips = recorded.iloc[list(check.picked)]
-    outcome = run_trials(task.obj, _as_planned(grips, kept, task.object_id), config,
+    outcome = run_trials(task.obj, as_planned(grips, kept, task.object_id), config,
                          config.dataset.trials, config.dataset.seed)
     same = np.ones(len(grips), dtype=bool)
     for name in OUTCOME_COLUMNS:
@@ -162,7 +162,7 @@ def _check_object(check: _ObjectCheck) -> tuple[bool, int, list[str]]:
     return planned_alike, int(same.sum()), notes
 
 
-def _as_planned(grips: pd.DataFrame, kept: pd.DataFrame, object_id: str) -> pd.DataFrame:
+def as_planned(grips: pd.DataFrame, kept: pd.DataFrame, object_id: str) -> pd.DataFrame:
     """The recorded grips with the grip ids the generation simulated them under (the planner's
     ``<contour name>/<local id>``; a per-grip draw scheme keys on it) and the dataset's object id
     (the common draws' key)."""
@@ -240,6 +240,19 @@ def _retest_sample(directory: Path, objects: int, seed: int) -> list[_ObjectChec
     rng = np.random.default_rng(seed)
     chosen = [eligible[i] for i in rng.permutation(len(eligible))[: int(objects)]]
     return _checks(directory, manifest, table, chosen)
+
+
+def recorded_objects(directory: str | Path, table: pd.DataFrame,
+                     object_ids: Sequence[str]) -> list[tuple[ObjectTask, pd.DataFrame]]:
+    """Each of ``object_ids`` as (the task that planned it, its rows of ``table``, the dataset
+    ``directory`` loaded).
+
+    Raises:
+        ValueError: the dataset's objects table lacks one of them.
+    """
+    directory = Path(directory)
+    checks = _checks(directory, read_manifest(directory), table, list(object_ids))
+    return [(check.task, check.recorded) for check in checks]
 
 
 def _checks(directory: Path, manifest: dict, table: pd.DataFrame,

@@ -105,7 +105,7 @@ class GripAcceptEnv(GripEnvBase):
         info = self._grip_info(found, row)
         success, reward = False, 0.0
         if execute:
-            success = self.backend.execute(found, row, self.np_random)
+            success = self._execute(found, row)
             self._attempts += 1
             reward = self.success_reward if success else self.failure_reward
         self._position += 1

@@ -141,7 +141,7 @@ class GripSelectEnv(GripEnvBase):
             info.update(attempts=self._attempts, success=False, is_success=False,
                         invalid_action=True)
             return self._observation(), self.invalid_action_reward, self._end_if(True), False, info
-        success = self.backend.execute(found, row, self.np_random)
+        success = self._execute(found, row)
         self._attempts += 1
         self._mask[slot] = 0
         self._remaining -= 1

@@ -1,0 +1,146 @@
+"""The retry task: success within m attempts when the attempts share the object's draw.
+
+A robot whose first grip slips tries again on the same object, under the same friction and mass.
+The recorded trials share their draws across an object's grips (trial k of every grip met the
+same friction, mass and pose noise), so for a static order of grips
+
+    shared_at_m = mean over k of [any of the first m grips held at trial k]
+
+is the chance of a hold within m attempts when an episode's attempts replay one trial index k
+(``GripSelect-v0`` / ``GripAccept-v0`` with ``max_attempts = m`` on data with per-trial outcomes).
+The leaderboard's ``success_at_m`` = ``1 - prod(1 - p)`` over the same grips treats the attempts
+as independent; ``overstatement_at_m`` = ``success_at_m - shared_at_m`` is how much that
+assumption adds (positive when failures go together: a draw that defeats one grip defeats
+others).
+
+Ties in a method's scores are broken uniformly at random, and ``shared_at_m`` is its exact
+expectation over the tie-breaks: for one k, a tie group of size ``g`` with ``s`` grips that held
+at k, cut by the budget after ``j`` of its members, fails with probability
+``C(g - s, j) / C(g, j)``, and the groups fail independently of each other's order.
+
+Needs the per-trial columns (:func:`grip_env.columns.trial_columns`): a dataset made by
+``grip-env generate`` now, or the standard dataset's re-simulated trials
+(:func:`grip_env.dataset.trial_outcomes.with_trial_outcomes`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from scipy.special import comb
+
+from classifiers.experiments.benchmark.aggregate import estimate, mean, paired_bootstraps
+from classifiers.experiments.benchmark.leaderboard import REFERENCE, metric_matrices
+from classifiers.experiments.benchmark.selection import KEYS, selection_metrics
+from grip_env.columns import trial_success_columns
+from grip_env.dataset.shards import recorded_trial_successes
+
+#: Attempts the retry task scores (success within 1, 2 and 3).
+RETRY_ATTEMPTS = 3
+
+
+def shared_columns(attempts: int = RETRY_ATTEMPTS) -> list[str]:
+    """``shared_at_1`` .. ``shared_at_{attempts}``."""
+    return [f"shared_at_{m}" for m in range(1, attempts + 1)]
+
+
+def retry_metrics(candidates: pd.DataFrame, scores: pd.DataFrame,
+                  attempts: int = RETRY_ATTEMPTS) -> pd.DataFrame:
+    """Per (method, seed, object): ``shared_at_1..m`` (shared draws, exact over tie-breaks),
+    the leaderboard's ``success_at_1..m`` (independent attempts) and ``overstatement_at_1..m``.
+
+    Args:
+        candidates: one row per (object_id, candidate) with ``success_rate`` and the per-trial
+            columns ``trial_success_0..T-1``.
+        scores: the benchmark's score table (``method, seed, object_id, candidate, score``).
+
+    Raises:
+        ValueError: the candidates lack the per-trial columns, or ``attempts`` is not 1..5.
+    """
+    trials = recorded_trial_successes(candidates.columns)
+    if not trials:
+        raise ValueError("the retry task needs every trial's outcome (trial_success_0..T-1), "
+                         "which these candidates do not record: generate the dataset again, or "
+                         "add the re-simulated trials (grip_env.dataset.trial_outcomes)")
+    if not 1 <= attempts <= 5:
+        raise ValueError(f"attempts must be within 1..5, got {attempts!r}")
+    independent = selection_metrics(candidates, scores).set_index(list(KEYS))
+    frame = scores[[*KEYS, "candidate", "score"]].merge(
+        candidates[["object_id", "candidate", *trial_success_columns(trials)]],
+        on=["object_id", "candidate"], how="left", validate="many_to_one")
+    grouped = frame.groupby(list(KEYS), sort=True)["score"]
+    start = grouped.rank(method="min", ascending=False).to_numpy(int) - 1
+    size = grouped.rank(method="max", ascending=False).to_numpy(int) - start
+    held = frame[list(trial_success_columns(trials))].to_numpy(float)
+    tie = frame[list(KEYS)].assign(start=start, size=size)
+    sums = pd.DataFrame(held, columns=range(trials)).groupby(
+        [tie[c] for c in tie.columns], sort=True).sum().reset_index()
+    g, a = sums["size"].to_numpy(int), sums["start"].to_numpy(int)
+    s = sums[list(range(trials))].to_numpy(float)  # members that held at trial k
+    out = pd.DataFrame(index=independent.index)
+    for m in range(1, attempts + 1):
+        tried = np.clip(m - a, 0, g)[:, None]  # members of each tie group within the budget
+        fail = comb(g[:, None] - s, tried) / comb(g[:, None], tried)
+        all_fail = pd.DataFrame(fail).groupby([sums[k] for k in KEYS], sort=True).prod()
+        shared = 1.0 - all_fail.mean(axis=1)
+        out[f"shared_at_{m}"] = shared.loc[out.index].to_numpy()
+        out[f"success_at_{m}"] = independent[f"success_at_{m}"]
+        out[f"overstatement_at_{m}"] = out[f"success_at_{m}"] - out[f"shared_at_{m}"]
+    return out.reset_index()
+
+
+def retry_leaderboard(metrics: pd.DataFrame, reps: int = 2000, seed: int = 0,
+                      reference: str = REFERENCE, attempts: int = RETRY_ATTEMPTS,
+                      ) -> dict[str, Any]:
+    """Per method and m: ``shared_at_m`` (mean over objects and runs, 95 % stratified bootstrap
+    interval), its difference from ``reference`` paired over the same resampled objects, and
+    the overstatement of the independence formula with its interval. Every object counts."""
+    objects = sorted(set(metrics["object_id"]))
+    board: dict[str, Any] = {"objects": len(objects), "attempts": attempts,
+                             "reference": reference, "methods": {}}
+    columns = [*shared_columns(attempts),
+               *(f"overstatement_at_{m}" for m in range(1, attempts + 1))]
+    matrices = {c: metric_matrices(metrics, c, objects) for c in columns}
+    boots = {c: paired_bootstraps(matrices[c], reps, seed, task_bootstrap=True)
+             for c in columns}
+    for name in matrices[columns[0]]:
+        row: dict[str, Any] = {"runs": int(matrices[columns[0]][name].shape[0])}
+        for m in range(1, attempts + 1):
+            shared, over = f"shared_at_{m}", f"overstatement_at_{m}"
+            value, boot = matrices[shared], boots[shared]
+            row[shared] = estimate(mean(value[name]), mean(boot[name]))
+            row[f"{shared}_minus_{reference}"] = estimate(
+                mean(value[name]) - mean(value[reference]),
+                mean(boot[name]) - mean(boot[reference]))
+            row[over] = estimate(mean(matrices[over][name]), mean(boots[over][name]))
+        board["methods"][name] = row
+    return board
+
+
+def retry_table(board: Mapping[str, Any], methods: Sequence[str] | None = None) -> str:
+    """The retry board as a Markdown table: success within m under shared draws [interval],
+    minus the reference [paired interval], and the independence formula's overstatement."""
+    attempts, reference = int(board["attempts"]), board["reference"]
+    names = list(methods or board["methods"])
+    head = ["method", *(f"within {m}" for m in range(1, attempts + 1)),
+            *(f"within {m} minus {reference}" for m in range(2, attempts + 1)),
+            *(f"independence overstates, {m}" for m in range(2, attempts + 1))]
+    lines = ["| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
+    for name in names:
+        row = board["methods"][name]
+        cells = [name, *(_ci(row[f"shared_at_{m}"]) for m in range(1, attempts + 1)),
+                 *(_ci(row[f"shared_at_{m}_minus_{reference}"], signed=True)
+                   for m in range(2, attempts + 1)),
+                 *(_ci(row[f"overstatement_at_{m}"], signed=True)
+                   for m in range(2, attempts + 1))]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def _ci(found: Mapping[str, Any], signed: bool = False) -> str:
+    low, high = found["ci"]
+    form = "{:+.3f}" if signed else "{:.3f}"
+    return (f"{form.format(found['estimate'])} [{form.format(low)}, {form.format(high)}]")
