@@ -26,6 +26,7 @@ Needs the per-trial columns (:func:`grip_env.columns.trial_columns`): a dataset 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -36,6 +37,7 @@ from classifiers.experiments.benchmark.aggregate import estimate, mean, paired_b
 from classifiers.experiments.benchmark.leaderboard import REFERENCE, metric_matrices
 from classifiers.experiments.benchmark.selection import KEYS, selection_metrics
 from grip_env.columns import trial_success_columns
+from grip_env.config import Config
 from grip_env.dataset.shards import recorded_trial_successes
 
 #: Attempts the retry task scores (success within 1, 2 and 3).
@@ -144,3 +146,96 @@ def _ci(found: Mapping[str, Any], signed: bool = False) -> str:
     low, high = found["ci"]
     form = "{:+.3f}" if signed else "{:.3f}"
     return (f"{form.format(found['estimate'])} [{form.format(low)}, {form.format(high)}]")
+
+
+def standard_retry_board(data: str = "standard", trials: str | Path | None = None,
+                         scores: str | Path | None = None, reps: int = 2000,
+                         config: Config | None = None) -> dict[str, Any]:
+    """The retry task on the standard split (v4) on the held-out objects whose every trial is
+    recorded: in ``data`` itself, or (``trials``) in a folder of re-simulated shards
+    (:func:`grip_env.dataset.trial_outcomes.with_trial_outcomes`). Methods: the baselines'
+    static orders (best-Q_C, best-Q_G, random, oracle) and, from a study's ``scores`` file
+    (``classifiers/scores.parquet``), its rankers and classifiers, every seed.
+
+    Raises:
+        ValueError: no held-out object has its trials recorded, or the scores file does not
+            score the split's candidates.
+    """
+    from classifiers.experiments.benchmark.methods import baseline_scores, drop_duplicates
+    from classifiers.experiments.benchmark.split import (
+        candidate_sets,
+        candidate_table,
+        standard_split,
+    )
+    from grip_env.columns import trial_columns
+    from grip_env.config import load_config
+    from grip_env.dataset.loading import load
+    from grip_env.dataset.trial_outcomes import with_trial_outcomes
+    from grip_env.datasets import resolve_data
+
+    config = config or load_config()
+    table = load(resolve_data(data))
+    recorded = with_trial_outcomes(table, trials) if trials is not None else table
+    count = recorded_trial_successes(recorded.columns)
+    split = standard_split()
+    have = set(recorded["object_id"].astype(str)) if count else set()
+    held = [oid for oid in split.test_objects if oid in have]
+    if not held:
+        raise ValueError("no held-out object of the standard split has its trials recorded")
+    bare = table.copy(deep=False)
+    bare.attrs = {}
+    candidates = candidate_table(candidate_sets(bare, config, split))
+    candidates = candidates[candidates["object_id"].isin(held)].merge(
+        recorded[["grip_id", *trial_columns(count)]], on="grip_id", how="left",
+        validate="one_to_one")
+    frames = [baseline_scores(candidates).query("method != 'epsilon'")]
+    if scores is not None:
+        learned = drop_duplicates(pd.read_parquet(scores))
+        learned = learned[learned["object_id"].astype(str).isin(held)]
+        frames.append(learned.assign(object_id=learned["object_id"].astype(str)))
+    metrics = retry_metrics(candidates, pd.concat(frames, ignore_index=True))
+    board = retry_leaderboard(metrics, reps, config.learning.seed)
+    board["split"] = {"name": split.name, "version": split.version,
+                      "held_out_objects": len(split.test_objects), "scored_objects": len(held)}
+    board["per_object"] = metrics.round(6).to_dict(orient="records")
+    return board
+
+
+def main(argv: list[str] | None = None) -> None:
+    import argparse
+    import json
+
+    parser = argparse.ArgumentParser(prog="python -m classifiers.experiments.benchmark.retry",
+                                     description=__doc__.splitlines()[0])  # type: ignore[union-attr]
+    parser.add_argument("--data", default="standard", help="the dataset (default: standard)")
+    parser.add_argument("--trials", type=Path, default=None,
+                        help="re-simulated per-trial shards (default for standard: "
+                             "grip_env/data/standard_trials)")
+    parser.add_argument("--scores", type=Path, default=None,
+                        help="a study's classifiers/scores.parquet (rankers, classifiers)")
+    parser.add_argument("--methods", default="best_qc,ranker_lambdarank,oracle,random",
+                        help="the methods to tabulate, comma-separated")
+    parser.add_argument("--reps", type=int, default=2000)
+    parser.add_argument("--out", type=Path, default=None, help="write retry.json here")
+    args = parser.parse_args(argv)
+    trials = args.trials
+    if trials is None and args.data == "standard":
+        from grip_env.dataset.trial_outcomes import STANDARD_TRIALS
+
+        trials = STANDARD_TRIALS
+    try:
+        board = standard_retry_board(args.data, trials, args.scores, args.reps)
+    except ValueError as exc:
+        parser.exit(2, f"error: {exc}\n")
+    split = board["split"]
+    print(f"{split['name']} v{split['version']}: {split['scored_objects']} of the "
+          f"{split['held_out_objects']} held-out objects have every trial recorded\n")
+    shown = [m for m in args.methods.split(",") if m in board["methods"]]
+    print(retry_table(board, shown))
+    if args.out is not None:
+        args.out.mkdir(parents=True, exist_ok=True)
+        (args.out / "retry.json").write_text(json.dumps(board, indent=1))
+
+
+if __name__ == "__main__":
+    main()
