@@ -53,7 +53,7 @@ def test_an_older_dataset_loads_without_them(tmp_path: Path) -> None:
 
     grips = load(run(tmp_path / "old"))  # its job writes summaries only, as before
     assert list(grips.columns) == list(DATASET_COLUMNS)
-    with pytest.raises(ValueError, match="records no per-trial outcomes.*trial_outcomes"):
+    with pytest.raises(ValueError, match=r"records no per-trial outcomes.*trial_outcomes"):
         per_trial_outcomes(grips)
 
 

@@ -8,9 +8,9 @@ objects), ``methods`` (baselines and loaders of SB3 zips, saved models and ``mod
 entry points, as score tables), ``outputs`` (what a method returns, as scores),
 ``provenance`` (what a method was trained on: a run that saw a held-out object is refused),
 ``selection`` (exact per-object metrics), ``retry`` (success within 1-3 attempts that share the
-object's draw, on data with every trial's outcome), ``aggregate`` (rliable's IQM, stratified bootstrap,
-probability of improvement, performance profiles), ``leaderboard`` (tables, verdicts, files),
-``plots``.
+object's draw, on data with every trial's outcome), ``aggregate`` (rliable's IQM, stratified
+bootstrap, probability of improvement, performance profiles), ``leaderboard`` (tables,
+verdicts, files), ``plots``.
 """
 
 from __future__ import annotations
