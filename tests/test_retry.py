@@ -11,7 +11,8 @@ import pytest
 from cli_runs import assert_refused, cli
 
 from classifiers.evaluation.synthetic import synthetic_grips
-from classifiers.experiments.benchmark.retry import retry_leaderboard, retry_metrics, retry_table
+from classifiers.experiments.benchmark.retry import retry_leaderboard, retry_metrics
+from classifiers.report.leaderboard import retry_table
 from grip_env.columns import trial_robustness_columns, trial_success_columns
 from grip_env.envs.accept import GripAcceptEnv
 from grip_env.envs.backends import ReplayBackend

@@ -3,7 +3,7 @@ benchmark wrote (``leaderboard.json``, :mod:`classifiers.experiments.benchmark.l
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -77,8 +77,8 @@ def leaderboard_markdown(board: Mapping[str, Any]) -> str:
         "## Success within k attempts (GripAccept-v0 / GripSelect-v0 with max_attempts = k)", "",
         _table(attempts), "",
         "Chance that one of the method's top-k picks holds, from the recorded success rates, "
-        "assuming independent trials (the replay backend's draws without per-trial outcomes).",
-        "", *_retry_lines(board),
+        "assuming independent trials (the replay backend's draws).", "",
+        *_retry_lines(board),
     ]  # fmt: skip
     return "\n".join(lines)
 
@@ -87,8 +87,6 @@ def _retry_lines(board: Mapping[str, Any]) -> list[str]:
     """The retry task's section, when the dataset records every trial's outcome."""
     if "retry" not in board:
         return []
-    from classifiers.experiments.benchmark.retry import retry_table
-
     retry = board["retry"]
     return ["## Retry: success within m attempts that share the object's draw", "",
             retry_table(retry), "",
@@ -174,3 +172,29 @@ def _attempts(board: Mapping[str, Any]) -> int:
     row = next(iter(board["methods"].values()), {})
     return max((int(key.rsplit("_", 1)[1]) for key in row if key.startswith("success_at_")),
                default=0)
+
+
+def retry_table(board: Mapping[str, Any], methods: Sequence[str] | None = None) -> str:
+    """The retry board as a Markdown table: success within m under shared draws [interval],
+    minus the reference [paired interval], and the independence formula's overstatement."""
+    attempts, reference = int(board["attempts"]), board["reference"]
+    names = list(methods or board["methods"])
+    head = ["method", *(f"within {m}" for m in range(1, attempts + 1)),
+            *(f"within {m} minus {reference}" for m in range(2, attempts + 1)),
+            *(f"independence overstates, {m}" for m in range(2, attempts + 1))]
+    lines = ["| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
+    for name in names:
+        row = board["methods"][name]
+        cells = [name, *(_signed_ci(row[f"shared_at_{m}"]) for m in range(1, attempts + 1)),
+                 *(_signed_ci(row[f"shared_at_{m}_minus_{reference}"], signed=True)
+                   for m in range(2, attempts + 1)),
+                 *(_signed_ci(row[f"overstatement_at_{m}"], signed=True)
+                   for m in range(2, attempts + 1))]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def _signed_ci(found: Mapping[str, Any], signed: bool = False) -> str:
+    low, high = found["ci"]
+    form = "{:+.3f}" if signed else "{:.3f}"
+    return f"{form.format(found['estimate'])} [{form.format(low)}, {form.format(high)}]"

@@ -160,10 +160,11 @@ def record_trials(source: str | Path, out_dir: str | Path, until: datetime | Non
         if (limit is not None and done >= limit) or (until is not None
                                                       and datetime.now(UTC) >= until):
             break
-        began = time.perf_counter()
+        began, began_cpu = time.perf_counter(), time.process_time()
         ((task, rows),) = recorded_objects(source, table, [object_id])
         frame = object_trials(task, rows)
-        _write_object(out, index, object_id, frame, time.perf_counter() - began)
+        _write_object(out, index, object_id, frame, time.perf_counter() - began,
+                      time.process_time() - began_cpu)
         done, new_grips = done + 1, new_grips + len(frame)
         if progress:
             print(f"{object_id}: {len(frame)} grips in {time.perf_counter() - began:.0f} s "
@@ -195,12 +196,16 @@ def shard_file(out: Path, object_id: str) -> Path:
 
 
 def _write_object(out: Path, index: dict, object_id: str, frame: pd.DataFrame,
-                  seconds: float) -> None:
+                  seconds: float, cpu_seconds: float) -> None:
+    """The object's shard, then its index entry: wall ``seconds`` and this process's CPU
+    ``cpu_seconds`` (the trials run in it: grip_env is imported first, so its kernels are
+    portable), both including the re-planning."""
     path = shard_file(out, object_id)
     table = pa.Table.from_pandas(frame, preserve_index=False)
     checksum = write_atomically(path, lambda temp: pq.write_table(table, temp))
     index["objects"][object_id] = {"file": path.name, "rows": len(frame), "sha256": checksum,
-                                   "seconds": round(seconds, 2)}
+                                   "seconds": round(seconds, 2),
+                                   "cpu_seconds": round(cpu_seconds, 2)}
     write_text_atomically(out / INDEX_FILE, json.dumps(index, indent=1) + "\n")
 
 

@@ -23,7 +23,9 @@ class GripAcceptEnv(GripEnvBase):
 
     Each episode is one object of the split; its best ``max_candidates`` candidates are shown one
     at a time, lowest ``Q_C`` first (``candidate_order="q_c"``) or in a new random order each
-    episode (``"shuffled"``), and each is skipped or executed.
+    episode (``"shuffled"``), and each is skipped or executed. Replayed with every trial's
+    outcome, every execution of an episode replays the same trial index k (``info["trial"]`` at
+    ``reset``), as :class:`~grip_env.envs.select.GripSelectEnv` does.
 
     ## Action Space
 

@@ -25,7 +25,6 @@ Needs the per-trial columns (:func:`grip_env.columns.trial_columns`): a dataset 
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -122,32 +121,6 @@ def retry_leaderboard(metrics: pd.DataFrame, reps: int = 2000, seed: int = 0,
     return board
 
 
-def retry_table(board: Mapping[str, Any], methods: Sequence[str] | None = None) -> str:
-    """The retry board as a Markdown table: success within m under shared draws [interval],
-    minus the reference [paired interval], and the independence formula's overstatement."""
-    attempts, reference = int(board["attempts"]), board["reference"]
-    names = list(methods or board["methods"])
-    head = ["method", *(f"within {m}" for m in range(1, attempts + 1)),
-            *(f"within {m} minus {reference}" for m in range(2, attempts + 1)),
-            *(f"independence overstates, {m}" for m in range(2, attempts + 1))]
-    lines = ["| " + " | ".join(head) + " |", "|" + " --- |" * len(head)]
-    for name in names:
-        row = board["methods"][name]
-        cells = [name, *(_ci(row[f"shared_at_{m}"]) for m in range(1, attempts + 1)),
-                 *(_ci(row[f"shared_at_{m}_minus_{reference}"], signed=True)
-                   for m in range(2, attempts + 1)),
-                 *(_ci(row[f"overstatement_at_{m}"], signed=True)
-                   for m in range(2, attempts + 1))]
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines)
-
-
-def _ci(found: Mapping[str, Any], signed: bool = False) -> str:
-    low, high = found["ci"]
-    form = "{:+.3f}" if signed else "{:.3f}"
-    return (f"{form.format(found['estimate'])} [{form.format(low)}, {form.format(high)}]")
-
-
 def standard_retry_board(data: str = "standard", trials: str | Path | None = None,
                          scores: str | Path | None = None, reps: int = 2000,
                          config: Config | None = None) -> dict[str, Any]:
@@ -231,6 +204,8 @@ def main(argv: list[str] | None = None) -> None:
     print(f"{split['name']} v{split['version']}: {split['scored_objects']} of the "
           f"{split['held_out_objects']} held-out objects have every trial recorded\n")
     shown = [m for m in args.methods.split(",") if m in board["methods"]]
+    from classifiers.report.leaderboard import retry_table
+
     print(retry_table(board, shown))
     if args.out is not None:
         args.out.mkdir(parents=True, exist_ok=True)
