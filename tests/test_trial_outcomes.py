@@ -125,3 +125,17 @@ def test_record_trials_reproduces_a_committed_shard(tmp_path: Path) -> None:
     pd.testing.assert_frame_equal(
         again, committed[committed["object_id"] == again["object_id"].iloc[0]].reset_index(
             drop=True))
+
+
+def test_the_command_refuses_another_datasets_folder(tmp_path: Path, capsys) -> None:  # type: ignore[no-untyped-def]
+    from grip_env.dataset.trial_outcomes import INDEX_FILE, main
+
+    (tmp_path / INDEX_FILE).write_text('{"fingerprint": "other", "label_model": "x", '
+                                       '"trials": 5, "objects": {}}')
+    before = sorted(tmp_path.iterdir())
+    with pytest.raises(SystemExit) as stop:
+        main(["standard", "--out", str(tmp_path), "--objects", "1"])
+    assert stop.value.code == 2
+    error = capsys.readouterr().err.strip().splitlines()
+    assert len(error) == 1 and error[0].startswith("error: ") and "another dataset" in error[0]
+    assert sorted(tmp_path.iterdir()) == before  # nothing written
