@@ -189,3 +189,30 @@ def test_the_standard_retry_board_scores_the_held_out_objects_done() -> None:
         assert row["overstatement_at_1"]["estimate"] == pytest.approx(0.0, abs=1e-12)
         shared = [row[f"shared_at_{m}"]["estimate"] for m in (1, 2, 3)]
         assert shared == sorted(shared)  # another attempt never lowers the chance
+
+
+def test_an_adaptive_policy_is_scored_on_every_trial(table: pd.DataFrame) -> None:
+    """The policy that always takes the first valid slot is the best-Q_C static order: its
+    episodes, pinned to each trial k, give retry_metrics' exact shared-draw figures."""
+    from classifiers.experiments.benchmark.methods import baseline_scores
+    from classifiers.experiments.benchmark.retry import policy_retry_metrics
+    from grip_env.config import Config
+
+    config = Config().override(selector={"max_candidates": 12})
+    ids = sorted(table["object_id"].astype(str).unique())
+    data = table.assign(object_id=table["object_id"].astype(str))
+    first_valid = policy_retry_metrics(data, ids, lambda obs, mask: int(np.argmax(mask)), config)
+    candidates = data.sort_values(["object_id", "Q_C"], kind="mergesort").assign(
+        candidate=lambda f: f.groupby("object_id").cumcount())
+    static = retry_metrics(candidates, baseline_scores(candidates).query("method == 'best_qc'"))
+    for m in (1, 2, 3):
+        assert np.allclose(first_valid[f"shared_at_{m}"], static[f"shared_at_{m}"])
+
+
+def test_the_trial_option_pins_k(table: pd.DataFrame) -> None:
+    env = _env(table)
+    assert env.reset(seed=0, options={"trial": 3})[1]["trial"] == 3
+    with pytest.raises(ValueError, match=r"'trial' must be an integer in \[0, 5\)"):
+        env.reset(options={"trial": 5})
+    with pytest.raises(ValueError, match="needs trials replayed by index"):
+        _env(table, replay="rate").reset(options={"trial": 0})

@@ -153,13 +153,19 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, NDArray[Any]], dict[str, Any]]:
-        """Start an episode on a new object (``options={"object_id": ...}`` picks it);
-        ``info`` has ``object_id``, ``candidates``, ``attempts`` and, when the backend replays
-        trials by index, ``trial`` (the episode's k)."""
+        """Start an episode on a new object (``options={"object_id": ...}`` picks it; with
+        trials replayed by index, ``options={"trial": k}`` pins the episode's trial k, as an
+        evaluation that runs every k does); ``info`` has ``object_id``, ``candidates``,
+        ``attempts`` and, when the backend replays trials by index, ``trial`` (the episode's k)."""
         super().reset(seed=seed)
+        options = dict(options or {})
+        pinned = self._pinned_trial(options.pop("trial", None))
         found = self._found = self._episode_candidates(options)
         self._slots = self._shuffled_slots(found.count)
-        self._trial = int(self.np_random.integers(self.trials)) if self.trials else None
+        if pinned is not None:
+            self._trial = pinned
+        else:
+            self._trial = int(self.np_random.integers(self.trials)) if self.trials else None
         self._attempts, self._outcome = 0, None
         self._start_episode(found)
         if self.render_mode == "human":
@@ -168,6 +174,19 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         if self._trial is not None:
             info["trial"] = self._trial
         return self._observation(), info
+
+    def _pinned_trial(self, trial: Any) -> int | None:
+        """``reset``'s ``trial`` option, checked: an index of the replayed trials (or None)."""
+        if trial is None:
+            return None
+        if not self.trials:
+            raise ValueError("reset option 'trial' needs trials replayed by index (data with "
+                             "every trial's outcome, replay='trial' or 'auto')")
+        if isinstance(trial, bool) or not isinstance(trial, int | np.integer) or not (
+                0 <= trial < self.trials):
+            raise ValueError(f"reset option 'trial' must be an integer in [0, {self.trials}), "
+                             f"got {trial!r}")
+        return int(trial)
 
     def _execute(self, found: CandidateSet, row: int) -> bool:
         """Execute candidate ``row``: the episode's trial k when replayed by index."""
@@ -188,8 +207,8 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         options = dict(options or {})
         object_id = options.pop("object_id", None)
         if options:
-            raise ValueError(f"unknown reset options {sorted(options)}; the one option is "
-                             "'object_id'")  # fmt: skip
+            raise ValueError(f"unknown reset options {sorted(options)}; the options are "
+                             "'object_id' and 'trial'")  # fmt: skip
         self._ended = False
         if object_id is None:
             return self._sample_candidates()

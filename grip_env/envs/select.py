@@ -49,7 +49,8 @@ class GripSelectEnv(GripEnvBase):
 
     An object drawn uniformly from the split's objects that have a candidate, with the
     environment's ``np_random`` (``reset(seed=...)`` fixes every draw), or the one named by
-    ``reset(options={"object_id": ...})``.
+    ``reset(options={"object_id": ...})``; with trials replayed by index, the episode's trial
+    k is drawn the same way, or pinned by ``reset(options={"trial": k})``.
 
     ## Episode End
 

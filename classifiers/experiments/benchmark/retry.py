@@ -25,6 +25,7 @@ Needs the per-trial columns (:func:`grip_env.columns.trial_columns`): a dataset 
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -119,6 +120,46 @@ def retry_leaderboard(metrics: pd.DataFrame, reps: int = 2000, seed: int = 0,
             row[over] = estimate(mean(matrices[over][name]), mean(boots[over][name]))
         board["methods"][name] = row
     return board
+
+
+#: A policy for the retry task: (observation, valid-action mask) -> the slot to execute.
+RetryPolicy = Callable[[dict[str, np.ndarray], np.ndarray], int]
+
+
+def policy_retry_metrics(table: pd.DataFrame, object_ids: Sequence[str], policy: RetryPolicy,
+                         config: Config, name: str = "policy", seed: int = 0,
+                         attempts: int = RETRY_ATTEMPTS) -> pd.DataFrame:
+    """``shared_at_1..m`` of a (possibly adaptive) policy: for each object and each trial index
+    k, one ``GripSelect-v0`` episode pinned to k (``reset(options={"object_id", "trial"})``,
+    ``max_attempts = m``); the policy sees each failure (the failed slot masked) and may pick
+    the next grip by it. ``shared_at_j`` = mean over k of [held within j attempts]. A
+    deterministic policy makes this exact; rows ``method, seed, object_id, shared_at_*``.
+
+    Raises:
+        ValueError: ``table`` does not record every trial's outcome.
+    """
+    from grip_env.envs.select import GripSelectEnv
+
+    trials = recorded_trial_successes(table.columns)
+    if not trials:
+        raise ValueError("the retry task needs every trial's outcome (trial_success_0..T-1)")
+    env = GripSelectEnv(data=table, config=config, max_attempts=attempts, replay="trial")
+    rows = []
+    for object_id in object_ids:
+        held_at = np.full((trials, attempts), False)
+        for k in range(trials):
+            observation, _ = env.reset(seed=seed, options={"object_id": object_id, "trial": k})
+            for attempt in range(attempts):
+                slot = int(policy(observation, env.action_masks()))
+                observation, _, terminated, _, info = env.step(slot)
+                if info["success"]:
+                    held_at[k, attempt:] = True
+                if terminated:
+                    break
+        rows.append({"method": name, "seed": seed, "object_id": object_id,
+                     **dict(zip(shared_columns(attempts), held_at.mean(axis=0), strict=True))})
+    env.close()
+    return pd.DataFrame(rows)
 
 
 def standard_retry_board(data: str = "standard", trials: str | Path | None = None,
