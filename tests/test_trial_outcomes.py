@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
 import pytest
 
 from grip_env.columns import DATASET_COLUMNS, trial_columns
@@ -139,3 +140,25 @@ def test_the_command_refuses_another_datasets_folder(tmp_path: Path, capsys) -> 
     error = capsys.readouterr().err.strip().splitlines()
     assert len(error) == 1 and error[0].startswith("error: ") and "another dataset" in error[0]
     assert sorted(tmp_path.iterdir()) == before  # nothing written
+
+
+def test_validate_checks_the_trials_summarise_to_the_row(generated_dataset_dir: Path,
+                                                         tmp_path: Path) -> None:
+    import pyarrow.parquet as pq
+
+    from grip_env.dataset import validate
+    from grip_env.dataset.files import sha256_of
+    from grip_env.dataset.manifest import read_manifest, write_manifest
+
+    copy = shutil.copytree(generated_dataset_dir, tmp_path / "d")
+    assert validate(copy) == []
+    manifest = read_manifest(copy)
+    object_id, record = next(iter(manifest["shards"].items()))
+    shard = copy / record["file"]
+    table = pq.read_table(shard)
+    frame = table.to_pandas()
+    frame["trial_success_0"] = ~frame["trial_success_0"]  # one trial's outcome changed
+    pq.write_table(pa.Table.from_pandas(frame, schema=table.schema, preserve_index=False), shard)
+    manifest["shards"][object_id]["sha256"] = sha256_of(shard)
+    write_manifest(copy, manifest)
+    assert any("successes is not the summary of trial_*_0..1" in p for p in validate(copy))
