@@ -50,6 +50,7 @@ from grip_env.dataset.manifest import read_manifest
 from grip_env.dataset.resimulation import as_planned, recorded_objects, same_candidates
 from grip_env.dataset.shards import recorded_trials
 from grip_env.dataset.split import held_out_objects
+from grip_env.shutdown import deferred_signals
 
 #: The standard dataset's per-trial outcomes (re-simulated; see the module docstring).
 STANDARD_TRIALS = Path(__file__).resolve().parents[1] / "data" / "standard_trials"
@@ -163,8 +164,9 @@ def record_trials(source: str | Path, out_dir: str | Path, until: datetime | Non
         began, began_cpu = time.perf_counter(), time.process_time()
         ((task, rows),) = recorded_objects(source, table, [object_id])
         frame = object_trials(task, rows)
-        _write_object(out, index, object_id, frame, time.perf_counter() - began,
-                      time.process_time() - began_cpu)
+        with deferred_signals():  # the shard and its index entry, never one without the other
+            _write_object(out, index, object_id, frame, time.perf_counter() - began,
+                          time.process_time() - began_cpu)
         done, new_grips = done + 1, new_grips + len(frame)
         if progress:
             print(f"{object_id}: {len(frame)} grips in {time.perf_counter() - began:.0f} s "
@@ -308,8 +310,11 @@ def main(argv: list[str] | None = None) -> None:
         STANDARD_TRIALS if args.source == "standard" else None)
     if out is None:
         parser.exit(2, "error: --out is needed for a dataset other than 'standard'\n")
-    try:
-        found = record_trials(resolve_data(args.source), out, args.until, args.objects)
+    from grip_env.shutdown import stop_on_signals
+
+    try:  # a signal stops it between writes: the finished objects stay, the same command resumes
+        with stop_on_signals("run the same command again to continue"):
+            found = record_trials(resolve_data(args.source), out, args.until, args.objects)
     except ValueError as exc:
         parser.exit(2, f"error: {exc}\n")
     print(found.summary())
