@@ -139,6 +139,7 @@ def test_shared_draws_hand_computed() -> None:
     assert found["success_at_2"] == pytest.approx(0.75)  # 1 - 0.5 * 0.5: independence
     assert found["overstatement_at_2"] == pytest.approx(0.25)
     assert found["overstatement_at_1"] == 0.0
+    assert found["ceiling"] == 1.0  # some grip holds at every k
 
 
 def test_ties_are_averaged_exactly() -> None:

@@ -52,7 +52,9 @@ def shared_columns(attempts: int = RETRY_ATTEMPTS) -> list[str]:
 def retry_metrics(candidates: pd.DataFrame, scores: pd.DataFrame,
                   attempts: int = RETRY_ATTEMPTS) -> pd.DataFrame:
     """Per (method, seed, object): ``shared_at_1..m`` (shared draws, exact over tie-breaks),
-    the leaderboard's ``success_at_1..m`` (independent attempts) and ``overstatement_at_1..m``.
+    the leaderboard's ``success_at_1..m`` (independent attempts), ``overstatement_at_1..m`` and
+    ``ceiling`` (the share of trial indices at which some candidate held: what a policy that
+    tried every candidate would reach).
 
     Args:
         candidates: one row per (object_id, candidate) with ``success_rate`` and the per-trial
@@ -91,6 +93,9 @@ def retry_metrics(candidates: pd.DataFrame, scores: pd.DataFrame,
         out[f"shared_at_{m}"] = shared.loc[out.index].to_numpy()
         out[f"success_at_{m}"] = independent[f"success_at_{m}"]
         out[f"overstatement_at_{m}"] = out[f"success_at_{m}"] - out[f"shared_at_{m}"]
+    columns = list(trial_success_columns(trials))
+    any_held = candidates.groupby("object_id")[columns].any().mean(axis=1)
+    out["ceiling"] = any_held.loc[out.index.get_level_values("object_id")].to_numpy()
     return out.reset_index()
 
 
@@ -99,10 +104,13 @@ def retry_leaderboard(metrics: pd.DataFrame, reps: int = 2000, seed: int = 0,
                       ) -> dict[str, Any]:
     """Per method and m: ``shared_at_m`` (mean over objects and runs, 95 % stratified bootstrap
     interval), its difference from ``reference`` paired over the same resampled objects, and
-    the overstatement of the independence formula with its interval. Every object counts."""
+    the overstatement of the independence formula with its interval; and ``ceiling``, the mean
+    over objects of :func:`retry_metrics`' ceiling. Every object counts."""
     objects = sorted(set(metrics["object_id"]))
+    ceiling = metrics.groupby("object_id")["ceiling"].first()
     board: dict[str, Any] = {"objects": len(objects), "attempts": attempts,
-                             "reference": reference, "methods": {}}
+                             "reference": reference, "ceiling": float(ceiling.mean()),
+                             "methods": {}}
     columns = [*shared_columns(attempts),
                *(f"overstatement_at_{m}" for m in range(1, attempts + 1))]
     matrices = {c: metric_matrices(metrics, c, objects) for c in columns}
@@ -248,6 +256,7 @@ def main(argv: list[str] | None = None) -> None:
     from classifiers.report.leaderboard import retry_table
 
     print(retry_table(board, shown))
+    print(f"\nceiling (some candidate holds at the episode's trial): {board['ceiling']:.3f}")
     if args.out is not None:
         args.out.mkdir(parents=True, exist_ok=True)
         (args.out / "retry.json").write_text(json.dumps(board, indent=1))
