@@ -54,7 +54,7 @@ def retry_metrics(candidates: pd.DataFrame, scores: pd.DataFrame,
     """Per (method, seed, object): ``shared_at_1..m`` (shared draws, exact over tie-breaks),
     the leaderboard's ``success_at_1..m`` (independent attempts), ``overstatement_at_1..m`` and
     ``ceiling`` (the share of trial indices at which some candidate held: what a policy that
-    tried every candidate would reach).
+    knew the draw would reach, in one attempt; no policy exceeds it).
 
     Args:
         candidates: one row per (object_id, candidate) with ``success_rate`` and the per-trial
