@@ -217,3 +217,12 @@ def test_the_trial_option_pins_k(table: pd.DataFrame) -> None:
         env.reset(options={"trial": 5})
     with pytest.raises(ValueError, match="needs trials replayed by index"):
         _env(table, replay="rate").reset(options={"trial": 0})
+
+
+@pytest.mark.parametrize("cls", [GripSelectEnv, GripAcceptEnv])
+def test_gymnasiums_checker_passes_with_trials_replayed(table: pd.DataFrame, cls: type) -> None:
+    from gymnasium.utils.env_checker import check_env
+
+    env = _env(table, cls)
+    assert env.trials == TRIALS
+    check_env(env, skip_render_check=True)  # seeded resets (the trial draw included) repeat
