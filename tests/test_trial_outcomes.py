@@ -162,3 +162,45 @@ def test_validate_checks_the_trials_summarise_to_the_row(generated_dataset_dir: 
     manifest["shards"][object_id]["sha256"] = sha256_of(shard)
     write_manifest(copy, manifest)
     assert any("successes is not the summary of trial_*_0..1" in p for p in validate(copy))
+
+
+def _without_trials(directory: Path) -> None:
+    """Make a generated dataset look as one made before the per-trial columns: pack it and
+    rewrite its packed file with the summaries only."""
+    import pyarrow.parquet as pq
+
+    from grip_env.dataset.files import sha256_of
+    from grip_env.dataset.manifest import read_manifest, write_manifest
+    from grip_env.dataset.shards import GRIP_SCHEMA
+
+    packed = pack(directory)
+    pq.write_table(pq.read_table(packed).select(GRIP_SCHEMA.names), packed)
+    manifest = read_manifest(directory)
+    for record in manifest["shards"].values():
+        record["sha256"] = sha256_of(packed)
+    write_manifest(directory, manifest)
+
+
+@pytest.mark.slow
+def test_an_older_dataset_gets_its_trials_back_bit_for_bit(generated_dataset_dir: Path,
+                                                          tmp_path: Path) -> None:
+    """Re-simulated and attached, a dataset stripped of its trial columns is the one
+    ``generate`` wrote, every trial in place."""
+    from grip_env.dataset.trial_outcomes import attach_trials, record_trials
+
+    original = load(generated_dataset_dir)
+    old = shutil.copytree(generated_dataset_dir, tmp_path / "old")
+    _without_trials(old)
+    assert list(load(old).columns) == list(DATASET_COLUMNS)
+    with pytest.raises(ValueError, match="holds no per-trial outcomes"):
+        attach_trials(old, tmp_path / "nothing")
+    found = record_trials(old, tmp_path / "trials", limit=2, progress=False)
+    assert found.objects_done == 2
+    with pytest.raises(ValueError, match="finish the re-simulation first"):
+        attach_trials(old, tmp_path / "trials")
+    record_trials(old, tmp_path / "trials", progress=False)  # resumes: the rest
+    attach_trials(old, tmp_path / "trials")
+    pd.testing.assert_frame_equal(load(old), original, check_exact=True)
+    from grip_env.dataset import validate
+
+    assert validate(old) == []

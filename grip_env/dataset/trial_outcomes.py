@@ -17,8 +17,10 @@ checksum and cost in ``index.json``; an interrupted run loses the object in flig
 the same command continues.
 
     python -m grip_env.dataset.trial_outcomes SOURCE --out DIR [--until HH:MM] [--objects N]
+    python -m grip_env.dataset.trial_outcomes SOURCE --out DIR --attach   # once all are done
 
-The standard dataset's are in :data:`STANDARD_TRIALS` (``SOURCE`` = ``standard``).
+The standard dataset's are in :data:`STANDARD_TRIALS` (``SOURCE`` = ``standard``);
+:func:`attach_trials` (``--attach``) writes them into the dataset's own files when complete.
 """
 
 from __future__ import annotations
@@ -282,6 +284,45 @@ def with_trial_outcomes(table: pd.DataFrame, folder: str | Path = STANDARD_TRIAL
     return merged
 
 
+def attach_trials(dataset: str | Path, folder: str | Path) -> Path:
+    """Write the per-trial outcomes of ``folder`` into the dataset's own files, once every
+    object is done: the dataset is packed (:func:`~grip_env.dataset.packing.pack`), its packed
+    file rewritten with the trial columns (every summary checked again, bit for bit) and the
+    manifest's shard checksums updated; the grips and their order do not change. Returns the
+    packed file.
+
+    Raises:
+        ValueError: ``folder`` lacks some of the dataset's grips (finish the re-simulation), or
+            holds another dataset's trials.
+    """
+    from grip_env.dataset.manifest import write_manifest
+    from grip_env.dataset.packing import ROW_GROUP_ROWS, pack
+    from grip_env.dataset.shards import PACKED_FILE, ShardRecord, dataset_schema
+
+    directory, folder = Path(dataset), Path(folder)
+    if not (folder / INDEX_FILE).exists():
+        raise ValueError(f"{folder} holds no per-trial outcomes ({INDEX_FILE} missing)")
+    _open_index(folder, read_manifest(directory))  # the same dataset's trials, or raise
+    packed = pack(directory)
+    table = load(directory)
+    found = with_trial_outcomes(table, folder)
+    if len(found) != len(table):
+        missing = table.loc[~table["grip_id"].isin(found["grip_id"]), "object_id"].nunique()
+        raise ValueError(f"{folder} lacks the trials of {missing} of the dataset's objects: "
+                         "finish the re-simulation first")
+    schema = dataset_schema(recorded_trials(found.columns))
+    rows = pa.Table.from_pandas(found.loc[:, schema.names], schema=schema, preserve_index=False)
+    checksum = write_atomically(packed, lambda temp: pq.write_table(
+        rows, temp, compression="zstd", row_group_size=ROW_GROUP_ROWS))
+    manifest = read_manifest(directory)
+    for object_id, record in manifest["shards"].items():
+        manifest["shards"][object_id] = ShardRecord(
+            PACKED_FILE, int(record["rows"]), checksum, int(record.get("offset", 0))).as_dict()
+    manifest["trials_recorded_by"] = "re-simulation (grip_env.dataset.trial_outcomes)"
+    write_manifest(directory, manifest)
+    return packed
+
+
 def _until(text: str) -> datetime:
     """``HH:MM`` (UTC): the next such time from now."""
     try:
@@ -305,6 +346,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--until", type=_until, default=None,
                         help="start no object after this time, HH:MM UTC")
     parser.add_argument("--objects", type=int, default=None, help="stop after this many objects")
+    parser.add_argument("--attach", action="store_true",
+                        help="once every object is done: write the trials into SOURCE's files")
     args = parser.parse_args(argv)
     out = args.out if args.out is not None else (
         STANDARD_TRIALS if args.source == "standard" else None)
@@ -313,6 +356,9 @@ def main(argv: list[str] | None = None) -> None:
     from grip_env.shutdown import stop_on_signals
 
     try:  # a signal stops it between writes: the finished objects stay, the same command resumes
+        if args.attach:
+            print(f"wrote {attach_trials(resolve_data(args.source), out)}")
+            return
         with stop_on_signals("run the same command again to continue"):
             found = record_trials(resolve_data(args.source), out, args.until, args.objects)
     except ValueError as exc:
