@@ -152,7 +152,7 @@ def _check_object(check: _ObjectCheck) -> tuple[bool, int, list[str]]:
     if not planned_alike:
         notes.append(f"{task.object_id}: the candidates planned again differ from the recorded")
     grips = recorded.iloc[list(check.picked)]
-    outcome = run_trials(task.obj, as_planned(grips, kept, task.object_id), config,
+    outcome = run_trials(task.obj, _as_planned(grips, kept, task.object_id), config,
                          config.dataset.trials, config.dataset.seed)
     same = np.ones(len(grips), dtype=bool)
     for name in OUTCOME_COLUMNS:
@@ -162,7 +162,7 @@ def _check_object(check: _ObjectCheck) -> tuple[bool, int, list[str]]:
     return planned_alike, int(same.sum()), notes
 
 
-def as_planned(grips: pd.DataFrame, kept: pd.DataFrame, object_id: str) -> pd.DataFrame:
+def _as_planned(grips: pd.DataFrame, kept: pd.DataFrame, object_id: str) -> pd.DataFrame:
     """The recorded grips with the grip ids the generation simulated them under (the planner's
     ``<contour name>/<local id>``; a per-grip draw scheme keys on it) and the dataset's object id
     (the common draws' key)."""

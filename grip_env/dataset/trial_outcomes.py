@@ -49,7 +49,7 @@ from grip_env.dataset.files import sha256_of, write_atomically, write_text_atomi
 from grip_env.dataset.jobs import ObjectTask, kept_grips
 from grip_env.dataset.loading import load
 from grip_env.dataset.manifest import read_manifest
-from grip_env.dataset.resimulation import as_planned, recorded_objects, same_candidates
+from grip_env.dataset.resimulation import _as_planned, recorded_objects, same_candidates
 from grip_env.dataset.shards import recorded_trials
 from grip_env.dataset.split import held_out_objects
 from grip_env.shutdown import deferred_signals
@@ -111,7 +111,7 @@ def object_trials(task: ObjectTask, rows: pd.DataFrame) -> pd.DataFrame:
     if not same_candidates(kept, rows):
         raise TrialMismatchError(f"{task.object_id}: the grips planned again differ from the "
                                  "recorded ones")
-    grips = as_planned(rows.reset_index(drop=True), kept, task.object_id)
+    grips = _as_planned(rows.reset_index(drop=True), kept, task.object_id)
     outcome = run_trial_outcomes(task.obj, grips, config, trials, config.dataset.seed)
     robust = outcome["robustness"].to_numpy(float).reshape(len(rows), trials)
     success = outcome["success"].to_numpy(bool).reshape(len(rows), trials)

@@ -48,7 +48,7 @@ def cases() -> None:
 
 
 def cost(grips: int, seed: int) -> None:
-    from grip_env.dataset.resimulation import _sample, as_planned, kept_grips
+    from grip_env.dataset.resimulation import _as_planned, _sample, kept_grips
     from grip_env.datasets import standard_path
     from grip_env.sim import run_trial_outcomes
 
@@ -56,7 +56,7 @@ def cost(grips: int, seed: int) -> None:
     work = []
     for check in checks:
         chosen = check.recorded.iloc[list(check.picked)]
-        planned = as_planned(chosen, kept_grips(check.task), check.task.object_id)
+        planned = _as_planned(chosen, kept_grips(check.task), check.task.object_id)
         work.append((check.task.obj, planned, check.task.config))
     outcomes = {}
     print("| engine | trials | steps | CPU s | ms / trial | µs / step | held | success |")
