@@ -26,6 +26,28 @@ OUTCOMES = ("trials", "successes", "success_rate", "success")
 #: Graded outcome: the highest disturbance held per trial, mean and spread over trials, in g (an
 #: acceleration of the object in multiples of gravity's 9.81 m/s², not grams).
 ROBUSTNESS = ("robustness_mean", "robustness_std")
+#: Per-trial outcomes by trial index k = 0..T-1 (``trial_columns(T)``, after ROBUSTNESS): whether
+#: trial k held the reference level, and the highest level it held (g). Trial k of every grip of
+#: an object met the same draw (friction, mass, pose noise). Datasets made before these columns
+#: lack them.
+TRIAL_SUCCESS_PREFIX = "trial_success_"
+TRIAL_ROBUSTNESS_PREFIX = "trial_robustness_"
+
+
+def trial_success_columns(trials: int) -> tuple[str, ...]:
+    """``trial_success_0`` .. ``trial_success_{trials-1}``."""
+    return tuple(f"{TRIAL_SUCCESS_PREFIX}{k}" for k in range(trials))
+
+
+def trial_robustness_columns(trials: int) -> tuple[str, ...]:
+    """``trial_robustness_0`` .. ``trial_robustness_{trials-1}``."""
+    return tuple(f"{TRIAL_ROBUSTNESS_PREFIX}{k}" for k in range(trials))
+
+
+def trial_columns(trials: int) -> tuple[str, ...]:
+    """The per-trial columns of a dataset at ``trials`` trials a grip, in table order: every
+    trial's success, then every trial's robustness."""
+    return trial_success_columns(trials) + trial_robustness_columns(trials)
 
 DESCRIPTORS = CONTACTS + NORMALS + FORCES + REGIONS + CURVATURES + FOCI + HAND + OBJECT
 CANDIDATE_COLUMNS = IDENTITY + DESCRIPTORS + FEATURES + INDEXES

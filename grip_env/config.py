@@ -353,6 +353,13 @@ class SelectorConfig(_Section):
     gamma: float = Field(0.99, ge=0.0, le=1.0, description="PPO discount factor")
     ent_coef: float = Field(0.01, ge=0.0, le=1.0, description="PPO entropy coefficient")
 
+    @model_validator(mode="after")
+    def _attempts_within_candidates(self) -> SelectorConfig:
+        if self.max_attempts > self.max_candidates:
+            raise ValueError(f"max_attempts {self.max_attempts} exceeds max_candidates "
+                             f"{self.max_candidates}: an episode shows no more candidates")
+        return self
+
 
 class Config(_Section):
     """The whole configuration; every section has defaults."""

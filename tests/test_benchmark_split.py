@@ -108,6 +108,10 @@ def test_generated_dataset_gets_the_auto_split(generated_dataset_dir: Path, fold
     split = board(out)["split"]
     assert split["name"] == AUTO_SPLIT_NAME and split["standard"] is False
     assert split["test_objects"] == list(auto_split(objects, seed).test_objects)
+    retry = board(out)["retry"]  # a dataset generated now records every trial: the retry task
+    assert retry["attempts"] == 3 and retry["objects"] == len(split["test_objects"])
+    assert set(retry["methods"]) == set(board(out)["methods"]) >= {"best_qc", "oracle"}
+    assert "Retry: success within m attempts" in (out / "leaderboard.md").read_text()
 
 
 def _standard_like(without: str) -> pd.DataFrame:

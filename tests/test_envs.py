@@ -308,7 +308,7 @@ def accept_env(data: pd.DataFrame, **options: object) -> GripAcceptEnv:
 
 
 def test_accept_shows_candidates_best_first_and_ends_when_they_run_out(data):
-    env = accept_env(data, objects=["rectangle"], failure_reward=-0.5, max_attempts=10)
+    env = accept_env(data, objects=["rectangle"], failure_reward=-0.5, max_attempts=8)
     obs, info = env.reset(seed=0)
     q_c, rewards, terminated = [], [], False
     while not terminated:

@@ -132,6 +132,7 @@ def _outcomes(grips: pd.DataFrame, manifest: dict[str, Any]) -> str:
         "",
         f"- Success rate {_share(grips['success'])}; per-object success rates range "
         f"{_per_object_range(grips)}.",
+        _per_trial_line(grips),
         f"- Robustness: {_share(robustness == 0)} of grips drop the object in every trial, "
         f"{_share(robustness >= cap)} hold the ramp's ceiling in every trial.",
         "",
@@ -139,6 +140,20 @@ def _outcomes(grips: pd.DataFrame, manifest: dict[str, Any]) -> str:
         "| --- |" + " --- |" * len(QUANTILES),
         "| mean robustness (g) | " + " | ".join(f"{v:.1f}" for v in quantiles) + " |",
     ])
+
+
+def _per_trial_line(grips: pd.DataFrame) -> str:
+    """Whether the files hold every trial's outcome by trial index."""
+    from grip_env.dataset.shards import recorded_trials
+
+    if recorded_trials(grips.columns):
+        return ("- Every trial's outcome is recorded by trial index (`trial_success_k`, "
+                "`trial_robustness_k`): trial k of an object's grips met one draw, so retries "
+                "that share it can be replayed and scored.")
+    return ("- Every trial's outcome by trial index is **not** in these files (made before it "
+            "was kept): `python -m grip_env.dataset.trial_outcomes DIR --out TRIALS` re-simulates "
+            "it, checked against these summaries bit for bit (the standard dataset's: "
+            "`grip_env/data/standard_trials/`).")
 
 
 def _reliability(report: dict[str, Any] | None) -> str:

@@ -14,7 +14,12 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike
 
-from grip_env.columns import DATASET_COLUMNS, ROBUSTNESS
+from grip_env.columns import (
+    DATASET_COLUMNS,
+    ROBUSTNESS,
+    trial_robustness_columns,
+    trial_success_columns,
+)
 from grip_env.config import Config
 from grip_env.objects import PlanarObject
 
@@ -63,14 +68,20 @@ def simulate_object(task: ObjectTask) -> pd.DataFrame:
     trials on the true contour.
 
     The trials' draws are keyed by the run seed and the object's id (common to its grips), never
-    by the object's position in the run."""
-    from grip_env.sim import run_trials
+    by the object's position in the run. Every trial's outcome is kept by trial index beside
+    the summaries (:func:`~grip_env.columns.trial_columns`)."""
+    from grip_env.sim import run_trial_outcomes
+    from grip_env.sim.execution import trial_summary
 
     config = task.config
     kept = kept_grips(task)
-    outcome = run_trials(task.obj, kept.assign(object_id=task.object_id), config,
-                         config.dataset.trials, config.dataset.seed)
-    return with_outcomes(kept, outcome, task.object_id)
+    trials = config.dataset.trials
+    outcome = run_trial_outcomes(task.obj, kept.assign(object_id=task.object_id), config,
+                                 trials, config.dataset.seed)
+    robust = outcome["robustness"].to_numpy(float).reshape(len(kept), trials)
+    success = outcome["success"].to_numpy(bool).reshape(len(kept), trials)
+    return with_outcomes(kept, trial_summary(robust, success), task.object_id,
+                         (robust, success))
 
 
 def kept_grips(task: ObjectTask) -> pd.DataFrame:
@@ -167,7 +178,8 @@ def perceived_contour(task: ObjectTask, world: World | None = None) -> PlanarObj
 
 
 def with_outcomes(
-    grips: pd.DataFrame, outcome: pd.DataFrame | Mapping[str, ArrayLike], object_id: str
+    grips: pd.DataFrame, outcome: pd.DataFrame | Mapping[str, ArrayLike], object_id: str,
+    per_trial: tuple[ArrayLike, ArrayLike] | None = None,
 ) -> pd.DataFrame:
     """Dataset rows: candidates with the object's id, unique grip ids and the outcome columns.
 
@@ -176,6 +188,8 @@ def with_outcomes(
     ``success_rate = successes / trials`` and ``success = success_rate >= 0.5``.
     ``grip_id`` becomes ``"<object_id>/<grip id within the object>"``, unique across a dataset
     (a leading ``"<candidate object_id>/"`` in the candidate's grip id is replaced).
+    ``per_trial`` (robustness, success), each grips × trials by trial index, adds the columns
+    ``trial_success_k`` and ``trial_robustness_k``; ``outcome`` must be their summary.
     """
     rows = grips.reset_index(drop=True).copy()
     local_ids = [
@@ -191,4 +205,15 @@ def with_outcomes(
     rows["success"] = rows["success_rate"] >= SUCCESS_THRESHOLD
     for name in ROBUSTNESS:
         rows[name] = np.asarray(outcome[name], dtype=np.float64)
-    return rows.loc[:, list(DATASET_COLUMNS)]
+    rows = rows.loc[:, list(DATASET_COLUMNS)]
+    if per_trial is None:
+        return rows
+    robust, success = (np.asarray(a) for a in per_trial)
+    trials = robust.shape[1] if robust.ndim == 2 else 0
+    if robust.shape != (len(rows), trials) or success.shape != robust.shape:
+        raise ValueError(f"per-trial outcomes must be grips x trials, got {robust.shape} and "
+                         f"{success.shape} for {len(rows)} grips")
+    success_frame = pd.DataFrame(success.astype(bool), columns=list(trial_success_columns(trials)))
+    robust_frame = pd.DataFrame(robust.astype(np.float64),
+                                columns=list(trial_robustness_columns(trials)))
+    return pd.concat([rows, success_frame, robust_frame], axis=1)

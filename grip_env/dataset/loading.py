@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from grip_env.columns import DATASET_COLUMNS
+from grip_env.columns import DATASET_COLUMNS, trial_columns
 from grip_env.dataset.manifest import FORMAT, MANIFEST_FILE, Manifest, read_manifest, shard_records
-from grip_env.dataset.shards import GRIP_SCHEMA, ShardReader
+from grip_env.dataset.shards import GRIP_SCHEMA, ShardReader, recorded_trials
 from grip_env.label_model import label_model_of, label_model_warning
 
 
@@ -22,7 +22,9 @@ def load(path: str | Path, verify: bool = True, allow_partial: bool = False) -> 
         allow_partial: load an unfinished dataset instead of raising.
 
     Returns:
-        A DataFrame with :data:`~grip_env.columns.DATASET_COLUMNS` and a fresh RangeIndex;
+        A DataFrame with :data:`~grip_env.columns.DATASET_COLUMNS`, then every trial's outcome
+        by trial index (:func:`~grip_env.columns.trial_columns`) when every object's shard
+        records them (datasets made before they were recorded do not), and a fresh RangeIndex;
         ``attrs["params"]`` holds the GraspParams as a dict and ``attrs["manifest"]`` the manifest
         (both :class:`SharedAttribute`).
 
@@ -44,7 +46,7 @@ def load(path: str | Path, verify: bool = True, allow_partial: bool = False) -> 
     parts = [reader.record(records[object_id], verify) for object_id in order
              if object_id in records]
     grips = pd.concat(parts, ignore_index=True) if parts else _empty_grips()
-    grips = grips.loc[:, list(DATASET_COLUMNS)]
+    grips = grips.loc[:, list(DATASET_COLUMNS) + _shared_trial_columns(parts)]
     grips.attrs["params"] = SharedAttribute(manifest["params"])
     grips.attrs["manifest"] = SharedAttribute(manifest)
     return grips
@@ -91,6 +93,13 @@ def _manifest_json(directory: Path) -> Manifest | None:
     except (OSError, UnicodeDecodeError, ValueError):
         return None
     return manifest if isinstance(manifest, dict) and manifest.get("format") == FORMAT else None
+
+
+def _shared_trial_columns(parts: list[pd.DataFrame]) -> list[str]:
+    """The per-trial columns every part has (none when a part lacks them: a dataset resumed
+    across the change that added them keeps the columns every object has)."""
+    counts = {recorded_trials(part.columns) for part in parts}
+    return list(trial_columns(counts.pop())) if len(counts) == 1 else []
 
 
 def _empty_grips() -> pd.DataFrame:

@@ -21,7 +21,14 @@ import pyarrow.parquet as pq
 
 from grip_env.dataset.files import write_atomically
 from grip_env.dataset.manifest import read_manifest, shard_records, write_manifest
-from grip_env.dataset.shards import GRIP_SCHEMA, GRIPS_DIR, PACKED_FILE, ShardReader, ShardRecord
+from grip_env.dataset.shards import (
+    GRIPS_DIR,
+    PACKED_FILE,
+    ShardReader,
+    ShardRecord,
+    dataset_schema,
+    recorded_trials,
+)
 
 #: Rows per Parquet row group of the packed file (a few objects' grips).
 ROW_GROUP_ROWS = 4096
@@ -44,8 +51,10 @@ def pack(path: str | Path) -> Path:
     if not all(record.packed for record in records.values()):
         reader = ShardReader(directory)
         parts = [reader.record(records[object_id]) for object_id in order]
+        counts = {recorded_trials(part.columns) for part in parts}
+        schema = dataset_schema(counts.pop() if len(counts) == 1 else 0)  # what every shard has
         table = pa.concat_tables(
-            [pa.Table.from_pandas(part, schema=GRIP_SCHEMA, preserve_index=False)
+            [pa.Table.from_pandas(part.loc[:, schema.names], schema=schema, preserve_index=False)
              for part in parts])  # fmt: skip
         checksum = write_atomically(packed, lambda temp: pq.write_table(
             table, temp, compression="zstd", row_group_size=ROW_GROUP_ROWS))

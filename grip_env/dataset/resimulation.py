@@ -242,6 +242,19 @@ def _retest_sample(directory: Path, objects: int, seed: int) -> list[_ObjectChec
     return _checks(directory, manifest, table, chosen)
 
 
+def recorded_objects(directory: str | Path, table: pd.DataFrame,
+                     object_ids: Sequence[str]) -> list[tuple[ObjectTask, pd.DataFrame]]:
+    """Each of ``object_ids`` as (the task that planned it, its rows of ``table``, the dataset
+    ``directory`` loaded).
+
+    Raises:
+        ValueError: the dataset's objects table lacks one of them.
+    """
+    directory = Path(directory)
+    checks = _checks(directory, read_manifest(directory), table, list(object_ids))
+    return [(check.task, check.recorded) for check in checks]
+
+
 def _checks(directory: Path, manifest: dict, table: pd.DataFrame,
             chosen: list[str]) -> list[_ObjectCheck]:
     """Every recorded grip of the ``chosen`` objects, with the task that planned them.

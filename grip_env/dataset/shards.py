@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import json
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -16,7 +17,15 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from grip_env.columns import DATASET_COLUMNS, IDENTITY, OUTCOMES
+from grip_env.columns import (
+    DATASET_COLUMNS,
+    IDENTITY,
+    OUTCOMES,
+    TRIAL_ROBUSTNESS_PREFIX,
+    TRIAL_SUCCESS_PREFIX,
+    trial_columns,
+    trial_success_columns,
+)
 from grip_env.dataset.files import sha256_of, write_atomically
 
 GRIPS_DIR = "grips"
@@ -34,6 +43,44 @@ _TYPES: dict[str, pa.DataType] = {
 }
 #: Arrow schema of every grip shard: DATASET_COLUMNS in order; descriptors and features float64.
 GRIP_SCHEMA = pa.schema([(name, _TYPES.get(name, pa.float64())) for name in DATASET_COLUMNS])
+
+
+def dataset_schema(trials: int = 0) -> pa.Schema:
+    """:data:`GRIP_SCHEMA`, then the per-trial columns of ``trials`` trials a grip
+    (:func:`~grip_env.columns.trial_columns`: success bool, robustness float64); none for 0."""
+    extra = [(name, pa.bool_() if name.startswith(TRIAL_SUCCESS_PREFIX) else pa.float64())
+             for name in trial_columns(trials)]
+    return pa.schema([*GRIP_SCHEMA, *(pa.field(n, t) for n, t in extra)])
+
+
+def recorded_trials(columns: Iterable[str]) -> int:
+    """How many trials a grip the per-trial columns among ``columns`` record (0: none).
+
+    Raises:
+        ValueError: they are not exactly :func:`~grip_env.columns.trial_columns` of a count.
+    """
+    names = [str(c) for c in columns
+             if str(c).startswith((TRIAL_SUCCESS_PREFIX, TRIAL_ROBUSTNESS_PREFIX))]
+    trials = sum(name.startswith(TRIAL_SUCCESS_PREFIX) for name in names)
+    if sorted(names) != sorted(trial_columns(trials)):
+        raise ValueError(f"per-trial columns {names} are not trial_success_0..T-1 and "
+                         "trial_robustness_0..T-1 of one T")
+    return trials
+
+
+def recorded_trial_successes(columns: Iterable[str]) -> int:
+    """How many trials' successes (``trial_success_0..T-1``) ``columns`` hold (0: none): what
+    replaying or scoring trials by index needs (the robustness columns may be absent).
+
+    Raises:
+        ValueError: they are not ``trial_success_0..T-1`` of one T.
+    """
+    names = sorted(str(c) for c in columns if str(c).startswith(TRIAL_SUCCESS_PREFIX))
+    if names != sorted(trial_success_columns(len(names))):
+        raise ValueError(f"per-trial columns {names} are not trial_success_0..T-1 of one T")
+    return len(names)
+
+
 NON_FLOAT_COLUMNS = tuple(name for name in IDENTITY + OUTCOMES if name != "success_rate")
 #: The one file of a packed dataset, relative to the dataset.
 PACKED_FILE = f"{GRIPS_DIR}/grips.parquet"
@@ -61,7 +108,11 @@ def same_type(found: pa.DataType, expected: pa.DataType) -> bool:
 def schema_problems(name: str, schema: pa.Schema) -> list[str]:
     """One line per dataset column missing from ``schema`` or of another type."""
     problems = []
-    for field in GRIP_SCHEMA:
+    try:
+        expected = dataset_schema(recorded_trials(schema.names))
+    except ValueError as exc:
+        return [f"{name}: {exc}"]
+    for field in expected:
         if field.name not in schema.names:
             problems.append(f"{name}: column {field.name} missing")
         elif not same_type(schema.field(field.name).type, field.type):
@@ -99,17 +150,20 @@ def shard_path(directory: Path, index: int, object_id: str) -> Path:
 
 
 def grips_to_arrow(grips: pd.DataFrame, metadata: dict[str, Any]) -> pa.Table:
-    """The grip table in the shard schema; ``metadata`` is stored as JSON in the file.
+    """The grip table in the shard schema (with its per-trial columns, when it has them);
+    ``metadata`` is stored as JSON in the file.
 
     Raises:
-        ValueError: a dataset column is missing or cannot be cast to its type.
+        ValueError: a dataset column is missing or cannot be cast to its type, or the per-trial
+            columns are not those of one trial count.
     """
     missing = [name for name in DATASET_COLUMNS if name not in grips.columns]
     if missing:
         raise ValueError(f"grip table is missing dataset column(s): {', '.join(missing)}")
+    schema = dataset_schema(recorded_trials(grips.columns))
     try:
         table = pa.Table.from_pandas(
-            grips.loc[:, list(DATASET_COLUMNS)], schema=GRIP_SCHEMA, preserve_index=False
+            grips.loc[:, schema.names], schema=schema, preserve_index=False
         )
     except (pa.ArrowInvalid, pa.ArrowTypeError) as exc:
         raise ValueError(f"grip table does not fit the dataset schema: {exc}") from None
@@ -164,7 +218,7 @@ class ShardReader:
                 raise ValueError(f"shard {path} has {table.num_rows} rows, the manifest places "
                                  f"rows {record.offset}..{record.offset + record.rows} in it")
             table = table.slice(record.offset, record.rows)
-        return table.select(list(DATASET_COLUMNS)).to_pandas()
+        return table.select(dataset_schema(recorded_trials(table.schema.names)).names).to_pandas()
 
     def _table(self, path: Path, expected: ShardRecord | None) -> pa.Table:
         if path not in self._tables:

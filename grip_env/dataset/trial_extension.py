@@ -8,7 +8,10 @@ robustness is a ramp level (or 0), and the levels whose mean, spread and success
 recorded ones are unique for almost every grip. A grip whose levels are not unique has all its
 trials simulated. The sums of :func:`~grip_env.sim.execution.trial_summary` depend on the set of
 levels only, so the result has the bits a fresh ``generate`` at T trials gives; ``grip-env
-validate --resimulate`` checks that on any sample.
+validate --resimulate`` checks that on any sample. A source that records every trial's outcome
+(:func:`~grip_env.columns.trial_columns`) gives them in order, and the result records all T;
+recovered levels have no order, so from an older source the result records none (re-simulate
+them with :mod:`grip_env.dataset.trial_outcomes`).
 
     python -m grip_env.dataset.trial_extension SOURCE --config RECIPE --out DIR [--workers N]
 
@@ -27,6 +30,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
+from grip_env.columns import trial_robustness_columns
 from grip_env.config import Config, load_config
 from grip_env.dataset.catalog import ObjectsSpec
 from grip_env.dataset.generation import generate
@@ -40,6 +44,7 @@ from grip_env.dataset.manifest import (
     write_manifest,
 )
 from grip_env.dataset.resimulation import same_candidates
+from grip_env.dataset.shards import recorded_trials
 from grip_env.label_model import label_model_for
 from grip_env.sim import run_trial_outcomes
 from grip_env.sim.disturbance import ramp_levels, reached
@@ -104,14 +109,19 @@ def extended_object(task: ObjectTask, source: str, earlier: int) -> pd.DataFrame
     if not same_candidates(kept, rows):
         raise ValueError(f"{task.object_id}: the grips planned again differ from {source}'s")
     robust = np.empty((len(kept), config.dataset.trials))
-    robust[:, :earlier] = recorded_levels(rows, earlier, config)
+    by_index = recorded_trials(rows.columns) == earlier > 0
+    if by_index:  # the source kept every trial's outcome: take them, in order
+        robust[:, :earlier] = rows[list(trial_robustness_columns(earlier))].to_numpy(float)
+    else:
+        robust[:, :earlier] = recorded_levels(rows, earlier, config)
     planned = kept.assign(object_id=task.object_id)  # the common draws' key, as generate runs
     robust[:, earlier:] = _levels(task, planned, earlier, config.dataset.trials - earlier)
     unknown = np.isnan(robust[:, :earlier]).any(axis=1)
     if unknown.any():
         robust[unknown, :earlier] = _levels(task, planned[unknown], 0, earlier)
     success = reaches_reference(robust, config)
-    return with_outcomes(kept, trial_summary(robust, success), task.object_id)
+    per_trial = (robust, success) if by_index else None  # recovered levels have no order
+    return with_outcomes(kept, trial_summary(robust, success), task.object_id, per_trial)
 
 
 def _levels(task: ObjectTask, grips: pd.DataFrame, first: int, count: int) -> NDArray:

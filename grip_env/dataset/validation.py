@@ -9,7 +9,13 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from grip_env.columns import FEATURES, INDEXES, ROBUSTNESS
+from grip_env.columns import (
+    FEATURES,
+    INDEXES,
+    ROBUSTNESS,
+    trial_robustness_columns,
+    trial_success_columns,
+)
 from grip_env.dataset.files import sha256_of
 from grip_env.dataset.jobs import SUCCESS_THRESHOLD
 from grip_env.dataset.manifest import Manifest, read_manifest, shard_records
@@ -26,7 +32,8 @@ def validate(path: str | Path) -> list[str]:
     Checks the objects table and each shard against the manifest (presence, SHA-256, row count),
     the schema (columns and types), every feature and index recomputed from its row's descriptors,
     outcome consistency (1 <= trials, 0 <= successes <= trials, rates and labels, robustness
-    finite and >= 0) and that grip ids are unique. String columns may be ``string`` or the
+    finite and >= 0; every trial's outcome, when recorded, summarising to the row's exactly)
+    and that grip ids are unique. String columns may be ``string`` or the
     equivalent ``large_string``.
 
     Raises:
@@ -182,8 +189,26 @@ def _outcome_problems(name: str, grips: pd.DataFrame) -> list[str]:
     for column in ROBUSTNESS:
         values = grips[column].to_numpy(dtype=np.float64)
         checks[f"{column} not a finite value >= 0 g"] = ~(np.isfinite(values) & (values >= 0))
+    checks.update(_per_trial_checks(grips))
     ids = grips["grip_id"]
     return [
         f"{name}: {what} in {int(bad.sum())} row(s), e.g. grip {ids.iloc[int(np.argmax(bad))]}"
         for what, bad in checks.items() if bad.any()
     ]
+
+
+def _per_trial_checks(grips: pd.DataFrame) -> dict[str, np.ndarray]:
+    """When every trial's outcome is recorded: do they summarise, bit for bit, to the row's
+    ``trials``, ``successes``, ``robustness_mean`` and ``robustness_std``?"""
+    from grip_env.dataset.shards import recorded_trials
+    from grip_env.sim.execution import trial_summary
+
+    count = recorded_trials(grips.columns)
+    if not count:
+        return {}
+    success = grips[list(trial_success_columns(count))].to_numpy(bool)
+    robust = grips[list(trial_robustness_columns(count))].to_numpy(float)
+    summary = trial_summary(robust, success)
+    return {f"{name} is not the summary of trial_*_0..{count - 1}":
+            np.asarray(summary[name]) != grips[name].to_numpy()
+            for name in ("trials", "successes", *ROBUSTNESS)}

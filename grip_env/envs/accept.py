@@ -23,7 +23,9 @@ class GripAcceptEnv(GripEnvBase):
 
     Each episode is one object of the split; its best ``max_candidates`` candidates are shown one
     at a time, lowest ``Q_C`` first (``candidate_order="q_c"``) or in a new random order each
-    episode (``"shuffled"``), and each is skipped or executed.
+    episode (``"shuffled"``), and each is skipped or executed. Replayed with every trial's
+    outcome, every execution of an episode replays the same trial index k (``info["trial"]`` at
+    ``reset``), as :class:`~grip_env.envs.select.GripSelectEnv` does.
 
     ## Action Space
 
@@ -105,7 +107,7 @@ class GripAcceptEnv(GripEnvBase):
         info = self._grip_info(found, row)
         success, reward = False, 0.0
         if execute:
-            success = self.backend.execute(found, row, self.np_random)
+            success = self._execute(found, row)
             self._attempts += 1
             reward = self.success_reward if success else self.failure_reward
         self._position += 1

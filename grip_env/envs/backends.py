@@ -22,6 +22,10 @@ from grip_env.mesh_sets import named_set
 from grip_env.objects import SHAPE_NAMES, PlanarObject, make_shape
 
 ObjectsArg = str | Sequence[str | PlanarObject] | None
+#: How a replayed execution is drawn: ``"trial"`` replays the recorded trial k of the episode
+#: (every attempt of an episode the same k), ``"rate"`` draws Bernoulli(success rate) afresh
+#: each execution; ``"auto"``: ``"trial"`` when the data records every trial's outcome.
+REPLAY_MODES = ("auto", "trial", "rate")
 _REPLAY_COLUMNS = ("object_id", "grip_id", "Q_C")
 _AREA_TOLERANCE = 0.01  # relative; a named shape's contour is trusted for drawing within this
 
@@ -45,12 +49,23 @@ class OutcomeBackend(Protocol):
         """Release resources (idempotent)."""
 
 
+def recorded_trial_count(backend: OutcomeBackend) -> int:
+    """The trials a backend replays by index (``ReplayBackend`` with ``replay="trial"``), else 0:
+    its episodes then draw one trial index k and every attempt replays trial k."""
+    return int(getattr(backend, "trials", 0) or 0)
+
+
 class ReplayBackend:
     """Outcomes replayed from recorded trials.
 
-    Executing a grip draws ``success ~ Bernoulli(successes / trials)`` from the grip's recorded
-    trials (or its ``success_rate`` when the counts are absent) with the environment's generator:
-    one step costs one uniform draw.
+    With ``replay="trial"`` (the default when the data records every trial's outcome,
+    ``trial_success_0..T-1``), an episode draws one trial index k (:attr:`trials` > 0 tells the
+    environment to) and executing a grip replays its recorded trial k: every grip's trial k met
+    the same friction, mass and pose noise, so a failed first pick says something about the
+    draw, and a retry in the same episode meets the same draw. With ``replay="rate"`` (the only
+    choice for data without per-trial outcomes) executing a grip draws
+    ``success ~ Bernoulli(successes / trials)`` (or its ``success_rate`` when the counts are
+    absent) with the environment's generator, independently at every execution.
 
     Args:
         data: a dataset directory or file (read with ``grip_env.dataset.load``), ``"standard"``
@@ -59,12 +74,17 @@ class ReplayBackend:
             the features, and ``trials``/``successes`` or ``success_rate``).
         objects: restrict to these object ids (names, or objects whose ``name`` is the id);
             objects also give the contours used for drawing.
+        replay: ``"auto"``, ``"trial"`` or ``"rate"`` (:data:`REPLAY_MODES`); ``"trial"`` on
+            data without per-trial outcomes raises ``ValueError``.
 
     A dataset directory labelled by another label model than this code's
     (:data:`grip_env.sim.LABEL_MODEL`) gives one ``UserWarning``.
     """
 
-    def __init__(self, data: str | Path | pd.DataFrame, objects: ObjectsArg = None) -> None:
+    def __init__(self, data: str | Path | pd.DataFrame, objects: ObjectsArg = None,
+                 replay: str = "auto") -> None:
+        if replay not in REPLAY_MODES:
+            raise ValueError(f"replay must be one of {REPLAY_MODES}, got {replay!r}")
         if not isinstance(data, pd.DataFrame):
             data = resolve_data(data)
         frame = data if isinstance(data, pd.DataFrame) else _load_dataset(data)
@@ -90,6 +110,18 @@ class ReplayBackend:
         self._contours = {**stored, **given_contours}
         params = frame.attrs.get("params") or {}
         self.feature_cap: float | None = params.get("feature_cap")
+        self.trials = self._replayed_trials(frame, replay)
+        self._trial_success: dict[tuple[str, int], NDArray[np.bool_]] = {}
+
+    @staticmethod
+    def _replayed_trials(frame: pd.DataFrame, replay: str) -> int:
+        from grip_env.dataset.shards import recorded_trial_successes
+
+        recorded = recorded_trial_successes(frame.columns)
+        if replay == "trial" and not recorded:
+            raise ValueError("replay='trial' needs every trial's outcome (trial_success_0..T-1),"
+                             " which this data does not record; use replay='rate'")
+        return recorded if replay != "rate" else 0
 
     def candidates(self, object_id: str) -> pd.DataFrame:
         return self._frames[object_id]
@@ -99,8 +131,25 @@ class ReplayBackend:
             self._contours[object_id] = _named_shape_contour(object_id, self._frames[object_id])
         return self._contours[object_id]
 
-    def execute(self, candidates: CandidateSet, slot: int, rng: np.random.Generator) -> bool:
-        return bool(rng.random() < candidates.success_rate[slot])
+    def execute(self, candidates: CandidateSet, slot: int, rng: np.random.Generator,
+                trial: int | None = None) -> bool:
+        """Whether candidate ``slot`` holds: its recorded trial ``trial`` when given (replay
+        "trial"), else a Bernoulli draw of its success rate with ``rng``."""
+        if trial is None:
+            return bool(rng.random() < candidates.success_rate[slot])
+        return bool(self._trial_outcomes(candidates)[slot, trial])
+
+    def _trial_outcomes(self, candidates: CandidateSet) -> NDArray[np.bool_]:
+        """(count, trials) recorded trial successes of the candidates, by slot (kept)."""
+        key = (candidates.object_id, candidates.count)
+        found = self._trial_success.get(key)
+        if found is None:
+            from grip_env.columns import trial_success_columns
+
+            columns = list(trial_success_columns(self.trials))
+            found = candidates.rows[columns].to_numpy(bool)
+            self._trial_success[key] = found
+        return found
 
     def close(self) -> None:
         return None

@@ -2,6 +2,10 @@
 
 An episode is one object, drawn uniformly with the environment's ``np_random`` from the objects
 of its split that have at least one candidate, or pinned with ``reset(options={"object_id": id})``.
+When the backend replays recorded trials by index (``ReplayBackend``, ``replay="trial"``), the
+episode also draws one trial index k with ``np_random`` (``info["trial"]``), and every attempt of
+the episode replays trial k: the same friction, mass and pose noise for every grip tried, as a
+robot retrying on one object meets them.
 A ``step`` after the episode ended raises (call ``reset``). Subclasses define the spaces
 (:meth:`GripEnvBase._make_spaces`), ``reset`` and ``step``; the constructor, with its explicit
 keyword signature, is this class's.
@@ -19,7 +23,13 @@ from numpy.typing import NDArray
 
 from grip_env.config import Config, load_config
 from grip_env.dataset.split import objects_in_split
-from grip_env.envs.backends import LiveBackend, ObjectsArg, OutcomeBackend, ReplayBackend
+from grip_env.envs.backends import (
+    LiveBackend,
+    ObjectsArg,
+    OutcomeBackend,
+    ReplayBackend,
+    recorded_trial_count,
+)
 from grip_env.envs.observation import (
     CandidateSet,
     FeatureScaler,
@@ -60,6 +70,7 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         render_mode: str | None = None,
         render_style: str | None = None,
         engine: str | None = None,
+        replay: str = "auto",
     ) -> None:
         self.config = config if config is not None else load_config()
         if engine is not None:  # live trials in this engine (sim.engine), checked now
@@ -87,8 +98,14 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
                 f"render_mode must be one of {self.metadata['render_modes']}, got {render_mode!r}"
             )
         self.render_mode = render_mode
+        if self.max_attempts > self.max_candidates:
+            raise ValueError(f"max_attempts {self.max_attempts} exceeds the {self.max_candidates}"
+                             " candidates an episode shows (max_candidates): no episode can "
+                             "use them")
         self.feature_names = feature_subset(features)
-        self.backend = self._make_backend(data, objects, backend)
+        self.backend = self._make_backend(data, objects, backend, replay)
+        self.trials = recorded_trial_count(self.backend)
+        self._trial: int | None = None
         self.render_style = self._checked_style(render_style)
         self._camera = SceneCamera(self.config) if self.render_style == "scene" else None
         self.object_ids = objects_in_split(
@@ -116,13 +133,14 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
 
     def _make_backend(
         self, data: str | Path | pd.DataFrame | None, objects: ObjectsArg,
-        backend: OutcomeBackend | None,
+        backend: OutcomeBackend | None, replay: str,
     ) -> OutcomeBackend:
-        """``backend`` as given, else replay of ``data``, else live trials on ``objects`` (in
-        ``sim.engine``)."""
+        """``backend`` as given, else replay of ``data`` (``replay``: how executions are drawn),
+        else live trials on ``objects`` (in ``sim.engine``)."""
         if backend is None:
-            return LiveBackend(objects, self.config) if data is None else ReplayBackend(data,
-                                                                                        objects)
+            if data is None:
+                return LiveBackend(objects, self.config)
+            return ReplayBackend(data, objects, replay)
         if data is not None or objects is not None:
             raise ValueError("pass either backend= or data=/objects= (data= is a shortcut for "
                              "backend=ReplayBackend(data, objects)), not both")  # fmt: skip
@@ -135,17 +153,46 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, NDArray[Any]], dict[str, Any]]:
-        """Start an episode on a new object (``options={"object_id": ...}`` picks it);
-        ``info`` has ``object_id``, ``candidates`` and ``attempts``."""
+        """Start an episode on a new object (``options={"object_id": ...}`` picks it; with
+        trials replayed by index, ``options={"trial": k}`` pins the episode's trial k, as an
+        evaluation that runs every k does); ``info`` has ``object_id``, ``candidates``,
+        ``attempts`` and, when the backend replays trials by index, ``trial`` (the episode's k)."""
         super().reset(seed=seed)
+        options = dict(options or {})
+        pinned = self._pinned_trial(options.pop("trial", None))
         found = self._found = self._episode_candidates(options)
         self._slots = self._shuffled_slots(found.count)
+        if pinned is not None:
+            self._trial = pinned
+        else:
+            self._trial = int(self.np_random.integers(self.trials)) if self.trials else None
         self._attempts, self._outcome = 0, None
         self._start_episode(found)
         if self.render_mode == "human":
             self.render()
         info = {"object_id": found.object_id, "candidates": found.count, "attempts": 0}
+        if self._trial is not None:
+            info["trial"] = self._trial
         return self._observation(), info
+
+    def _pinned_trial(self, trial: Any) -> int | None:
+        """``reset``'s ``trial`` option, checked: an index of the replayed trials (or None)."""
+        if trial is None:
+            return None
+        if not self.trials:
+            raise ValueError("reset option 'trial' needs trials replayed by index (data with "
+                             "every trial's outcome, replay='trial' or 'auto')")
+        if isinstance(trial, bool) or not isinstance(trial, int | np.integer) or not (
+                0 <= trial < self.trials):
+            raise ValueError(f"reset option 'trial' must be an integer in [0, {self.trials}), "
+                             f"got {trial!r}")
+        return int(trial)
+
+    def _execute(self, found: CandidateSet, row: int) -> bool:
+        """Execute candidate ``row``: the episode's trial k when replayed by index."""
+        if self._trial is None:
+            return self.backend.execute(found, row, self.np_random)
+        return self.backend.execute(found, row, self.np_random, trial=self._trial)  # type: ignore[call-arg]
 
     def _start_episode(self, found: CandidateSet) -> None:
         """Set the environment's own episode state for ``found`` (subclasses)."""
@@ -160,8 +207,8 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         options = dict(options or {})
         object_id = options.pop("object_id", None)
         if options:
-            raise ValueError(f"unknown reset options {sorted(options)}; the one option is "
-                             "'object_id'")  # fmt: skip
+            raise ValueError(f"unknown reset options {sorted(options)}; the options are "
+                             "'object_id' and 'trial'")  # fmt: skip
         self._ended = False
         if object_id is None:
             return self._sample_candidates()

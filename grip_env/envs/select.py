@@ -22,6 +22,11 @@ class GripSelectEnv(GripEnvBase):
     Each episode is one object of the split. The agent sees every candidate grip's features at
     once and picks one; the grip is executed (its recorded trials replayed, or run in PyBullet).
     After a failure it may pick again, up to ``max_attempts``; failed candidates are masked.
+    Replaying data that records every trial's outcome, an episode draws one trial index k
+    (``info["trial"]``) and every attempt replays trial k of the grip picked: a retry meets the
+    same friction, mass and pose noise as the failed pick, as on a real robot (the retry
+    setting). Without per-trial outcomes each execution is a fresh Bernoulli draw of the grip's
+    success rate.
 
     ## Action Space
 
@@ -44,7 +49,8 @@ class GripSelectEnv(GripEnvBase):
 
     An object drawn uniformly from the split's objects that have a candidate, with the
     environment's ``np_random`` (``reset(seed=...)`` fixes every draw), or the one named by
-    ``reset(options={"object_id": ...})``.
+    ``reset(options={"object_id": ...})``; with trials replayed by index, the episode's trial
+    k is drawn the same way, or pinned by ``reset(options={"trial": k})``.
 
     ## Episode End
 
@@ -52,7 +58,8 @@ class GripSelectEnv(GripEnvBase):
     valid candidate remains; never truncated. A ``step`` after the end raises ``RuntimeError``.
     ``info`` holds ``object_id``, ``grip_id``, ``Q_C``, ``success_rate`` (recorded rate; None
     live), ``attempts``, ``success``, ``is_success`` (the same flag, under the name SB3's
-    ``Monitor`` and ``EvalCallback`` read) and ``invalid_action``.
+    ``Monitor`` and ``EvalCallback`` read) and ``invalid_action``; ``reset``'s ``info`` also
+    holds ``trial`` when trials are replayed by index.
 
     ## Arguments
 
@@ -65,7 +72,10 @@ class GripSelectEnv(GripEnvBase):
     - ``engine``: the physics engine of live trials, ``"pybullet"`` or ``"mujoco"`` (default: the
       config's ``sim.engine``); an unknown or uninstalled engine raises ``ValueError``.
     - ``max_candidates``, ``max_attempts``: K and executions per episode (default
-      ``config.selector``).
+      ``config.selector``); ``max_attempts`` above K raises ``ValueError``.
+    - ``replay``: how a replayed execution is drawn: ``"trial"`` (the episode's trial k),
+      ``"rate"`` (Bernoulli of the success rate, each execution independent) or ``"auto"``
+      (``"trial"`` when the data records every trial's outcome).
     - ``success_reward``, ``failure_reward``, ``invalid_action_reward``: reward values.
     - ``features``: feature subset (names from S1..C6, Q_G, Q_C); default the twelve S1..C6.
     - ``split``: ``"train"``, ``"test"`` or ``"all"`` objects, from
@@ -141,7 +151,7 @@ class GripSelectEnv(GripEnvBase):
             info.update(attempts=self._attempts, success=False, is_success=False,
                         invalid_action=True)
             return self._observation(), self.invalid_action_reward, self._end_if(True), False, info
-        success = self.backend.execute(found, row, self.np_random)
+        success = self._execute(found, row)
         self._attempts += 1
         self._mask[slot] = 0
         self._remaining -= 1

@@ -8,7 +8,8 @@ objects), ``methods`` (baselines and loaders of SB3 zips, d3rlpy policies, saved
 ``module:function`` entry points, observation policies among them, as score tables),
 ``outputs`` (what a method returns, as scores), ``provenance`` (what a method was trained on: a
 run that saw a held-out object is refused; its training budget),
-``selection`` (exact per-object metrics), ``aggregate`` (rliable's IQM, stratified bootstrap,
+``selection`` (exact per-object metrics), ``retry`` (success within 1-3 attempts that share
+the object's draw, on data with every trial's outcome), ``aggregate`` (rliable's IQM, stratified bootstrap,
 probability of improvement, performance profiles), ``leaderboard`` (tables, verdicts, files),
 ``plots``.
 """
@@ -214,9 +215,13 @@ def _bare(table: pd.DataFrame) -> pd.DataFrame:
 def _board(candidates: pd.DataFrame, scores: pd.DataFrame, split: dict[str, Any], reps: int,
            seed: int) -> dict[str, Any]:  # fmt: skip
     from classifiers.experiments.benchmark.leaderboard import build_leaderboard
+    from classifiers.experiments.benchmark.retry import retry_leaderboard, retry_metrics
     from classifiers.experiments.benchmark.selection import selection_metrics
+    from grip_env.dataset.shards import recorded_trial_successes
 
     metrics = selection_metrics(candidates, scores)
     board = build_leaderboard(metrics, split, reps=reps, seed=seed)
     board["per_object"] = metrics.round(6).to_dict(orient="records")
+    if recorded_trial_successes(candidates.columns):  # the retry task, from the shared draws
+        board["retry"] = retry_leaderboard(retry_metrics(candidates, scores), reps, seed)
     return board

@@ -37,13 +37,22 @@ import numpy as np
 import pandas as pd
 
 from classifiers.experiments.benchmark.outputs import choice_scores
-from grip_env.columns import OUTCOMES, ROBUSTNESS
+from grip_env.columns import OUTCOMES, ROBUSTNESS, TRIAL_ROBUSTNESS_PREFIX, TRIAL_SUCCESS_PREFIX
 from grip_env.envs.observation import CandidateSet
 
 SCORE_COLUMNS = ("method", "seed", "object_id", "candidate", "score")
 BASELINES = ("best_qc", "best_qg", "epsilon", "random", "oracle")
 HIDDEN_COLUMNS = (*OUTCOMES, *ROBUSTNESS)
 SCORE_FILES = ("classifiers/scores.parquet", "images/scores.parquet", "selector/scores.parquet")
+#: Per-trial outcome columns (``trial_success_k``, ``trial_robustness_k``) are hidden as well.
+HIDDEN_PREFIXES = (TRIAL_SUCCESS_PREFIX, TRIAL_ROBUSTNESS_PREFIX)
+
+
+def hidden_columns(columns: Sequence[str]) -> list[str]:
+    """The outcome columns among ``columns``: what a method must not see."""
+    return [c for c in columns if c in HIDDEN_COLUMNS or str(c).startswith(HIDDEN_PREFIXES)]
+
+
 #: Learned-model names that are the baselines again (rank_qc is best_qc with calibrated units,
 #: random a sampled stand-in for the exact random pick): left out of a study's leaderboard.
 DUPLICATES = ("_rank_qc", "_rank_qg", "_random")
@@ -77,7 +86,7 @@ def baseline_scores(candidates: pd.DataFrame, grasp: Any = None) -> pd.DataFrame
 
 def public_rows(found: CandidateSet) -> pd.DataFrame:
     """The candidate table a method sees: slot order, outcome columns removed."""
-    rows = found.rows.drop(columns=[c for c in HIDDEN_COLUMNS if c in found.rows.columns])
+    rows = found.rows.drop(columns=hidden_columns(list(found.rows.columns)))
     return rows.reset_index(drop=True)
 
 
@@ -430,7 +439,7 @@ def fitted_scores(table: pd.DataFrame, candidates: pd.DataFrame, config: Any,
 
     train = table[~table["object_id"].astype(str).isin(set(candidates["object_id"]))]
     learning, frames = config.learning, []
-    shown = candidates.drop(columns=[c for c in HIDDEN_COLUMNS if c in candidates.columns])
+    shown = candidates.drop(columns=hidden_columns(list(candidates.columns)))
     for seed in seeds:
         for name in learning.models:
             model = make_model(name, seed, FEATURES).fit(train, train[LABEL_COLUMN].astype(bool))

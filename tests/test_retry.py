@@ -1,0 +1,228 @@
+"""The retry setting: an episode's attempts replay one trial index k, and its scoring from the
+shared draws against the independence formula."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+from cli_runs import assert_refused, cli
+
+from classifiers.evaluation.synthetic import synthetic_grips
+from classifiers.experiments.benchmark.retry import retry_leaderboard, retry_metrics
+from classifiers.report.leaderboard import retry_table
+from grip_env.columns import trial_robustness_columns, trial_success_columns
+from grip_env.envs.accept import GripAcceptEnv
+from grip_env.envs.backends import ReplayBackend
+from grip_env.envs.select import GripSelectEnv
+
+TRIALS = 5
+
+
+def with_trials(table: pd.DataFrame, seed: int = 0) -> pd.DataFrame:
+    """``table`` with per-trial successes that sum to its ``successes`` (a seeded placement)."""
+    rng = np.random.default_rng(seed)
+    trials = int(table["trials"].iloc[0])
+    held = np.zeros((len(table), trials), dtype=bool)
+    for row, count in enumerate(table["successes"].to_numpy(int)):
+        held[row, rng.permutation(trials)[:count]] = True
+    extra = pd.DataFrame(held, columns=list(trial_success_columns(trials)), index=table.index)
+    levels = pd.DataFrame(np.where(held, 64.0, 8.0), columns=list(trial_robustness_columns(trials)),
+                          index=table.index)
+    return pd.concat([table, extra, levels], axis=1)
+
+
+@pytest.fixture(scope="module")
+def table() -> pd.DataFrame:
+    return with_trials(synthetic_grips(n_objects=8, grips=(4, 9), trials=TRIALS, seed=3))
+
+
+def _env(table: pd.DataFrame, cls: type = GripSelectEnv, **options: object) -> GripSelectEnv:
+    defaults = {"max_candidates": 12, "max_attempts": 3}
+    return cls(data=table, **(defaults | options))
+
+
+def _recorded(table: pd.DataFrame, grip_id: object, trial: int) -> bool:
+    row = table.loc[table["grip_id"] == grip_id].iloc[0]
+    return bool(row[f"trial_success_{trial}"])
+
+
+# ----------------------------------------------------------------------------- environment
+def test_attempts_within_an_episode_replay_the_same_trial(table: pd.DataFrame) -> None:
+    env = _env(table)
+    assert env.trials == TRIALS
+    seen = 0
+    for episode in range(40):
+        _, info = env.reset(seed=episode)
+        k = info["trial"]
+        terminated, slot = False, 0
+        while not terminated:
+            _, reward, terminated, _, step = env.step(slot)
+            assert step["success"] == _recorded(table, step["grip_id"], k)  # trial k, every try
+            assert reward == float(step["success"])
+            slot, seen = slot + 1, seen + 1
+    assert seen > 40  # some episodes retried
+
+
+def test_accept_env_replays_the_episode_trial(table: pd.DataFrame) -> None:
+    env = _env(table, GripAcceptEnv)
+    for episode in range(20):
+        _, info = env.reset(seed=100 + episode)
+        terminated = False
+        while not terminated:
+            _, _, terminated, _, step = env.step(1)
+            assert step["success"] == _recorded(table, step["grip_id"], info["trial"])
+
+
+def test_fresh_episodes_draw_k_from_the_seed(table: pd.DataFrame) -> None:
+    def trials(seed: int) -> list[int]:
+        env = _env(table)
+        first = env.reset(seed=seed)[1]["trial"]
+        return [first] + [env.reset()[1]["trial"] for _ in range(59)]
+
+    drawn = trials(7)
+    assert drawn == trials(7)  # reproducible from the seed
+    assert drawn != trials(8)
+    assert set(drawn) == set(range(TRIALS))  # every index drawn, not one k for every episode
+    counts = np.bincount(drawn, minlength=TRIALS)
+    assert counts.min() >= 4  # about uniform (12 expected each)
+
+
+def test_rate_replay_and_data_without_trials(table: pd.DataFrame) -> None:
+    env = _env(table, replay="rate")
+    assert env.trials == 0 and "trial" not in env.reset(seed=0)[1]
+    bare = synthetic_grips(n_objects=4, trials=TRIALS, seed=1)
+    assert _env(bare).trials == 0  # auto: the old independent draws
+    with pytest.raises(ValueError, match="replay='trial' needs every trial's outcome"):
+        ReplayBackend(bare, replay="trial")
+    with pytest.raises(ValueError, match="replay must be one of"):
+        ReplayBackend(bare, replay="trials")
+
+
+def test_max_attempts_beyond_the_candidates_is_refused(table: pd.DataFrame) -> None:
+    with pytest.raises(ValueError, match="max_attempts 13 exceeds the 12 candidates"):
+        _env(table, max_attempts=13)
+    _env(table, max_attempts=12).close()
+
+
+def test_cli_refuses_max_attempts_beyond_the_candidates(tmp_path: Path) -> None:
+    config = tmp_path / "c.yaml"
+    config.write_text("selector:\n  max_candidates: 8\n  max_attempts: 9\n")
+    out = tmp_path / "out"
+    code, output = cli("select", "--out", out, "--config", config)
+    assert_refused(code, output, "max_attempts 9 exceeds max_candidates 8")
+    assert not out.exists()
+
+
+# ----------------------------------------------------------------------------- scoring
+def _one_object(held: list[list[int]], scores: list[float]) -> tuple[pd.DataFrame, pd.DataFrame]:
+    held_array = np.array(held, dtype=bool)
+    candidates = pd.DataFrame({
+        "object_id": "a", "candidate": range(len(held)),
+        "success_rate": held_array.mean(axis=1)})
+    candidates[list(trial_success_columns(held_array.shape[1]))] = held_array
+    frame = pd.DataFrame({"method": "m", "seed": 0, "object_id": "a",
+                          "candidate": range(len(held)), "score": scores})
+    return candidates, frame
+
+
+def test_shared_draws_hand_computed() -> None:
+    # two grips that fail on the same draws (k = 2, 3), a third that holds exactly there
+    held = [[1, 1, 0, 0], [1, 1, 0, 0], [0, 0, 1, 1]]
+    candidates, scores = _one_object(held, [3.0, 2.0, 1.0])
+    found = retry_metrics(candidates, scores).iloc[0]
+    assert found["shared_at_1"] == 0.5
+    assert found["shared_at_2"] == 0.5  # the second grip fails when the first does
+    assert found["shared_at_3"] == 1.0
+    assert found["success_at_2"] == pytest.approx(0.75)  # 1 - 0.5 * 0.5: independence
+    assert found["overstatement_at_2"] == pytest.approx(0.25)
+    assert found["overstatement_at_1"] == 0.0
+    assert found["ceiling"] == 1.0  # some grip holds at every k
+
+
+def test_ties_are_averaged_exactly() -> None:
+    held = [[1, 1, 0, 0], [1, 1, 0, 0], [0, 0, 1, 1]]
+    candidates, scores = _one_object(held, [0.0, 0.0, 0.0])  # all tied: a uniform order
+    found = retry_metrics(candidates, scores).iloc[0]
+    orders = [(0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0)]
+    array = np.array(held, dtype=bool)
+    for m in (1, 2, 3):
+        expected = np.mean([array[list(order[:m])].any(axis=0).mean() for order in orders])
+        assert found[f"shared_at_{m}"] == pytest.approx(expected)
+
+
+def test_shared_never_exceeds_independence_when_grips_fail_together(table: pd.DataFrame) -> None:
+    from classifiers.experiments.benchmark.methods import baseline_scores
+
+    candidates = table.assign(candidate=table.groupby("object_id").cumcount(),
+                              object_id=table["object_id"].astype(str))
+    metrics = retry_metrics(candidates, baseline_scores(candidates))
+    first = metrics["shared_at_1"].to_numpy()
+    assert np.allclose(first, metrics["success_at_1"].to_numpy())  # one attempt: no difference
+    assert (np.diff(metrics[["shared_at_1", "shared_at_2", "shared_at_3"]].to_numpy(), axis=1)
+            >= -1e-12).all()  # more attempts never hurt
+    board = retry_leaderboard(metrics, reps=200)
+    assert board["objects"] == 8 and set(board["methods"]) >= {"best_qc", "oracle", "random"}
+    assert board["methods"]["best_qc"]["shared_at_2_minus_best_qc"]["estimate"] == 0.0
+    assert "within 2 minus best_qc" in retry_table(board)
+
+
+def test_scoring_needs_the_per_trial_columns() -> None:
+    bare = synthetic_grips(n_objects=2, trials=3, seed=0)
+    candidates = bare.assign(candidate=bare.groupby("object_id").cumcount())
+    scores = candidates[["object_id", "candidate"]].assign(method="m", seed=0, score=0.0)
+    with pytest.raises(ValueError, match="needs every trial's outcome"):
+        retry_metrics(candidates, scores)
+
+
+@pytest.mark.slow
+def test_the_standard_retry_board_scores_the_held_out_objects_done() -> None:
+    from classifiers.experiments.benchmark.retry import standard_retry_board
+    from classifiers.experiments.benchmark.split import STANDARD_TEST_OBJECTS_V4
+    from grip_env.dataset.trial_outcomes import STANDARD_TRIALS, read_trial_shards
+
+    done = set(read_trial_shards(STANDARD_TRIALS)["object_id"]) & set(STANDARD_TEST_OBJECTS_V4)
+    board = standard_retry_board(trials=STANDARD_TRIALS, reps=100)
+    assert board["split"]["scored_objects"] == board["objects"] == len(done) > 0
+    for row in board["methods"].values():
+        assert row["overstatement_at_1"]["estimate"] == pytest.approx(0.0, abs=1e-12)
+        shared = [row[f"shared_at_{m}"]["estimate"] for m in (1, 2, 3)]
+        assert shared == sorted(shared)  # another attempt never lowers the chance
+
+
+def test_an_adaptive_policy_is_scored_on_every_trial(table: pd.DataFrame) -> None:
+    """The policy that always takes the first valid slot is the best-Q_C static order: its
+    episodes, pinned to each trial k, give retry_metrics' exact shared-draw figures."""
+    from classifiers.experiments.benchmark.methods import baseline_scores
+    from classifiers.experiments.benchmark.retry import policy_retry_metrics
+    from grip_env.config import Config
+
+    config = Config().override(selector={"max_candidates": 12})
+    ids = sorted(table["object_id"].astype(str).unique())
+    data = table.assign(object_id=table["object_id"].astype(str))
+    first_valid = policy_retry_metrics(data, ids, lambda obs, mask: int(np.argmax(mask)), config)
+    candidates = data.sort_values(["object_id", "Q_C"], kind="mergesort").assign(
+        candidate=lambda f: f.groupby("object_id").cumcount())
+    static = retry_metrics(candidates, baseline_scores(candidates).query("method == 'best_qc'"))
+    for m in (1, 2, 3):
+        assert np.allclose(first_valid[f"shared_at_{m}"], static[f"shared_at_{m}"])
+
+
+def test_the_trial_option_pins_k(table: pd.DataFrame) -> None:
+    env = _env(table)
+    assert env.reset(seed=0, options={"trial": 3})[1]["trial"] == 3
+    with pytest.raises(ValueError, match=r"'trial' must be an integer in \[0, 5\)"):
+        env.reset(options={"trial": 5})
+    with pytest.raises(ValueError, match="needs trials replayed by index"):
+        _env(table, replay="rate").reset(options={"trial": 0})
+
+
+@pytest.mark.parametrize("cls", [GripSelectEnv, GripAcceptEnv])
+def test_gymnasiums_checker_passes_with_trials_replayed(table: pd.DataFrame, cls: type) -> None:
+    from gymnasium.utils.env_checker import check_env
+
+    env = _env(table, cls)
+    assert env.trials == TRIALS
+    check_env(env, skip_render_check=True)  # seeded resets (the trial draw included) repeat
