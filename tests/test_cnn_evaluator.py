@@ -115,7 +115,7 @@ def test_a_saved_model_names_no_other_image_code(tmp_path, monkeypatch):
     meta = tmp_path / "cnn.json"
     info = json.loads(meta.read_text())
     meta.write_text(json.dumps({**info, "inputs": {**info["inputs"], "images": "os.system"}}))
-    with pytest.raises(ValueError, match="names the image transformer 'os.system'"):
+    with pytest.raises(ValueError, match=r"names the image transformer 'os\.system'"):
         load_model(tmp_path, "cnn")
 
 

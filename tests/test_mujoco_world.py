@@ -247,8 +247,8 @@ def test_the_arms_servos_never_need_more_than_the_arms_force_in_a_trial(monkeypa
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="MuJoCo's pads are 4.7-5.4 times as stiff as the rubber: its "
-                   "impedance (0.9-0.95) mixes into the direct solref's spring (BENCHMARKS.md, "
+@pytest.mark.xfail(strict=True, reason="MuJoCo's pads are 4.7-5.4 times as stiff as the rubber: "
+                   "its impedance (0.9-0.95) mixes into the direct solref's spring (BENCHMARKS.md, "
                    "'MuJoCo's arm as servo constraints')")
 def test_each_pad_yields_like_rubber_on_the_held_box():
     """As PyBullet's pads do (``tests/test_sim_fidelity.py``): force = stiffness x depth (5 %)."""

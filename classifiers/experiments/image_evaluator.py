@@ -126,7 +126,7 @@ def summarise_cv(per_fold: pd.DataFrame, names: list[str], folds: int) -> dict[s
         "reference": reference,
         "models": summarise(per_fold.drop(columns=[FIT_SECONDS, FIT_CPU_SECONDS]), folds),
         "paired_difference": {name: paired_difference(by_model[name], by_model[reference], folds)
-                              for name in names[:-1]},  # fmt: skip
+                              for name in names[:-1]},
         "fit_seconds": seconds,
     }
 

@@ -131,8 +131,9 @@ def _image(answers: dict[str, Any]) -> str:
              if n != joined and n in image["auc"]]  # fmt: skip
     picks = {"picks": image.get("picks", {}), "ranked_objects": answers.get("ranked_objects", 0)}
     method = f"classifier_{joined}"
-    at_picking = (f"; at picking, `{joined}` {_compare(picks, method, 'ranker_lambdarank', '`lambdarank`')}"
-                  f" and {_compare(picks, method, 'best_qc', _QC)}")  # fmt: skip
+    against_ranker = _compare(picks, method, "ranker_lambdarank", "`lambdarank`")
+    at_picking = (f"; at picking, `{joined}` {against_ranker}"
+                  f" and {_compare(picks, method, 'best_qc', _QC)}")
     return f"{question} {verdict}{'; ' + '; '.join(alone) if alone else ''}{at_picking}."
 
 

@@ -25,8 +25,8 @@ from classifiers.report.answers import (
     strong_methods,
 )
 from classifiers.report.document import Report, frame_of_intervals
-from classifiers.report.image_section import image_section
 from classifiers.report.grip_images import choose_grips, draw_grip_images
+from classifiers.report.image_section import image_section
 from classifiers.report.judge import (
     FEW_OBJECTS,
     SPANS,

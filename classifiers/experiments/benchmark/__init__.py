@@ -9,9 +9,9 @@ objects), ``methods`` (baselines and loaders of SB3 zips, d3rlpy policies, saved
 ``outputs`` (what a method returns, as scores), ``provenance`` (what a method was trained on: a
 run that saw a held-out object is refused; its training budget),
 ``selection`` (exact per-object metrics), ``retry`` (success within 1-3 attempts that share
-the object's draw, on data with every trial's outcome), ``aggregate`` (rliable's IQM, stratified bootstrap,
-probability of improvement, performance profiles), ``leaderboard`` (tables, verdicts, files),
-``plots``.
+the object's draw, on data with every trial's outcome), ``aggregate`` (rliable's IQM,
+stratified bootstrap, probability of improvement, performance profiles), ``leaderboard``
+(tables, verdicts, files), ``plots``.
 """
 
 from __future__ import annotations
