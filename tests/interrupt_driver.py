@@ -2,9 +2,9 @@
 
 Run as ``python tests/interrupt_driver.py generate ...`` with
 
-- ``GRIP_TEST_PAUSE``: ``planning`` (inside ``candidates``), ``physics`` (inside ``run_trials``,
-  which re-runs the real PyBullet trials for the whole pause) or ``write`` (a shard's temporary
-  file written, not yet renamed);
+- ``GRIP_TEST_PAUSE``: ``planning`` (inside ``candidates``), ``physics`` (inside
+  ``run_trial_outcomes``, which re-runs the real PyBullet trials for the whole pause) or
+  ``write`` (a shard's temporary file written, not yet renamed);
 - ``GRIP_TEST_MARKERS``: a directory; the first process to reach the point creates
   ``<dir>/<point>`` holding its pid, and pauses ``GRIP_TEST_PAUSE_SECONDS`` (default 60);
   with ``GRIP_TEST_PAUSES=n`` the next ones create ``<point>.2`` .. ``<point>.n`` and pause too.
@@ -64,14 +64,15 @@ def _install() -> None:
     import grip_env.planning.pipeline as pipeline
     import grip_env.sim as sim
 
-    plan, simulate, write_atomically = pipeline.candidates, sim.run_trials, shards.write_atomically
+    plan, simulate, write_atomically = (pipeline.candidates, sim.run_trial_outcomes,
+                                        shards.write_atomically)
 
     def candidates(*args, **kwargs):  # type: ignore[no-untyped-def]
         if _first_to_reach("planning"):
             time.sleep(_pause_seconds())
         return plan(*args, **kwargs)
 
-    def run_trials(*args, **kwargs):  # type: ignore[no-untyped-def]
+    def run_trial_outcomes(*args, **kwargs):  # type: ignore[no-untyped-def]
         result = simulate(*args, **kwargs)
         if _first_to_reach("physics"):
             deadline = time.monotonic() + _pause_seconds()
@@ -86,8 +87,8 @@ def _install() -> None:
                 time.sleep(_pause_seconds())
         return write_atomically(path, write_then_pause)
 
-    pipeline.candidates, sim.run_trials, shards.write_atomically = (
-        candidates, run_trials, paused_write
+    pipeline.candidates, sim.run_trial_outcomes, shards.write_atomically = (
+        candidates, run_trial_outcomes, paused_write
     )
 
 

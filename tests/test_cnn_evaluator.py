@@ -152,10 +152,13 @@ def test_the_table_step_takes_the_grip_table_only():
 
 
 FAST = {"max_epochs": 30, "learning_rate": 0.03}
+#: the regressor's squared loss diverges at the classifiers' step on scikit-learn's toy
+#: regression (R^2 0.26 at 0.03, 0.77 at 0.01: measured)
+FAST_REGRESSOR = {**FAST, "learning_rate": 0.01}
 
 
 @pytest.mark.slow
-@parametrize_with_checks([CNNClassifier(**FAST), CNNRegressor(**FAST),
+@parametrize_with_checks([CNNClassifier(**FAST), CNNRegressor(**FAST_REGRESSOR),
                           CNNClassifier(n_measures=1, **FAST)])
 def test_the_networks_pass_scikit_learn_estimator_checks(estimator, check):
     check(estimator)

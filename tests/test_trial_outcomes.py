@@ -204,3 +204,11 @@ def test_an_older_dataset_gets_its_trials_back_bit_for_bit(generated_dataset_dir
     from grip_env.dataset import validate
 
     assert validate(old) == []
+
+
+def test_a_table_that_records_its_trials_is_returned_as_it_is(generated_grips: pd.DataFrame,
+                                                               tmp_path: Path) -> None:
+    """A dataset ``generate`` writes holds every trial already: nothing is merged twice."""
+    from grip_env.dataset.trial_outcomes import with_trial_outcomes
+
+    assert with_trial_outcomes(generated_grips, tmp_path / "no-such-folder") is generated_grips

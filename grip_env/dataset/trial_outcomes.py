@@ -40,6 +40,7 @@ import pyarrow.parquet as pq
 
 from grip_env.columns import (
     ROBUSTNESS,
+    TRIAL_SUCCESS_PREFIX,
     trial_columns,
     trial_robustness_columns,
     trial_success_columns,
@@ -266,12 +267,15 @@ def per_trial_outcomes(table: pd.DataFrame) -> tuple[np.ndarray, np.ndarray]:
 def with_trial_outcomes(table: pd.DataFrame, folder: str | Path = STANDARD_TRIALS,
                         ) -> pd.DataFrame:
     """The grips of ``table`` whose per-trial outcomes ``folder`` holds (the objects re-simulated
-    so far), with those columns added; ``attrs`` kept.
+    so far), with those columns added; ``attrs`` kept. A table that records every trial already
+    (as every dataset ``generate`` writes now) is returned as it is.
 
     Raises:
         ValueError: as :func:`read_trial_shards`, or the folder's trials are not the table's
             (their summaries differ).
     """
+    if any(str(c).startswith(TRIAL_SUCCESS_PREFIX) for c in table.columns):
+        return table
     trials = read_trial_shards(folder)
     rows = table.loc[table["grip_id"].isin(trials["grip_id"])]
     merged = rows.merge(trials.drop(columns="object_id"), on="grip_id", how="left",
