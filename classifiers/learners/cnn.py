@@ -179,11 +179,11 @@ class CNNClassifier(_ConvNet, TorchMLPClassifier):
 
     Attributes
     ----------
-    classes_ : ndarray of shape (n_classes,), the labels seen in ``fit``.
-    n_features_in_ : int, columns seen in ``fit`` (the image's pixels and the measures).
-    network_ : torch.nn.Module, the fitted :class:`ImageNetwork`.
-    n_epochs_ : int, epochs run (early stopping may end before ``max_epochs``).
-    best_validation_loss_ : float, lowest validation loss.
+    ``classes_`` : ndarray of shape (n_classes,), the labels seen in ``fit``.
+    ``n_features_in_`` : int, columns seen in ``fit`` (the image's pixels and the measures).
+    ``network_`` : torch.nn.Module, the fitted :class:`ImageNetwork`.
+    ``n_epochs_`` : int, epochs run (early stopping may end before ``max_epochs``).
+    ``best_validation_loss_`` : float, lowest validation loss.
     """
 
     def decision_function(self, X: Any) -> np.ndarray:
@@ -200,9 +200,9 @@ class CNNRegressor(_ConvNet, TorchMLPRegressor):
 
     Attributes
     ----------
-    n_features_in_ : int, columns seen in ``fit``.
-    network_ : torch.nn.Module, the fitted :class:`ImageNetwork`.
-    n_epochs_ : int, epochs run.
-    best_validation_loss_ : float, lowest validation loss.
-    target_mean_, target_scale_ : float, the target's standardisation.
+    ``n_features_in_`` : int, columns seen in ``fit``.
+    ``network_`` : torch.nn.Module, the fitted :class:`ImageNetwork`.
+    ``n_epochs_`` : int, epochs run.
+    ``best_validation_loss_`` : float, lowest validation loss.
+    ``target_mean_``, ``target_scale_`` : float, the target's standardisation.
     """
