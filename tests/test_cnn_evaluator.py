@@ -248,3 +248,23 @@ def test_the_report_names_the_closest_measure_and_the_fit_cost():
     line = fit_time_line({"cnn": {"mean": 40.0, "max": 50.0, "cpu_mean": 20.0, "cpu_max": 25.5}},
                          10_000, 5)
     assert "about 8,000 grips" in line and "cnn 20.0 s CPU (longest 25.5 s; wall 40.0 s)" in line
+
+
+def test_predict_refuses_a_dataset_without_the_contours_images_need(saved_cnn,
+                                                                    generated_dataset_dir,
+                                                                    tmp_path):
+    """A dataset whose objects table lost its contours: one line, exit 2, nothing written."""
+    import shutil
+
+    from cli_runs import assert_refused, cli
+
+    folder, _, _ = saved_cnn
+    data = tmp_path / "data"
+    shutil.copytree(generated_dataset_dir, data)
+    objects = pd.read_parquet(data / "objects.parquet")
+    objects.drop(columns=["contour", "perceived_contour"], errors="ignore").to_parquet(
+        data / "objects.parquet")
+    out = tmp_path / "p.parquet"
+    code, output = cli("predict", "--model", folder / "cnn.json", "--data", data, "--out", out)
+    assert_refused(code, output, "contour")
+    assert not out.exists()
