@@ -62,7 +62,7 @@ def test_an_engine_that_cannot_be_loaded_says_so_and_how_to_reinstall(monkeypatc
         require_engine("mujoco")
 
 
-@pytest.mark.parametrize("command", ["generate", "calibrate"])
+@pytest.mark.parametrize("command", ["generate", "calibrate", "study"])
 def test_the_cli_refuses_an_unknown_engine_and_writes_nothing(tmp_path, command):
     config = tmp_path / "physx.yaml"
     config.write_text("sim:\n  engine: physx\n")
