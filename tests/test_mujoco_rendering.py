@@ -223,3 +223,21 @@ def test_a_mujoco_gl_that_breaks_mujoco_s_import_is_refused_in_one_line():
     [line] = [line for line in done.stdout.splitlines() if line.startswith("refused:")]
     assert "engine 'mujoco' is installed but cannot be loaded" in line
     assert "MUJOCO_GL: bogus" in line
+
+
+def test_show_draws_a_trial_in_mujoco(tmp_path):
+    """``grip-env show --sim`` runs and draws the trial in the config's engine: its outcome is
+    not PyBullet's."""
+    from cli_runs import cli
+    from PIL import Image
+
+    outcomes = {}
+    for engine in ("mujoco", "pybullet"):
+        config = tmp_path / f"{engine}.yaml"
+        config.write_text(f"sim:\n  engine: {engine}\n")
+        out = tmp_path / f"{engine}.png"
+        code, output = cli("show", "rectangle", "--sim", "--config", config, "--out", out)
+        assert code == 0, output
+        assert Image.open(out).size[0] > 1000  # four phases side by side
+        [outcomes[engine]] = [line for line in output.splitlines() if line.startswith("trial of")]
+    assert outcomes["mujoco"] != outcomes["pybullet"]
