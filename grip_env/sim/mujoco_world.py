@@ -41,6 +41,7 @@ controls; sources: ``/work/shared/notes/mujoco-grasping.md``), ``sim.solver_iter
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 import sys
@@ -517,7 +518,8 @@ class MujocoWorld:
 
         It draws the geometry MuJoCo simulates (its URDF import keeps no visual meshes: the hand
         is its collision pieces), lit by MuJoCo's headlight. Headless, through EGL
-        (``grip_env.sim.mujoco_gl``); without a GPU, Mesa's software rasteriser draws it.
+        (``_gl_platform``); without a GPU, Mesa's software rasteriser draws it. Each frame size
+        keeps its OpenGL context until ``close``.
 
         Raises:
             ValueError: a size below one pixel, the eye on the target, or no OpenGL here (the
@@ -744,10 +746,15 @@ def _gl_platform() -> str:
     installed; else MuJoCo's default (GLFW, which needs a display, on Linux)."""
     chosen = os.environ.get("MUJOCO_GL", "").lower().strip()
     headless = not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
-    if (not chosen and sys.platform.startswith("linux") and headless and find_library("EGL")
-            and (find_library("OpenGL") or find_library("GL"))):
+    if not chosen and sys.platform.startswith("linux") and headless and _egl_installed():
         return "egl"
     return chosen or "default"
+
+
+@functools.cache
+def _egl_installed() -> bool:
+    """Whether the EGL and OpenGL libraries MuJoCo's EGL platform loads are installed."""
+    return bool(find_library("EGL") and (find_library("OpenGL") or find_library("GL")))
 
 
 def _gl_context_class(platform: str) -> type:
