@@ -300,3 +300,26 @@ def test_an_environment_without_mujoco_says_how_to_install_it(monkeypatch):
     monkeypatch.delitem(sys.modules, "grip_env.sim.mujoco_world", raising=False)
     with pytest.raises(EngineUnavailable, match=r'pip install "grip-env\[mujoco\]"'):
         gymnasium.make("GripSelect-v0", objects=["rectangle"], engine="mujoco")
+
+
+@pytest.mark.parametrize("sample", ["--resimulate", "--retest"])
+@pytest.mark.parametrize("case", ["missing mujoco", "unknown engine"])
+def test_a_resimulation_in_an_engine_this_code_cannot_run_is_refused_and_writes_nothing(
+        three_objects, tmp_path, monkeypatch, sample, case):
+    """--resimulate and --retest simulate in the dataset's own engine: without it, one line
+    before any check is printed."""
+    import sys
+
+    from grip_env.label_model import MUJOCO_LABEL_MODEL
+
+    if case == "missing mujoco":
+        folder = _relabelled(three_objects, tmp_path / "data", MUJOCO_LABEL_MODEL, "mujoco")
+        monkeypatch.setitem(sys.modules, "mujoco", None)  # as where it is not installed
+        monkeypatch.delitem(sys.modules, "grip_env.sim.mujoco_world", raising=False)
+        fragments = ("engine 'mujoco' is not installed", 'pip install "grip-env[mujoco]"')
+    else:
+        folder = _relabelled(three_objects, tmp_path / "data", "2026.12-xm", "physx")
+        fragments = ("unknown engine 'physx'",)
+    report = tmp_path / "found.json"
+    assert_refused(*run("validate", folder, sample, 1, "--report", report), *fragments)
+    assert not report.exists()

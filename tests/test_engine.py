@@ -62,7 +62,7 @@ def test_an_engine_that_cannot_be_loaded_says_so_and_how_to_reinstall(monkeypatc
         require_engine("mujoco")
 
 
-@pytest.mark.parametrize("command", ["generate", "calibrate"])
+@pytest.mark.parametrize("command", ["generate", "calibrate", "study"])
 def test_the_cli_refuses_an_unknown_engine_and_writes_nothing(tmp_path, command):
     config = tmp_path / "physx.yaml"
     config.write_text("sim:\n  engine: physx\n")
@@ -186,3 +186,46 @@ def test_the_engine_version_a_manifest_records_is_the_engine_s_own():
 
     assert engine_record("mujoco") == {"name": "mujoco", "version": mujoco.__version__}
     assert re.fullmatch(r"\d+\.\d+\.\d+", engine_record("pybullet")["version"])
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(__import__("importlib").util.find_spec("mujoco") is None,
+                    reason="mujoco not installed")
+def test_generate_validate_and_calibrate_run_in_the_config_s_engine(tmp_path):
+    """End to end on one object: generate labels in the config's engine (the same grips as
+    PyBullet's, other outcomes), validate re-simulates them in it bit for bit, and calibrate
+    runs its trials in it (about 25 s)."""
+    import json
+
+    from grip_env.dataset import load
+    from grip_env.label_model import LABEL_MODEL, MUJOCO_LABEL_MODEL
+
+    tiny = "dataset:\n  trials: 2\n  max_grips_per_object: 3\n  workers: 1\n"
+    data = {}
+    for name in ("pybullet", "mujoco"):
+        config = tmp_path / f"{name}.yaml"
+        config.write_text(f"sim:\n  engine: {name}\n{tiny}")
+        code, output = run("generate", "--config", config, "--objects", "1", "--out",
+                           tmp_path / name, "--no-progress")
+        assert code == 0, output
+        data[name] = load(tmp_path / name)
+    manifest = json.loads((tmp_path / "mujoco" / "manifest.json").read_text())
+    assert manifest["engine"]["name"] == "mujoco"
+    assert manifest["label_model"] == MUJOCO_LABEL_MODEL != LABEL_MODEL
+    outcomes = ["successes", "robustness_mean", "robustness_std"]
+    grips = [c for c in data["pybullet"].columns if c not in outcomes and "trial" not in c
+             and c not in ("success", "success_rate")]
+    assert len(data["mujoco"]) == 3 and {"S1", "C6", "Q_C", "hand_x"} <= set(grips)
+    assert data["mujoco"][grips].equals(data["pybullet"][grips])  # planning knows no engine
+    assert not data["mujoco"][outcomes].equals(data["pybullet"][outcomes])
+    code, output = run("validate", tmp_path / "mujoco", "--resimulate", 3, "--workers", 1)
+    assert code == 0 and "label model " + MUJOCO_LABEL_MODEL in output, output
+    assert "outcomes identical on 3" in output, output
+    code, output = run("calibrate", "--config", tmp_path / "mujoco.yaml", "--quick",
+                       "--workers", 1, "--out", tmp_path / "calibration")
+    assert code == 0, output
+    calibration = json.loads((tmp_path / "calibration" / "calibration.json").read_text())
+    assert calibration["label_model"] == MUJOCO_LABEL_MODEL
+    assert calibration["config"]["sim"]["engine"] == "mujoco"
+    assert "calibration trials in MuJoCo" in (tmp_path / "calibration" /
+                                              "calibration.md").read_text()

@@ -50,9 +50,10 @@ def calibration_section(report: Report, result: dict[str, Any], trials: pd.DataF
     report.heading("Label validity (calibration)", level)
     report.text(
         f"Measured, never tuned: reference level {result['reference_level_g']:g} g, design "
-        f"friction mu = {result['mu']:g}, {result['trials']} simulated calibration trials"
-        f"{_conditions(result.get('config'))}. Each check states its target, the sample it "
-        "was measured on and whether the measured figure meets it."
+        f"friction mu = {result['mu']:g}, {result['trials']} simulated calibration trials in "
+        f"{_engine(result.get('config'))}{_conditions(result.get('config'))}. Each check "
+        "states its target, the sample it was measured on and whether the measured figure meets "
+        "it."
     )
     if result.get("recorded_with"):
         report.text(f"Recorded with the dataset `{result['recorded_with']}` (label model "
@@ -354,6 +355,12 @@ def _deciles(report: Report, checks: list[dict[str, Any]], fig_dir: Path, root: 
 
 
 # ------------------------------------------------------------------------------------ helpers
+def _engine(config: dict[str, Any] | None) -> str:
+    """The physics engine the trials ran in (a config from before engines: PyBullet)."""
+    return {"pybullet": "PyBullet", "mujoco": "MuJoCo"}.get(
+        ((config or {}).get("sim") or {}).get("engine", "pybullet"), "an unknown engine")
+
+
 def _conditions(config: dict[str, Any] | None) -> str:
     if not config:
         return ""

@@ -44,9 +44,9 @@ def show(
     mm_per_px: MmPerPxOption = None,
     contour: ContourOption = None,
     sim: Annotated[bool, typer.Option(
-        "--sim", help="simulate the best grip (or the best --grips N) in PyBullet on the true "
-                      "object and draw its phases: approach, close, lift, disturbance ramp; "
-                      "prints each outcome"
+        "--sim", help="simulate the best grip (or the best --grips N) in the config's engine "
+                      "(sim.engine) on the true object and draw its phases: approach, close, "
+                      "lift, disturbance ramp; prints each outcome"
     )] = False,
     seed: Annotated[int, typer.Option(
         min=0, help="seed of the simulated trial's draw (friction, mass, placement error)"

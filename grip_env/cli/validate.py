@@ -57,6 +57,11 @@ def validate(
         from grip_env.label_model import label_model_of
 
         manifest = read_manifest(directory)
+        if resimulate is not None or retest is not None:  # they simulate in its own engine
+            from grip_env.label_model import engine_of
+            from grip_env.sim.engine import require_engine
+
+            require_engine(engine_of(manifest))
         if crosscheck is not None:
             from grip_env.dataset.crosscheck import check_crosscheckable
 

@@ -309,11 +309,11 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
     def render(self) -> NDArray[np.uint8] | None:
         """The episode drawn as an RGB array (``"rgb_array"``) or in a window (``"human"``).
 
-        ``render_style="scene"`` (the live default): the PyBullet scene through TinyRenderer, the
-        hand holding the chosen or current candidate (executed without noise). ``"sketch"`` (the
-        replay default): the object's contour (when known), its candidates' contact triangles,
-        and the chosen or current candidate highlighted: green held, red dropped, blue not
-        executed yet.
+        ``render_style="scene"`` (the live default): the scene drawn by the live trials' engine
+        (PyBullet's TinyRenderer, or MuJoCo's OpenGL renderer through EGL), the hand holding the
+        chosen or current candidate (executed without noise). ``"sketch"`` (the replay default):
+        the object's contour (when known), its candidates' contact triangles, and the chosen or
+        current candidate highlighted: green held, red dropped, blue not executed yet.
         """
         if self.render_mode is None:
             gym.logger.warn("render() called without a render_mode; pass render_mode= to make()")

@@ -1,9 +1,11 @@
-"""Drawing an episode: the PyBullet scene, or a 2-D sketch of the candidates.
+"""Drawing an episode: the simulated scene, or a 2-D sketch of the candidates.
 
 Two styles, both fixed-size ``uint8`` RGB frames:
 
-- ``"scene"`` (:class:`SceneCamera`): the PyBullet scene through its TinyRenderer (no display
-  needed), seen obliquely: table, object and Barrett hand; with a chosen grip, the hand holding it
+- ``"scene"`` (:class:`SceneCamera`): the scene in the config's engine, drawn by that engine
+  (PyBullet: its TinyRenderer on the CPU; MuJoCo: its OpenGL renderer, off-screen through EGL, in
+  Mesa's software rasteriser without a GPU; neither needs a display), seen obliquely: table,
+  object and Barrett hand; with a chosen grip, the hand holding it
   at the end of a noise-free execution (the episode's own trial had noise: its outcome colours the
   sketch's highlight and the env's ``info``, not this picture).
 - ``"sketch"`` (:func:`draw_candidates`): the object's contour, every candidate's contact triangle
@@ -93,7 +95,8 @@ def _frame_limits(axes: object, contour: NDArray | None, contacts: NDArray) -> N
 
 
 class SceneCamera:
-    """Frames of the PyBullet scene of one object at a time (its world is kept between frames)."""
+    """Frames of the scene of one object at a time, in the config's engine (its world is kept
+    between frames)."""
 
     def __init__(self, config: Config, size_px: int = FRAME_SIZE_PX) -> None:
         self._config = config
@@ -140,7 +143,7 @@ class SceneCamera:
         return scene.world.render(eye, target_mm, self._size, self._size)
 
     def close(self) -> None:
-        """Release the PyBullet world (idempotent)."""
+        """Release the world (idempotent)."""
         if self._scene is not None:
             self._scene.close()
             self._scene, self._name = None, None

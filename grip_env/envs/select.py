@@ -85,7 +85,8 @@ class GripSelectEnv(GripEnvBase):
       candidates) or ``"none"``.
     - ``candidate_order``: ``"q_c"`` (best first) or ``"shuffled"``.
     - ``render_mode``: ``None``, ``"rgb_array"`` or ``"human"``; ``render_style``: ``"scene"``
-      (PyBullet through TinyRenderer; live only, its default) or ``"sketch"`` (2-D contour and
+      (drawn by ``engine``: PyBullet's TinyRenderer or MuJoCo's OpenGL renderer; live only, its
+      default) or ``"sketch"`` (2-D contour and
       contact triangles; the replay default).
 
     ## Version History

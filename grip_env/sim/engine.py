@@ -108,11 +108,13 @@ def require_engine(name: str) -> None:
     package = _PACKAGES[name]
     if importlib.util.find_spec(package) is None:
         raise EngineUnavailable(f"engine {name!r} is not installed: {_INSTALL[name]}")
-    try:  # installed but unloadable (a missing shared library, a wheel of another Python)
+    try:  # installed but unloadable (a missing shared library, a wheel of another Python, or
+        # MuJoCo's MUJOCO_GL naming a platform it cannot load: it loads it with itself)
         importlib.import_module(_MODULES[name])
-    except ImportError as exc:
-        raise EngineUnavailable(f"engine {name!r} is installed but cannot be loaded ({exc}): "
-                                f"reinstall it: {_INSTALL[name]}") from None
+    except (ImportError, RuntimeError, AttributeError, OSError) as exc:
+        raise EngineUnavailable(f"engine {name!r} is installed but cannot be loaded ("
+                                f"{type(exc).__name__}: {exc}): reinstall it: "
+                                f"{_INSTALL[name]}") from None
 
 
 def make_world(config: SimConfig) -> Engine:
