@@ -3,6 +3,7 @@ simulates it, the same bits every time."""
 
 from __future__ import annotations
 
+import ctypes.util
 import os
 import subprocess
 import sys
@@ -26,6 +27,12 @@ pytest.importorskip("mujoco")
 from grip_env.sim.mujoco_world import MujocoWorld
 
 HERE = Path(__file__).resolve().parent
+
+#: MuJoCo draws through OpenGL: headless, EGL's libraries (Mesa's llvmpipe will do) must be there.
+needs_opengl = pytest.mark.skipif(
+    ctypes.util.find_library("EGL") is None and not os.environ.get("DISPLAY"),
+    reason="no OpenGL here: MuJoCo renders headless through EGL (apt install libegl1 libgl1 "
+           "libgl1-mesa-dri)")
 MUJOCO = Config().override(sim={"engine": "mujoco"})
 
 
@@ -65,6 +72,7 @@ def _centroid(mask: np.ndarray) -> np.ndarray:
     ((0.5, -0.5, 2000.0), 0.97, 0.05),  # from straight above: the top face alone
     ((150.0, -250.0, 2000.0), 0.97, 0.3),  # obliquely: two side faces too, in shade
 ])
+@needs_opengl
 def test_a_resting_box_is_drawn_on_its_outline_to_a_pixel(eye_offset_mm, least_overlap,
                                                            most_shift_px):
     """Seen from 2 m, the box's silhouette is the projection of its simulated prism, its centre
@@ -124,6 +132,7 @@ def held() -> dict[str, tuple[np.ndarray, np.ndarray]]:
 
 
 
+@needs_opengl
 def test_a_held_object_is_drawn_where_mujoco_says_it_is(held):
     for phase, (frame, position) in held.items():
         drawn = _object_pixels(frame)
@@ -148,6 +157,7 @@ def _frame_of_a_fresh_world() -> np.ndarray:
         return world.render(centre + np.array([180.0, -230.0, 180.0]), centre)
 
 
+@needs_opengl
 def test_frames_are_the_same_bits_every_time():
     obj = _rectangle()
     with MujocoWorld() as world:
@@ -192,6 +202,7 @@ def test_without_opengl_rendering_says_what_to_install():
     assert "apt install libegl1" in line
 
 
+@needs_opengl
 def test_an_environment_in_mujoco_renders_its_scene():
     import gymnasium
 
@@ -225,6 +236,7 @@ def test_a_mujoco_gl_that_breaks_mujoco_s_import_is_refused_in_one_line():
     assert "MUJOCO_GL: bogus" in line
 
 
+@needs_opengl
 def test_show_draws_a_trial_in_mujoco(tmp_path):
     """``grip-env show --sim`` runs and draws the trial in the config's engine: its outcome is
     not PyBullet's."""
