@@ -54,7 +54,7 @@ def pick_differences(board: dict[str, Any], pairs: list[tuple[str, str]], seed: 
     unknown = sorted({name for pair in pairs for name in pair} - set(success))
     if unknown:
         raise ValueError(f"the leaderboard has no method {unknown[0]!r}")
-    boot = paired_bootstraps(success, reps, seed + 1, task_bootstrap=True)
+    boot = paired_bootstraps(success, reps, seed + 1, task_bootstrap=True, objects=objects)
     found = {}
     for a, b in pairs:
         difference = estimate(mean(success[a]) - mean(success[b]),
