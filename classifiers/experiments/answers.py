@@ -25,12 +25,13 @@ from typing import Any
 
 import pandas as pd
 
+from classifiers.experiments.benchmark import SUPERVISED_PREFIXES
 from classifiers.experiments.benchmark.aggregate import estimate, mean, paired_bootstraps
 from classifiers.experiments.benchmark.leaderboard import REFERENCE, metric_matrices
 
 ANSWERS_FILE = "answers.json"
 #: Method name prefixes of the supervised learners on the leaderboard.
-SUPERVISED = ("classifier_", "regressor_", "ranker_")
+SUPERVISED = SUPERVISED_PREFIXES
 RL, BEST_QG = "rl", "best_qg"
 #: The leaderboard method the image models are compared with at picking, beside best-Q_C.
 LAMBDARANK = "ranker_lambdarank"
