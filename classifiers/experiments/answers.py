@@ -7,8 +7,8 @@
 3. Does the RL selector beat best-Q_C, and does it match the best supervised method?
 4. Do the twelve measures capture what the grip's image holds? The image stage's paired ROC-AUC
    of each image model (``cnn``, ``cnn_measures``) against the measures' learner, and, at
-   picking, each image model against lambdarank and best-Q_C, over all held-out objects and by
-   family (meshes, procedural and named shapes).
+   picking, each image model against the measures' learner, lambdarank and best-Q_C, over all
+   held-out objects and by family (meshes, procedural and named shapes).
 
 A pick's comparison is the difference of top-1 success (the pick's recorded success rate),
 paired over every held-out object with the leaderboard's stratified bootstrap: the same resamples
@@ -98,8 +98,9 @@ def hand_difference(ablation: dict[str, Any]) -> dict[str, Any] | None:
 def image_answers(board: dict[str, Any], images: dict[str, Any],
                   seed: int) -> dict[str, Any] | None:  # fmt: skip
     """The image stage's answer: each image model's paired ROC-AUC difference to the measures'
-    learner (``"auc"``), and its top-1 success against lambdarank and best-Q_C over every
-    held-out object (``"picks"``) and each family's (``"families"``); None without the stage."""
+    learner (``"auc"``), and its top-1 success against that learner's picks, lambdarank's and
+    best-Q_C's over every held-out object (``"picks"``) and each family's (``"families"``);
+    None without the stage."""
     models = images.get("models", [])
     if not models:
         return None
@@ -107,7 +108,9 @@ def image_answers(board: dict[str, Any], images: dict[str, Any],
     auc = {name: {**cv["paired_difference"][name]["roc_auc"], "objects": cv.get("n_objects")}
            for name in models if name in cv.get("paired_difference", {})}  # fmt: skip
     present = set(board.get("methods", {}))
-    pairs = [(f"classifier_{name}", versus) for name in models for versus in (LAMBDARANK, REFERENCE)
+    learner = f"classifier_{cv['reference']}" if cv.get("reference") else None
+    versus_all = (*([learner] if learner else []), LAMBDARANK, REFERENCE)
+    pairs = [(f"classifier_{name}", versus) for name in models for versus in versus_all
              if {f"classifier_{name}", versus} <= present]  # fmt: skip
     picks = pick_differences(board, pairs, seed) if pairs else {}
     families: dict[str, Any] = {}
