@@ -341,3 +341,15 @@ def test_the_leaderboard_says_what_its_attempts_table_assumes() -> None:
     with_retry = attempts_caption({"methods": {}, "retry": {}})
     assert "retry section scores the same attempts on the shared draws" in with_retry
     assert retry_lines({"methods": {}}) == []
+
+
+def test_an_object_missing_its_trials_is_refused_not_read_as_a_hold(many: pd.DataFrame) -> None:
+    from classifiers.experiments.selector.evaluation import training_baselines
+    from grip_env.dataset.split import held_out_objects
+
+    config = _selector_config()
+    train, _ = held_out_objects(many["object_id"], config.learning)
+    partial = many.assign(trial_success_0=many["trial_success_0"].astype(float))
+    partial.loc[partial["object_id"] == train[0], "trial_success_0"] = np.nan
+    with pytest.raises(ValueError, match=rf"object '{train[0]}' lacks some of its trials'"):
+        training_baselines(partial, config)

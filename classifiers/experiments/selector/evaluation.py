@@ -125,7 +125,18 @@ def attempt_scoring(table: pd.DataFrame) -> dict[str, Any]:
 
 def trial_outcomes(found: CandidateSet, trials: int) -> NDArray[np.bool_]:
     """(candidates, trials) recorded outcome of each kept candidate at each trial index."""
-    return found.rows[list(trial_success_columns(trials))].to_numpy(bool)
+    return recorded_outcomes(found.rows, trials, found.object_id)
+
+
+def recorded_outcomes(rows: pd.DataFrame, trials: int, object_id: str) -> NDArray[np.bool_]:
+    """(rows, trials) of ``trial_success_0..trials-1``; ValueError when one is missing (a table
+    whose trials are recorded for some objects only), rather than a NaN read as a hold."""
+    values = rows[list(trial_success_columns(trials))]
+    if values.isna().to_numpy().any():
+        raise ValueError(f"object {object_id!r} lacks some of its trials' outcomes "
+                         f"(trial_success_0..{trials - 1}): score attempts on objects that "
+                         f"record every trial, or drop those columns to assume independence")
+    return values.to_numpy(bool)
 
 
 def action_probabilities(model: Any, sets: Sequence[CandidateSet],
@@ -241,7 +252,7 @@ def training_baselines(table: pd.DataFrame, config: Config) -> dict[str, float]:
         p = shown["success_rate"].to_numpy(float)
         best = np.argsort(-p, kind="stable")
         if trials:
-            held = shown[list(trial_success_columns(trials))].to_numpy(bool)
+            held = recorded_outcomes(shown, trials, str(shown["object_id"].iloc[0]))
             rows["random"].append(shared_random_metrics(held, selector.max_attempts)[1])
             rows["best Q_C"].append(shared_attempt_metrics(held, selector.max_attempts)[1])
             rows["oracle"].append(shared_attempt_metrics(held[best], selector.max_attempts)[1])
