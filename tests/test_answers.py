@@ -132,7 +132,9 @@ def test_the_image_answer_is_worded_from_the_image_stage(tmp_path):
            in sentence
     assert "the image alone (`cnn`) **is not distinguishable from** it (-0.010 [-0.040, " \
            "+0.020])" in sentence
-    assert "at picking, `cnn_measures` **beats** `lambdarank`" in sentence
+    # no picks of hgb on this board: the carry-over is judged against lambdarank's
+    assert "; and the gain carries over to picking: `cnn_measures` **beats** `lambdarank`" \
+        in sentence
     wide = {**image, "auc": {**image["auc"], "cnn_measures": {"mean": 0.08, "ci": [-0.19, 0.36],
                                                                 "objects": 40}}}
     assert "Not answered: the image with the measures (`cnn_measures`) against `hgb` on the " \
@@ -144,6 +146,47 @@ def test_the_image_answer_is_worded_from_the_image_stage(tmp_path):
     assert "Yes, as far as this network can tell: the image with the measures (`cnn_measures`) " \
            "**is not distinguishable from** `hgb`" in answer_sentences({**answers,
                                                                           "image": same})[3]
+
+
+def _image_study(tmp_path, extra: dict) -> dict:
+    board = _board(extra=extra)
+    (tmp_path / "benchmark").mkdir()
+    (tmp_path / "benchmark" / "leaderboard.json").write_text(json.dumps(board))
+    (tmp_path / "images").mkdir()
+    (tmp_path / "images" / "images.json").write_text(json.dumps({
+        "models": ["cnn_measures"], "families": {},
+        "cv": {"reference": "hgb", "n_objects": 40, "paired_difference": {
+            "cnn_measures": {"roc_auc": {"mean": 0.05, "ci": [0.03, 0.07]}}}}}))
+    return study_answers(tmp_path, seed=3)
+
+
+def test_the_image_answer_says_in_one_sentence_when_the_auc_gain_does_not_carry_to_picking(
+        tmp_path):  # fmt: skip
+    """cnn_measures gains ROC-AUC over hgb but picks 0.1 worse than hgb's picks on every object:
+    the one sentence says the gain does not carry over, with the picking figures it rests on."""
+    from classifiers.report.answers import signed
+
+    answers = _image_study(tmp_path, {"classifier_hgb": (0.1, 0.02, 2),
+                                      "classifier_cnn_measures": (0.0, 0.02, 2)})
+    picks = answers["image"]["picks"]
+    versus_hgb = picks["classifier_cnn_measures - classifier_hgb"]
+    assert versus_hgb["estimate"] == pytest.approx(-0.1, abs=0.02) and versus_hgb["ci"][1] < 0
+    sentence = answer_sentences(answers)[3]
+    assert sentence.count(". ") == 0 and sentence.endswith(").")  # one sentence
+    assert ("**beats** `hgb` on the twelve measures (+0.050 [+0.030, +0.070]); but the gain "
+            "does not carry over to picking: `cnn_measures` **is worse than** `hgb` "
+            f"({signed(versus_hgb)}), ") in sentence
+    lambdarank = picks["classifier_cnn_measures - ranker_lambdarank"]
+    assert f"`lambdarank` ({signed(lambdarank)}) and " in sentence
+    # without a ROC-AUC gain there is nothing to carry over: the picks alone
+    flat = {**answers["image"], "auc": {"cnn_measures": {"mean": 0.0, "ci": [-0.02, 0.02],
+                                                         "objects": 40}}}
+    worded = answer_sentences({**answers, "image": flat})[3]
+    assert "carry" not in worded
+    assert "; at picking, `cnn_measures` **is worse than** `hgb`" in worded
+    # a picking interval without a verdict (too few ranked objects) claims neither way
+    few = answer_sentences({**answers, "ranked_objects": 3})[3]
+    assert "carry" not in few and "no verdict (only 3 held-out object(s)" in few
 
 
 def test_every_answer_figure_is_drawn_from_the_results(tmp_path):

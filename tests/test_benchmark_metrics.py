@@ -251,6 +251,12 @@ def test_study_benchmark_reads_the_learners_per_seed_score_files(tmp_path) -> No
     assert "classifier_rank_qc" not in board["methods"] and "best_qc" in board["methods"]
     assert board["split"]["seeds"] == [0, 1, 2] and board["split"]["name"] == "study"
     assert (tmp_path / "benchmark" / "leaderboard.json").exists()  # the .md is the report's
+    train = table[~table["object_id"].isin(set(held["object_id"]))]
+    budget = board["methods"]["classifier_x"]["budget"]
+    assert (budget["grips"], budget["objects"]) == (len(train), train["object_id"].nunique())
+    assert budget["text"] == (f"{len(train):,} labelled grips of {train['object_id'].nunique()} "
+                              f"objects ({int(train['trials'].sum()):,} recorded trials)")
+    assert "budget" not in board["methods"]["best_qc"]
     pd.concat(frames).iloc[1:].to_parquet(tmp_path / "classifiers" / "scores.parquet")
     with pytest.raises(ValueError, match="every candidate"):
         study_benchmark(table, tmp_path, config, reps=200)
@@ -279,3 +285,37 @@ def test_the_success_difference_to_best_qc_is_paired_over_every_held_out_object(
     write_leaderboard(board, tmp_path / "benchmark")
     assert signed(found) == "+0.200 [+0.200, +0.200]"
     assert "(20 held-out objects, 16 rankable)" in "\n".join(_leaderboard_lines(tmp_path))
+
+
+def test_the_study_leaderboard_lists_the_rl_selectors_environment_steps(tmp_path) -> None:
+    """Each run's zip (``selector/seed_<s>/model.zip``) says its steps; the table shows them."""
+    from classifiers.evaluation.synthetic import synthetic_grips
+    from classifiers.experiments.benchmark import study_benchmark
+    from classifiers.experiments.benchmark.split import candidate_sets, candidate_table, study_split
+    from classifiers.experiments.selector.training import make_selector_env, make_selector_model
+    from classifiers.report.leaderboard import leaderboard_markdown
+    from grip_env.config import Config
+
+    table = synthetic_grips(n_objects=16, grips=(5, 9), seed=3)
+    table["object_id"] = table["object_id"].astype(str)
+    table["grip_id"] = table["grip_id"].astype(str)
+    config = Config().override(selector={"max_candidates": 8})
+    held = candidate_table(candidate_sets(table, config, study_split(table, config, [0, 1])))
+    rng = np.random.default_rng(0)
+    for seed in (0, 1):
+        env = make_selector_env(table, config, split="train", n_envs=1)
+        model = make_selector_model(env, "set", seed=seed, timesteps=16)
+        model.learn(16 * (seed + 1))
+        (tmp_path / "selector" / f"seed_{seed}").mkdir(parents=True)
+        model.save(tmp_path / "selector" / f"seed_{seed}" / "model.zip")
+        env.close()
+    frames = [held[["object_id", "candidate", "grip_id"]].assign(method="rl", seed=s,
+                                                                 score=rng.random(len(held)))
+              for s in (0, 1)]  # fmt: skip
+    pd.concat(frames).to_parquet(tmp_path / "selector" / "scores.parquet")
+    board = study_benchmark(table, tmp_path, config, reps=200)
+    budget = board["methods"]["rl"]["budget"]
+    steps = [run["environment_steps"] for run in budget["runs"]]
+    assert steps[1] > steps[0] >= 16  # each run's own count, as SB3 saved it
+    assert budget["text"] == "; ".join(f"{n:,} environment steps" for n in steps)
+    assert "| training budget |" in leaderboard_markdown(board)

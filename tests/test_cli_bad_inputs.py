@@ -323,3 +323,25 @@ def test_a_resimulation_in_an_engine_this_code_cannot_run_is_refused_and_writes_
     report = tmp_path / "found.json"
     assert_refused(*run("validate", folder, sample, 1, "--report", report), *fragments)
     assert not report.exists()
+
+
+# ----------------------------------------------------------------- offline RL and agents (issue 47)
+def test_an_export_with_more_attempts_than_candidates_writes_nothing(
+        three_objects, tmp_path, monkeypatch):  # fmt: skip
+    pytest.importorskip("minari")
+    root = tmp_path / "minari"
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(root))
+    code, output = run("export", "minari", "--data", three_objects, "--id", "grip-test/many-v0",
+                       "--split", "all", "--episodes", 1, "--max-attempts", 65)  # fmt: skip
+    assert_refused(code, output, "max_attempts 65 exceeds the 64 candidates")
+    assert not root.exists() or not any(root.rglob("*"))
+
+
+def test_a_select_config_with_more_attempts_than_candidates_writes_nothing(
+        three_objects, tmp_path):  # fmt: skip
+    config = tmp_path / "c.yaml"
+    config.write_text("selector:\n  max_candidates: 4\n  max_attempts: 5\n")
+    out = tmp_path / "out"
+    code, output = run("select", "--data", three_objects, "--out", out, "--config", config)
+    assert_refused(code, output, "max_attempts 5 exceeds max_candidates 4")
+    assert not out.exists()

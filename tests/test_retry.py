@@ -226,3 +226,130 @@ def test_gymnasiums_checker_passes_with_trials_replayed(table: pd.DataFrame, cls
     env = _env(table, cls)
     assert env.trials == TRIALS
     check_env(env, skip_render_check=True)  # seeded resets (the trial draw included) repeat
+
+
+# ----------------------------------------------------------------------------- the selector's own
+def test_the_selectors_attempt_metrics_use_the_shared_draws_by_hand() -> None:
+    from classifiers.experiments.selector.evaluation import attempt_metrics, shared_attempt_metrics
+
+    held = np.array([[1, 1, 0, 0], [1, 1, 0, 0], [0, 0, 1, 1]], dtype=bool)
+    # the second grip fails exactly when the first does: a second attempt adds nothing
+    assert shared_attempt_metrics(held, 2) == pytest.approx((0.5, 0.5, 1.5))
+    assert shared_attempt_metrics(held, 3) == pytest.approx((0.5, 1.0, 2.0))
+    assert attempt_metrics(held.mean(axis=1), 2) == pytest.approx((0.5, 0.75, 1.5))
+
+
+@pytest.mark.parametrize("max_attempts", [1, 2, 3, 5])
+def test_the_selectors_random_shared_figures_average_every_order(max_attempts: int) -> None:
+    from itertools import permutations
+
+    from classifiers.experiments.selector.evaluation import (
+        shared_attempt_metrics,
+        shared_random_metrics,
+    )
+
+    held = np.random.default_rng(max_attempts).random((4, 6)) < 0.4
+    brute = np.mean([shared_attempt_metrics(held[list(order)], max_attempts)
+                     for order in permutations(range(4))], axis=0)  # fmt: skip
+    np.testing.assert_allclose(shared_random_metrics(held, max_attempts), brute, atol=1e-12)
+
+
+def _selector_config():
+    from grip_env.config import Config
+
+    return Config().override(selector={"max_candidates": 12, "max_attempts": 3},
+                             learning={"models": ("logreg",)})  # fmt: skip
+
+
+def _selector_model(data: pd.DataFrame, config):
+    from classifiers.experiments.selector.training import make_selector_env, make_selector_model
+
+    return make_selector_model(make_selector_env(data, config, "train", 1), "set", seed=0)
+
+
+@pytest.fixture(scope="module")
+def many() -> pd.DataFrame:
+    table = with_trials(synthetic_grips(n_objects=16, grips=(4, 9), trials=TRIALS, seed=5))
+    return table.assign(object_id=table["object_id"].astype(str))
+
+
+def test_the_selectors_evaluation_scores_retries_as_the_environment_replays_them(
+        many: pd.DataFrame) -> None:  # fmt: skip
+    """Every selector's success within 3 attempts is what ``GripSelect-v0`` gives its picks when
+    an episode's attempts replay one trial k (each test object, every k): the RL policy, and
+    best-Q_C as the first valid slot; the result says the attempts shared the draw."""
+    from classifiers.experiments.benchmark.retry import policy_retry_metrics
+    from classifiers.experiments.selector.evaluation import evaluate_selectors
+
+    config = _selector_config()
+    model = _selector_model(many, config)
+    report = evaluate_selectors(model, many, config, n_boot=200)
+    assert report["attempts"]["draws"] == "shared" and report["attempts"]["trials"] == TRIALS
+    test = report["split"]["test"]
+
+    def agent(observation: dict, mask: np.ndarray) -> int:
+        return int(model.predict(observation, action_masks=mask, deterministic=True)[0])
+
+    for name, policy in (("rl", agent), ("best_qc", lambda obs, mask: int(np.argmax(mask)))):
+        played = policy_retry_metrics(many, test, policy, config, attempts=3)
+        within = report["policies"][name]["success_within_attempts"]["mean"]
+        assert within == pytest.approx(played["shared_at_3"].mean(), abs=1e-12), name
+
+
+def test_without_per_trial_outcomes_the_evaluation_says_it_assumes_independence(
+        many: pd.DataFrame) -> None:  # fmt: skip
+    from classifiers.experiments.selector.evaluation import attempt_metrics, evaluate_selectors
+
+    config = _selector_config()
+    bare = many.drop(columns=[c for c in many.columns if str(c).startswith("trial_")])
+    model = _selector_model(bare, config)
+    report = evaluate_selectors(model, bare, config, n_boot=200)
+    scoring = report["attempts"]
+    assert scoring["draws"] == "independent"
+    assert "does not record each trial's outcome" in scoring["note"]
+    test = report["split"]["test"]
+    expected = [attempt_metrics(group.sort_values("Q_C", kind="stable")["success_rate"]
+                                .to_numpy(float), 3)[1]
+                for _, group in bare[bare["object_id"].isin(test)].groupby("object_id")]
+    within = report["policies"]["best_qc"]["success_within_attempts"]["mean"]
+    assert within == pytest.approx(np.mean(expected), abs=1e-12)
+
+
+def test_the_learning_curves_baselines_are_the_shared_draw_episode_rewards(
+        many: pd.DataFrame) -> None:  # fmt: skip
+    """With trials replayed by index, best-Q_C's expected episode reward on the training objects
+    is the mean over their trials of a hold within the attempts, as the environment plays it."""
+    from classifiers.experiments.benchmark.retry import policy_retry_metrics
+    from classifiers.experiments.selector.evaluation import training_baselines
+    from grip_env.dataset.split import held_out_objects
+
+    config = _selector_config()
+    lines = training_baselines(many, config)
+    train, _ = held_out_objects(many["object_id"], config.learning)
+    played = policy_retry_metrics(many, list(train), lambda obs, mask: int(np.argmax(mask)),
+                                  config, attempts=3)  # fmt: skip
+    assert lines["best Q_C"] == pytest.approx(played["shared_at_3"].mean(), abs=1e-12)
+    bare = many.drop(columns=[c for c in many.columns if str(c).startswith("trial_")])
+    assert training_baselines(bare, config)["best Q_C"] != pytest.approx(lines["best Q_C"])
+
+
+def test_the_leaderboard_says_what_its_attempts_table_assumes() -> None:
+    from classifiers.report.leaderboard import attempts_caption, retry_lines
+
+    without = attempts_caption({"methods": {}})
+    assert "does not record each trial's outcome" in without and "overstate" in without
+    with_retry = attempts_caption({"methods": {}, "retry": {}})
+    assert "retry section scores the same attempts on the shared draws" in with_retry
+    assert retry_lines({"methods": {}}) == []
+
+
+def test_an_object_missing_its_trials_is_refused_not_read_as_a_hold(many: pd.DataFrame) -> None:
+    from classifiers.experiments.selector.evaluation import training_baselines
+    from grip_env.dataset.split import held_out_objects
+
+    config = _selector_config()
+    train, _ = held_out_objects(many["object_id"], config.learning)
+    partial = many.assign(trial_success_0=many["trial_success_0"].astype(float))
+    partial.loc[partial["object_id"] == train[0], "trial_success_0"] = np.nan
+    with pytest.raises(ValueError, match=rf"object '{train[0]}' lacks some of its trials'"):
+        training_baselines(partial, config)

@@ -7,8 +7,8 @@
 3. Does the RL selector beat best-Q_C, and does it match the best supervised method?
 4. Do the twelve measures capture what the grip's image holds? The image stage's paired ROC-AUC
    of each image model (``cnn``, ``cnn_measures``) against the measures' learner, and, at
-   picking, each image model against lambdarank and best-Q_C, over all held-out objects and by
-   family (meshes, procedural and named shapes).
+   picking, each image model against the measures' learner, lambdarank and best-Q_C, over all
+   held-out objects and by family (meshes, procedural and named shapes).
 
 A pick's comparison is the difference of top-1 success (the pick's recorded success rate),
 paired over every held-out object with the leaderboard's stratified bootstrap: the same resamples
@@ -25,12 +25,13 @@ from typing import Any
 
 import pandas as pd
 
+from classifiers.experiments.benchmark import SUPERVISED_PREFIXES
 from classifiers.experiments.benchmark.aggregate import estimate, mean, paired_bootstraps
 from classifiers.experiments.benchmark.leaderboard import REFERENCE, metric_matrices
 
 ANSWERS_FILE = "answers.json"
 #: Method name prefixes of the supervised learners on the leaderboard.
-SUPERVISED = ("classifier_", "regressor_", "ranker_")
+SUPERVISED = SUPERVISED_PREFIXES
 RL, BEST_QG = "rl", "best_qg"
 #: The leaderboard method the image models are compared with at picking, beside best-Q_C.
 LAMBDARANK = "ranker_lambdarank"
@@ -54,7 +55,7 @@ def pick_differences(board: dict[str, Any], pairs: list[tuple[str, str]], seed: 
     unknown = sorted({name for pair in pairs for name in pair} - set(success))
     if unknown:
         raise ValueError(f"the leaderboard has no method {unknown[0]!r}")
-    boot = paired_bootstraps(success, reps, seed + 1, task_bootstrap=True)
+    boot = paired_bootstraps(success, reps, seed + 1, task_bootstrap=True, objects=objects)
     found = {}
     for a, b in pairs:
         difference = estimate(mean(success[a]) - mean(success[b]),
@@ -97,8 +98,9 @@ def hand_difference(ablation: dict[str, Any]) -> dict[str, Any] | None:
 def image_answers(board: dict[str, Any], images: dict[str, Any],
                   seed: int) -> dict[str, Any] | None:  # fmt: skip
     """The image stage's answer: each image model's paired ROC-AUC difference to the measures'
-    learner (``"auc"``), and its top-1 success against lambdarank and best-Q_C over every
-    held-out object (``"picks"``) and each family's (``"families"``); None without the stage."""
+    learner (``"auc"``), and its top-1 success against that learner's picks, lambdarank's and
+    best-Q_C's over every held-out object (``"picks"``) and each family's (``"families"``);
+    None without the stage."""
     models = images.get("models", [])
     if not models:
         return None
@@ -106,7 +108,9 @@ def image_answers(board: dict[str, Any], images: dict[str, Any],
     auc = {name: {**cv["paired_difference"][name]["roc_auc"], "objects": cv.get("n_objects")}
            for name in models if name in cv.get("paired_difference", {})}  # fmt: skip
     present = set(board.get("methods", {}))
-    pairs = [(f"classifier_{name}", versus) for name in models for versus in (LAMBDARANK, REFERENCE)
+    learner = f"classifier_{cv['reference']}" if cv.get("reference") else None
+    versus_all = (*([learner] if learner else []), LAMBDARANK, REFERENCE)
+    pairs = [(f"classifier_{name}", versus) for name in models for versus in versus_all
              if {f"classifier_{name}", versus} <= present]  # fmt: skip
     picks = pick_differences(board, pairs, seed) if pairs else {}
     families: dict[str, Any] = {}

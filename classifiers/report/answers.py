@@ -130,11 +130,32 @@ def _image(answers: dict[str, Any]) -> str:
     alone = [_against_it(_SHOWN.get(n, n), image["auc"][n]) for n in image["models"]
              if n != joined and n in image["auc"]]  # fmt: skip
     picks = {"picks": image.get("picks", {}), "ranked_objects": answers.get("ranked_objects", 0)}
+    at_picking = _image_picks(picks, joined, image.get("reference"),
+                              gained=bool(auc) and not problem and auc["ci"][0] > 0)
+    return f"{question} {verdict}{'; ' + '; '.join(alone) if alone else ''}; {at_picking}."
+
+
+def _image_picks(picks: dict[str, Any], joined: str, reference: str | None, gained: bool) -> str:
+    """The image model's picks against the measures' learner, lambdarank and best-Q_C; after a
+    ROC-AUC gain (``gained``), whether the gain carries over to picking: it does when its picks
+    beat the learner's it gained over (lambdarank's when that learner's picks were not
+    scored), it does not when that interval says not, and nothing is claimed without a
+    verdict."""
     method = f"classifier_{joined}"
-    against_ranker = _compare(picks, method, "ranker_lambdarank", "`lambdarank`")
-    at_picking = (f"; at picking, `{joined}` {against_ranker}"
-                  f" and {_compare(picks, method, 'best_qc', _QC)}")
-    return f"{question} {verdict}{'; ' + '; '.join(alone) if alone else ''}{at_picking}."
+    shown = [(f"classifier_{reference}", f"`{reference}`")] if reference else []
+    shown += [("ranker_lambdarank", "`lambdarank`"), ("best_qc", _QC)]
+    found = [(versus, name) for versus, name in shown if f"{method} - {versus}" in picks["picks"]]
+    if not found:
+        return f"at picking, `{joined}` was not compared (no pick of it was scored)"
+    parts = [_compare(picks, method, versus, name) for versus, name in found]
+    listed = parts[0] if len(parts) == 1 else f"{', '.join(parts[:-1])} and {parts[-1]}"
+    key = f"{method} - {found[0][0]}"
+    if gained and "no verdict" not in parts[0]:
+        carries = relation(picks["picks"][key]["ci"]) == "beats"
+        lead = ("and the gain carries over to picking" if carries
+                else "but the gain does not carry over to picking")
+        return f"{lead}: `{joined}` {listed}"
+    return f"at picking, `{joined}` {listed}"
 
 
 def _against_it(shown: str, auc: dict[str, Any]) -> str:

@@ -85,19 +85,34 @@ def leaderboard_markdown(board: Mapping[str, Any]) -> str:
         f"success, per object; {board['interval']}. {verdict_sentence(board)}", "",
         "## Success within k attempts (GripAccept-v0 / GripSelect-v0 with max_attempts = k)", "",
         _table(attempts), "",
-        "Chance that one of the method's top-k picks holds, from the recorded success rates, "
-        "assuming independent trials (the replay backend's draws).", "",
-        *_retry_lines(board),
+        attempts_caption(board), "",
+        *retry_lines(board),
     ]  # fmt: skip
     return "\n".join(lines)
 
 
-def _retry_lines(board: Mapping[str, Any]) -> list[str]:
-    """The retry task's section, when the dataset records every trial's outcome."""
+def attempts_caption(board: Mapping[str, Any]) -> str:
+    """What the success-within-k table assumes, and where the shared-draw figures are (or why
+    there are none)."""
+    formula = ("Chance that one of the method's top-k picks holds, from the recorded success "
+               "rates, with the attempts taken as independent (1 - prod(1 - p)).")
+    if "retry" in board:
+        return (f"{formula} The recorded trials share their draws across an object's grips, so "
+                "this overstates what a retry gains: the retry section scores the same attempts "
+                "on the shared draws.")
+    return (f"{formula} The dataset does not record each trial's outcome, so the attempts "
+            "cannot be scored on the shared draws (a retry meets the draw that defeated the "
+            "first pick): these figures overstate what a retry gains.")
+
+
+def retry_lines(board: Mapping[str, Any], heading: bool = True) -> list[str]:
+    """The retry task's section (Markdown lines), when the dataset records every trial's
+    outcome; ``heading``: with its own heading."""
     if "retry" not in board:
         return []
     retry = board["retry"]
-    return ["## Retry: success within m attempts that share the object's draw", "",
+    title = "Retry: success within m attempts that share the object's draw"
+    return [*([f"## {title}", ""] if heading else [f"**{title}.**"]),
             retry_table(retry), "",
             f"Static order of each method; attempt m replays the same trial index k as the first "
             f"(same friction, mass and pose noise), averaged over k, on {retry['objects']} "

@@ -34,7 +34,13 @@ from classifiers.report.judge import (
     leaderboard_caution,
     unjudgeable,
 )
-from classifiers.report.leaderboard import leaderboard_frames, split_line, verdict_sentence
+from classifiers.report.leaderboard import (
+    attempts_caption,
+    leaderboard_frames,
+    retry_lines,
+    split_line,
+    verdict_sentence,
+)
 from classifiers.report.power import power_section
 from grip_env.config import Config
 from grip_env.objects import PlanarObject, procedural_objects
@@ -577,6 +583,10 @@ def _selector_section(report: Report, out: Path, selector: dict[str, Any]) -> No
     metrics = sorted({m for v in policies.values() for m in v if isinstance(v.get(m), dict)})
     report.table(frame_of_intervals(policies, metrics),
                  caption="First-pick success rate on the held-out objects, mean and 95% interval.")
+    scoring = selector.get("attempts") or {"note": "attempts taken as independent, 1 - prod(1 - "
+                                                   "p): the run predates shared-draw scoring"}
+    report.text(f"Success within {selector.get('max_attempts')} attempts and expected attempts: "
+                f"{scoring['note']}.")
     _stage_figures(report, out, "selector")
 
 
@@ -601,9 +611,12 @@ def _benchmark_section(report: Report, out: Path, board: dict[str, Any]) -> None
     report.table(main.set_index("method"), caption="Leaderboard, sorted by the interquartile "
                  "mean of the normalised score; intervals: " + board["interval"] + ".")
     report.text(few or "**" + verdict_sentence(board) + "**")
-    report.table(attempts.set_index("method"), caption="Success within k attempts: the chance "
-                 "that one of the method's top-k picks holds, independent trials assumed "
-                 "(GripSelect-v0 with max_attempts = k; GripAccept-v0 executing those k).")
+    report.table(attempts.set_index("method"), caption="Success within k attempts "
+                 "(GripSelect-v0 with max_attempts = k; GripAccept-v0 executing those k). "
+                 + attempts_caption(board))
+    for line in retry_lines(board, heading=False):
+        if line:
+            report.text(line)
     _stage_figures(report, out, "benchmark")
 
 

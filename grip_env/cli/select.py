@@ -41,7 +41,9 @@ def select(
     """Train a MaskablePPO selector on the training objects of DATA and evaluate it on the rest.
 
     Writes OUT/selector.json (first-pick success with 95% intervals for the selector, random,
-    best Q_C, best Q_G, classifiers and the oracle), OUT/model.zip (Stable-Baselines3), the
+    best Q_C, best Q_G, classifiers and the oracle, and success within selector.max_attempts:
+    on the shared draws when DATA records every trial's outcome, else with the attempts taken
+    as independent, as its "attempts" entry says), OUT/model.zip (Stable-Baselines3), the
     TensorBoard logs OUT/tb and OUT/learning_curve.png.
     """
     with stop_on_signals(f"rerun the same command to redo {out}"), user_errors():

@@ -26,6 +26,7 @@ from __future__ import annotations
 import json
 import math
 import time
+import zlib
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -305,6 +306,12 @@ def _group_values(rows: list[dict[str, Any]]) -> dict[str, float]:
     return found
 
 
+def _group_stream(seed: int, group: str) -> np.random.Generator:
+    """The bootstrap stream of one group (all objects, or a family), keyed by the seed and the
+    group's name: a family's intervals do not depend on which other families the sample holds."""
+    return np.random.default_rng([seed, zlib.crc32(group.encode())])
+
+
 def _agreement(rows: list[dict[str, Any]], grips: int, rng: np.random.Generator) -> Agreement:
     """The group's figures with bootstrap intervals (objects resampled ``BOOTSTRAP`` times)."""
     point = _group_values(rows)
@@ -365,16 +372,16 @@ def trials_for(retest: float, trials: int, target: float = TRUSTWORTHY) -> float
 
 def _figures(checks: list[_ObjectCheck], runs: list[_Runs], engine: str,
              seed: int) -> CrossCheck:
-    rng = np.random.default_rng(seed)
     other = other_engine(engine)
     rows = [_object_figures(r, engine, other) for r in runs]
     grips = [len(c.recorded) for c in checks]
-    overall = _agreement(rows, sum(grips), rng)
+    overall = _agreement(rows, sum(grips), _group_stream(seed, "all objects"))
     groups: dict[str, list[int]] = {}
     for i, check in enumerate(checks):
         groups.setdefault(object_family(check.task.obj), []).append(i)
-    families = {name: _agreement([rows[i] for i in members], sum(grips[i] for i in members), rng)
-                for name, members in sorted(groups.items())}
+    families = {name: _agreement([rows[i] for i in members], sum(grips[i] for i in members),
+                                 _group_stream(seed, f"family {name}"))
+                for name, members in sorted(groups.items())}  # fmt: skip
     reproduced = sum(_reproduced(r.draws[engine], c) for r, c in zip(runs, checks, strict=True))
     trials = checks[0].task.config.dataset.trials if checks else 0
     cost = _costs(runs, (engine, other), {engine: overall.retest_own,

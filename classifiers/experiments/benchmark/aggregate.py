@@ -14,6 +14,16 @@ seaborn); the estimators and the resampling scheme are rliable's:
   resampled too (the same objects for every method, so comparisons stay paired). The interval
   is the percentile interval of the statistic over the resamples.
 
+Several methods resampled together (:func:`paired_bootstraps`) draw from streams keyed by what
+the resample is of, never from one generator consumed method after method: the resampled objects
+from a stream keyed by the seed and the object ids (shared by every method: comparisons stay
+paired over the same objects), each method's runs within those objects from a stream keyed by
+the seed, the object ids and the method's name (:func:`keyed_generator`). A method's interval,
+and its paired difference to the reference, then depend only on its scores, the reference's,
+the objects and the seed: not on which other methods are on the board, nor on their order.
+Runs get a stream of their own per method because runs of two methods are independent
+trainings: there is no pairing to keep between seed i of one and seed i of another.
+
 ``scripts/check_rliable.py`` checks them against rliable 1.2.0: identical point estimates,
 intervals equal to Monte-Carlo error.
 
@@ -24,7 +34,9 @@ zero-width interval. The runs-only interval (rliable's default) is reported besi
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+import hashlib
+import json
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -105,19 +117,34 @@ def stratified_bootstrap(
     return estimate(statistic(matrix), statistic(matrix[index]))
 
 
+def keyed_generator(seed: int, *key: object) -> np.random.Generator:
+    """A generator whose stream is fixed by ``seed`` and ``key`` alone (their text, hashed with
+    SHA-256: the same on every machine and Python, unlike ``hash``)."""
+    digest = hashlib.sha256(json.dumps([str(part) for part in key]).encode()).digest()
+    words = np.frombuffer(digest, dtype=np.uint32).tolist()
+    return np.random.default_rng(np.random.SeedSequence([int(seed), *words]))
+
+
 def paired_bootstraps(
     scores: Mapping[str, NDArray[np.float64]], reps: int = 2000, seed: int = 0,
-    task_bootstrap: bool = True,
+    task_bootstrap: bool = True, objects: Sequence[str] | None = None,
 ) -> dict[str, NDArray[np.float64]]:
-    """Resamples ``(reps, runs, objects)`` of every method, with the same objects in each
-    resample for all methods (runs drawn independently per method)."""
+    """Resamples ``(reps, runs, objects)`` of every method: the same resampled objects for all
+    methods (a stream keyed by ``seed`` and ``objects``, the matrices' column ids; default their
+    positions), each method's runs from a stream keyed by ``seed``, ``objects`` and its name. A
+    method's resamples are the same whatever other methods are passed with it, in any order."""
     matrices = {name: check_scores(m, name) for name, m in scores.items()}
-    objects = {m.shape[1] for m in matrices.values()}
-    if len(objects) != 1:
-        raise ValueError(f"every method must score the same objects, got counts {sorted(objects)}")
-    rng = np.random.default_rng(seed)
-    tasks = object_resamples(objects.pop(), reps, rng, task_bootstrap)
-    return {name: m[resample_indices(*m.shape, reps, rng, tasks)] for name, m in matrices.items()}
+    counts = {m.shape[1] for m in matrices.values()}
+    if len(counts) != 1:
+        raise ValueError(f"every method must score the same objects, got counts {sorted(counts)}")
+    count = counts.pop()
+    ids = [str(i) for i in (range(count) if objects is None else objects)]
+    if len(ids) != count:
+        raise ValueError(f"{len(ids)} object ids for matrices of {count} objects")
+    tasks = object_resamples(count, reps, keyed_generator(seed, "objects", *ids), task_bootstrap)
+    return {name: m[resample_indices(*m.shape, reps, keyed_generator(seed, "runs", name, *ids),
+                                     tasks)]
+            for name, m in matrices.items()}  # fmt: skip
 
 
 def estimate(point: NDArray[np.float64], resampled: NDArray[np.float64]) -> dict[str, object]:

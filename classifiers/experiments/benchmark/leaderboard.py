@@ -71,13 +71,14 @@ def build_leaderboard(
     matrices, objects = score_matrices(metrics)
     if reference not in matrices:
         raise ValueError(f"the leaderboard needs the reference method {reference!r}")
-    boot = paired_bootstraps(matrices, reps, seed, task_bootstrap=True)
-    runs_only = paired_bootstraps(matrices, reps, seed, task_bootstrap=False)
+    boot = paired_bootstraps(matrices, reps, seed, task_bootstrap=True, objects=objects)
+    runs_only = paired_bootstraps(matrices, reps, seed, task_bootstrap=False, objects=objects)
     ref, ref_boot = matrices[reference], boot[reference]
     plain = metrics.groupby("method")[list(PLAIN)].mean()
     every = sorted(set(metrics["object_id"]))
     success = metric_matrices(metrics, "success", every)
-    success_boot = paired_bootstraps(success, reps, seed + 1, task_bootstrap=True)
+    success_boot = paired_bootstraps(success, reps, seed + 1, task_bootstrap=True,
+                                    objects=every)
     rows = {}
     for name, matrix in matrices.items():
         difference = estimate(mean(matrix) - mean(ref), mean(boot[name]) - mean(ref_boot))
@@ -106,8 +107,11 @@ def build_leaderboard(
         "degenerate_objects": degenerate, "taus": _round(TAUS),
         "interval": (f"95% percentile stratified bootstrap ({reps} resamples, seed {seed}): "
                      "objects resampled, runs resampled within each object (rliable's "
-                     "StratifiedBootstrap, task_bootstrap=True); the JSON's `iqm_runs_only_ci` and "
-                     "`mean_runs_only_ci` resample runs only (rliable's default)"),
+                     "StratifiedBootstrap, task_bootstrap=True), the resampled objects the same "
+                     "for every method and each method's runs from a stream of its own, so a "
+                     "method's interval does not depend on the board's other methods; the JSON's "
+                     "`iqm_runs_only_ci` and `mean_runs_only_ci` resample runs only (rliable's "
+                     "default)"),
         "methods": {name: rows[name] for name in order},
     }  # fmt: skip
 

@@ -114,7 +114,7 @@ def retry_leaderboard(metrics: pd.DataFrame, reps: int = 2000, seed: int = 0,
     columns = [*shared_columns(attempts),
                *(f"overstatement_at_{m}" for m in range(1, attempts + 1))]
     matrices = {c: metric_matrices(metrics, c, objects) for c in columns}
-    boots = {c: paired_bootstraps(matrices[c], reps, seed, task_bootstrap=True)
+    boots = {c: paired_bootstraps(matrices[c], reps, seed, task_bootstrap=True, objects=objects)
              for c in columns}
     for name in matrices[columns[0]]:
         row: dict[str, Any] = {"runs": int(matrices[columns[0]][name].shape[0])}

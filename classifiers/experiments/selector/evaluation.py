@@ -6,9 +6,17 @@ is taken as its probability of holding, so each object's score is an expectation
 sampling noise:
 
 - ``success_rate``: probability that the first pick holds;
-- ``success_within_attempts``: ``1 - prod(1 - p)`` over the first ``max_attempts`` picks;
-- ``expected_attempts``: expected number of grips executed, ``sum_j prod_{i<j}(1 - p_i)``, stopping
-  at the first hold or after ``max_attempts``.
+- ``success_within_attempts``: the chance that one of the first ``max_attempts`` picks holds;
+- ``expected_attempts``: expected number of grips executed, stopping at the first hold or after
+  ``max_attempts``.
+
+Attempts share the object's draw when the dataset records every trial's outcome
+(``trial_success_0..T-1``): an episode's attempts replay one trial index k, as
+``GripSelect-v0`` replays such data, so both are means over k of the picks' recorded trial k
+(:func:`shared_attempt_metrics`; a draw that defeats one grip tends to defeat the next). Without
+them the attempts are taken as independent, ``1 - prod(1 - p)`` and ``sum_j prod_{i<j}(1 - p_i)``
+over the picks' success rates (:func:`attempt_metrics`), which overstates what a retry gains;
+the result's ``attempts`` entry says which (:func:`attempt_scoring`).
 
 Selectors: ``rl`` (the trained policy, deterministic; after a failure the tried slot is masked and
 the policy asked again, as in the environment), ``random`` (exact expectation over uniformly
@@ -38,7 +46,9 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from classifiers.experiments.selector.data import check_grip_table
+from grip_env.columns import trial_success_columns
 from grip_env.config import Config
+from grip_env.dataset.shards import recorded_trial_successes
 from grip_env.dataset.split import held_out_objects
 from grip_env.envs.observation import CandidateSet, candidate_sets
 from grip_env.envs.select import GripSelectEnv
@@ -47,6 +57,8 @@ CLASSIFIER_CHOICES: tuple[str, ...] = ("logreg", "svm")
 METRICS: tuple[str, ...] = ("success_rate", "success_within_attempts", "expected_attempts")
 ROBUSTNESS_METRIC = "first_pick_robustness"
 Ranker = Callable[[CandidateSet], NDArray[np.intp]]
+#: (first-pick success, success within attempts, expected attempts).
+Attempts = tuple[float, float, float]
 
 
 def attempt_metrics(p: NDArray[np.float64], max_attempts: int) -> tuple[float, float, float]:
@@ -67,6 +79,64 @@ def random_metrics(p: NDArray[np.float64], max_attempts: int) -> tuple[float, fl
         elementary = np.concatenate([elementary, [0.0]]) + np.concatenate([[0.0], q * elementary])
     all_fail = np.array([elementary[j] / comb(n, j) for j in range(m + 1)])
     return float(1.0 - all_fail[1]), float(1.0 - all_fail[m]), float(all_fail[:m].sum())
+
+
+def shared_attempt_metrics(held: NDArray[np.bool_], max_attempts: int) -> Attempts:
+    """:func:`attempt_metrics` when the attempts share the object's draw: ``held`` is (picks,
+    trials), each pick's recorded outcome at every trial index k in the order picked; an
+    episode replays one k for all its attempts, so each figure is a mean over k."""
+    picks = np.asarray(held, dtype=bool)[:max_attempts]
+    failed_through = np.cumprod(~picks, axis=0)  # (attempts, trials): every pick so far failed
+    survive = np.concatenate([[1.0], failed_through.mean(axis=1)])
+    return float(picks[0].mean()), float(1.0 - survive[-1]), float(survive[:-1].sum())
+
+
+def shared_random_metrics(held: NDArray[np.bool_], max_attempts: int) -> Attempts:
+    """:func:`shared_attempt_metrics` averaged exactly over all orders of the candidates
+    (``held``: (candidates, trials)): at trial k, with ``f_k`` candidates that failed, a
+    uniformly random j-subset all fails with probability ``C(f_k, j) / C(n, j)``."""
+    from scipy.special import comb as combinations
+
+    n = held.shape[0]
+    m = min(max_attempts, n)
+    failed = n - np.asarray(held, dtype=bool).sum(axis=0)
+    j = np.arange(m + 1)
+    each_k = combinations(failed[None, :], j[:, None]) / combinations(n, j)[:, None]
+    all_fail = each_k.mean(axis=1)
+    return float(1.0 - all_fail[1]), float(1.0 - all_fail[m]), float(all_fail[:m].sum())
+
+
+def attempt_scoring(table: pd.DataFrame) -> dict[str, Any]:
+    """How attempts are scored on ``table``: ``{"draws": "shared" or "independent", "trials",
+    "note"}``; shared when it records every trial's outcome, else the independence formula,
+    and the note says why."""
+    trials = recorded_trial_successes(table.columns)
+    if trials:
+        return {"draws": "shared", "trials": trials,
+                "note": f"attempts share the object's draw: the mean over the {trials} recorded "
+                        "trial indices k of the picks' outcomes at k, as GripSelect-v0 replays "
+                        "them"}  # fmt: skip
+    return {"draws": "independent", "trials": 0,
+            "note": "attempts taken as independent, 1 - prod(1 - p) over the picks' success "
+                    "rates, because the dataset does not record each trial's outcome "
+                    "(trial_success_0..T-1): this overstates what a retry gains when one draw "
+                    "defeats several grips"}  # fmt: skip
+
+
+def trial_outcomes(found: CandidateSet, trials: int) -> NDArray[np.bool_]:
+    """(candidates, trials) recorded outcome of each kept candidate at each trial index."""
+    return recorded_outcomes(found.rows, trials, found.object_id)
+
+
+def recorded_outcomes(rows: pd.DataFrame, trials: int, object_id: str) -> NDArray[np.bool_]:
+    """(rows, trials) of ``trial_success_0..trials-1``; ValueError when one is missing (a table
+    whose trials are recorded for some objects only), rather than a NaN read as a hold."""
+    values = rows[list(trial_success_columns(trials))]
+    if values.isna().to_numpy().any():
+        raise ValueError(f"object {object_id!r} lacks some of its trials' outcomes "
+                         f"(trial_success_0..{trials - 1}): score attempts on objects that "
+                         f"record every trial, or drop those columns to assume independence")
+    return values.to_numpy(bool)
 
 
 def action_probabilities(model: Any, sets: Sequence[CandidateSet],
@@ -157,9 +227,11 @@ def training_baselines(table: pd.DataFrame, config: Config) -> dict[str, float]:
     """Expected episode reward of random, best-Q_C and oracle picks on the training objects.
 
     Objects are drawn uniformly per episode, each showing its ``max_candidates`` best by Q_C.
-    Success reward: the chance of a hold within ``max_attempts``; robustness reward (one
-    attempt only): the first pick's ``robustness_mean / sim.reference_level_g``. Empty when the
-    episode reward has no closed form (robustness with several attempts).
+    Success reward: the chance of a hold within ``max_attempts``, with the attempts sharing
+    the episode's trial when ``table`` records every trial's outcome (:func:`attempt_scoring`);
+    robustness reward (one attempt only): the first pick's ``robustness_mean /
+    sim.reference_level_g``. Empty when the episode reward has no closed form (robustness with
+    several attempts).
     """
     learning, selector = config.learning, config.selector
     robust = selector.reward == "robustness"
@@ -167,6 +239,7 @@ def training_baselines(table: pd.DataFrame, config: Config) -> dict[str, float]:
         return {}
     ids = table["object_id"].astype(str)
     train_ids, _ = held_out_objects(ids, learning)
+    trials = recorded_trial_successes(table.columns)
     rows: dict[str, list[float]] = {"random": [], "best Q_C": [], "oracle": []}
     for _, frame in table[ids.isin(train_ids).to_numpy()].groupby("object_id"):
         shown = frame.sort_values("Q_C", kind="stable").head(selector.max_candidates)
@@ -177,9 +250,16 @@ def training_baselines(table: pd.DataFrame, config: Config) -> dict[str, float]:
             rows["oracle"].append(value.max())
             continue
         p = shown["success_rate"].to_numpy(float)
+        best = np.argsort(-p, kind="stable")
+        if trials:
+            held = recorded_outcomes(shown, trials, str(shown["object_id"].iloc[0]))
+            rows["random"].append(shared_random_metrics(held, selector.max_attempts)[1])
+            rows["best Q_C"].append(shared_attempt_metrics(held, selector.max_attempts)[1])
+            rows["oracle"].append(shared_attempt_metrics(held[best], selector.max_attempts)[1])
+            continue
         rows["random"].append(random_metrics(p, selector.max_attempts)[1])
         rows["best Q_C"].append(attempt_metrics(p, selector.max_attempts)[1])
-        rows["oracle"].append(attempt_metrics(np.sort(p)[::-1], selector.max_attempts)[1])
+        rows["oracle"].append(attempt_metrics(p[best], selector.max_attempts)[1])
     return {name: float(np.mean(v)) for name, v in rows.items() if v}
 
 
@@ -194,7 +274,9 @@ def evaluate_selectors(
 
     Returns:
         ``{"policies": {name: {metric: {"mean", "ci"}, "per_object": [...]}}, "split": {...},
-        "max_attempts", "max_candidates", "interval"}``.
+        "max_attempts", "max_candidates", "attempts", "interval"}``; ``attempts`` says whether
+        the attempts shared the object's draw or were taken as independent, and why
+        (:func:`attempt_scoring`).
     """
     table = check_grip_table(data)
     ids = table["object_id"].astype(str)
@@ -211,13 +293,16 @@ def evaluate_selectors(
     fitted = fit_classifiers(table[ids.isin(train_ids).to_numpy()], config, classifiers)
     rankers.update({f"classifier_{name}": _classifier_ranker(m) for name, m in fitted.items()})
     robust = "robustness_mean" in table.columns
+    scoring = attempt_scoring(table)
     rankers["oracle"] = _oracle
     if robust:
         rankers["oracle_robustness"] = _robustness_oracle
-    scores = {name: _score(sets, rank, selector.max_attempts, robust)
+    trials = scoring["trials"]
+    scores = {name: _score(sets, rank, selector.max_attempts, robust, trials)
               for name, rank in rankers.items()}  # fmt: skip
     scores["random"] = np.array([
-        [*random_metrics(s.success_rate[: s.count], selector.max_attempts),
+        [*(shared_random_metrics(trial_outcomes(s, trials), selector.max_attempts) if trials
+           else random_metrics(s.success_rate[: s.count], selector.max_attempts)),
          *([float(s.rows["robustness_mean"].mean())] if robust else [])]
         for s in sets
     ])  # fmt: skip
@@ -230,6 +315,7 @@ def evaluate_selectors(
                   "test_fraction": learning.test_fraction, "seed": learning.seed},
         "max_attempts": selector.max_attempts,
         "max_candidates": selector.max_candidates,
+        "attempts": scoring,
         "reward": selector.reward,
         "interval": f"95% percentile bootstrap over test objects, {n_boot} resamples",
     }  # fmt: skip
@@ -265,12 +351,14 @@ def _summary(values: NDArray[np.float64], resamples: NDArray[np.intp],
 
 
 def _score(sets: list[CandidateSet], rank: Ranker, max_attempts: int,
-           robust: bool = False) -> NDArray[np.float64]:
-    """(objects, metrics) array of :func:`attempt_metrics` (and the first pick's robustness)."""
+           robust: bool = False, trials: int = 0) -> NDArray[np.float64]:
+    """(objects, metrics) array of :func:`attempt_metrics`, or with ``trials`` recorded by index
+    :func:`shared_attempt_metrics` (and the first pick's robustness)."""
     rows = []
     for found in sets:
         order = rank(found)
-        row = list(attempt_metrics(found.success_rate[order], max_attempts))
+        row = list(shared_attempt_metrics(trial_outcomes(found, trials)[order], max_attempts)
+                   if trials else attempt_metrics(found.success_rate[order], max_attempts))
         if robust:
             row.append(float(found.rows["robustness_mean"].to_numpy(float)[order[0]]))
         rows.append(row)
