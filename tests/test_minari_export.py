@@ -192,3 +192,24 @@ def test_a_missing_dataset_is_refused(tmp_path: Path, minari_root: Path):
     assert_refused(*cli("export", "minari", "--data", tmp_path / "none", "--id", "ab/c-v0"),
                    "none")
     assert not any(minari_root.rglob("*.hdf5"))
+
+
+def test_a_retry_export_keeps_the_failed_key(generated_dataset_dir: Path, minari_root: Path):
+    code, output = cli("export", "minari", "--data", generated_dataset_dir, "--id",
+                       "grip-test/retry-v0", "--episodes", EPISODES, "--seed", 3,
+                       "--max-attempts", 3)
+    assert code == 0, output
+    dataset = minari.load_dataset("grip-test/retry-v0")
+    assert set(dataset.observation_space.spaces) == {"features", "mask", "failed"}
+    assert "Dict(features, mask, failed)" in dataset.storage.metadata["description"]
+    retried = 0
+    for episode in dataset.iterate_episodes():
+        failed, mask = episode.observations["failed"], episode.observations["mask"]
+        assert len(episode) <= 3 and not failed[0].any()
+        for t, (action, reward) in enumerate(zip(episode.actions, episode.rewards, strict=True)):
+            expected = failed[t].copy()
+            expected[action] = reward == 0  # a drop marks the slot failed, a hold ends it
+            assert np.array_equal(failed[t + 1], expected)
+            assert mask[t + 1][action] == 0
+        retried += len(episode) > 1
+    assert retried > 0

@@ -14,7 +14,8 @@ generator), so one seed gives the same episodes, step for step.
 What Minari lacks is kept inside the episode:
 
 - the action mask: the observation is ``GripSelect-v0``'s own ``Dict(features, mask)``, so
-  ``episode.observations["mask"][t]`` is the mask at step ``t``;
+  ``episode.observations["mask"][t]`` is the mask at step ``t``; with ``max_attempts > 1`` it
+  also holds ``failed`` (the slots tried and failed so far in the episode);
 - the reward's source: ``infos`` hold, per step, the object's index in the metadata's
   ``objects`` list (``object_index``), the executed ``slot``, its recorded ``success_rate``
   (successes / trials of the grip's recorded trials: replay draws the reward as a Bernoulli of
@@ -197,7 +198,7 @@ def _run_episode(env: Any, policy: BehaviourPolicy, rng: np.random.Generator,
         done = terminated or truncated
     return {
         "observations": {key: np.stack([o[key] for o in observations])
-                         for key in ("features", "mask")},
+                         for key in observations[0]},  # features, mask (and failed: retries)
         "actions": np.asarray(actions, dtype=np.int64), "rewards": rewards,
         "terminations": terminations, "truncations": truncations,
         "infos": {key: np.asarray([i[key] for i in infos]) for key in infos[0]},
@@ -236,11 +237,12 @@ def _record(plan: ExportPlan, objects: Sequence[str], train_refs: tuple[float, f
 
 
 def _description(plan: ExportPlan, objects: Sequence[str], held_out: Sequence[str]) -> str:
+    retry = ", failed" if (plan.max_attempts or 1) > 1 else ""
     return (f"{len(objects)} objects of the grip-env dataset {plan.data!r} (split "
             f"{plan.split!r}), {plan.episodes_per_object} episodes each of {ENV_ID} (replay), "
             f"logged by the behaviour policy: {plan.policy.describe()}, seed {plan.seed}. The "
-            f"observation is the environment's Dict(features, mask): the action mask is "
-            f"observations['mask']. The reference scores are the exact expected returns of the "
+            f"observation is the environment's Dict(features, mask{retry}): the action mask "
+            f"is observations['mask']. The reference scores are the exact expected returns of the "
             f"uniform-random and the oracle pick on the {len(held_out)} evaluation objects "
             f"(eval_env_spec).")  # fmt: skip
 
