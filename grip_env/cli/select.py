@@ -69,7 +69,6 @@ def select(
             check_setting("selector", "timesteps", timesteps, "--timesteps")
         from classifiers.experiments.selector import REPORT_FILE, run_selector
         from classifiers.experiments.selector.data import check_grip_table
-
         from classifiers.experiments.selector.recorded import (
             retry_training_objects,
             with_recorded_trials,
