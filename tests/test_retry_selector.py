@@ -50,7 +50,7 @@ def test_one_attempt_needs_no_trials(table: pd.DataFrame) -> None:
 
 def test_the_retry_task_refuses_a_table_without_trials(table: pd.DataFrame) -> None:
     bare = table[[c for c in table.columns if not c.startswith("trial_")]]
-    with pytest.raises(ValueError, match="selector.max_attempts 3 .* does not record"):
+    with pytest.raises(ValueError, match=r"selector\.max_attempts 3 .* does not record"):
         retry_training_objects(bare, _config())
 
 
@@ -95,7 +95,7 @@ def trained(table: pd.DataFrame, tmp_path_factory: pytest.TempPathFactory):
 
 
 def test_the_retry_selector_trains_on_the_recorded_objects_only(trained) -> None:
-    result, out, partial, gone = trained
+    result, out, _, gone = trained
     assert "failed" in result.model.observation_space.spaces
     recorded = json.loads((out / "model.json").read_text())
     objects = next(iter(recorded.values()))["objects"]
