@@ -98,7 +98,9 @@ def test_the_retry_selector_trains_on_the_recorded_objects_only(trained) -> None
     result, out, _, gone = trained
     assert "failed" in result.model.observation_space.spaces
     recorded = json.loads((out / "model.json").read_text())
-    objects = next(iter(recorded.values()))["objects"]
+    record = recorded["trained_on"]
+    assert record["split"] == "train" and record["trials_recorded"] == result.objects.summary()
+    objects = record["objects"]
     assert result.objects is not None and sorted(objects) == sorted(result.objects.objects)
     assert not set(objects) & set(gone)
 

@@ -321,7 +321,8 @@ def train_selector(
     model.save(out / MODEL_FILE)
     from classifiers.experiments.benchmark.provenance import write_agent_record
 
-    write_agent_record(out / MODEL_FILE, env)  # model.json: the objects it was trained on
+    subset = {} if recorded is None else {"split": "train", "trials_recorded": recorded.summary()}
+    write_agent_record(out / MODEL_FILE, env, **subset)  # model.json: the objects trained on
     recorder = callbacks[0]
     baselines = None
     if table is not None:
