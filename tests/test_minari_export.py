@@ -165,6 +165,21 @@ def test_the_reference_returns_are_exact_expectations():
     assert comb(4, 4) == 1 and random_return(rates, 9) == pytest.approx(1.0)
 
 
+def test_the_shared_draw_reference_returns_by_hand():
+    from grip_env.offline.reference import shared_oracle_return, shared_random_return
+
+    held = np.array([[1, 1, 0, 0], [1, 0, 0, 0], [0, 0, 1, 0]], dtype=bool)  # 3 grips, 4 trials
+    rates = held.mean(axis=1)
+    # one pick: the mean rate, as without shared draws
+    assert shared_random_return(held, 1) == pytest.approx(rates.mean())
+    assert shared_oracle_return(held, rates, 1) == pytest.approx(0.5)
+    # two picks: at k = 0..3, 1, 2, 2, 3 grips failed; a pair all fails w.p. C(f, 2) / 3
+    assert shared_random_return(held, 2) == pytest.approx(1 - (0 + 1 + 1 + 3) / 3 / 4)
+    assert shared_oracle_return(held, rates, 2) == pytest.approx(0.5)  # grips 0, 1: k 0, 1
+    assert shared_oracle_return(held, rates, 3) == pytest.approx(0.75)  # k = 3 defeats all
+    assert oracle_return(rates, 2) == pytest.approx(1 - 0.5 * 0.75)  # independence: 0.625
+
+
 def test_an_existing_id_is_refused_unless_overwrite(exported, generated_dataset_dir, minari_root):
     files = sorted((p, p.stat().st_mtime_ns) for p in minari_root.rglob("*"))
     refused = cli("export", "minari", "--data", generated_dataset_dir, "--id",
@@ -202,6 +217,8 @@ def test_a_retry_export_keeps_the_failed_key(generated_dataset_dir: Path, minari
     dataset = minari.load_dataset("grip-test/retry-v0")
     assert set(dataset.observation_space.spaces) == {"features", "mask", "failed"}
     assert "Dict(features, mask, failed)" in dataset.storage.metadata["description"]
+    record = dataset.storage.metadata[RECORD_KEY]
+    assert "replayed by every attempt" in record["reward"]  # generate records every trial
     retried = 0
     for episode in dataset.iterate_episodes():
         failed, mask = episode.observations["failed"], episode.observations["mask"]

@@ -140,10 +140,12 @@ def export_minari(
         ids, sets = _objects_and_sets(env)
         objects = tuple(o for o, found in zip(ids, sets, strict=True) if found.count)
         episodes = collect_episodes(env, plan, objects)
-        train_refs = reference_returns(sets, env.unwrapped.max_attempts)
+        train_refs = reference_returns(sets, env.unwrapped.max_attempts, env.unwrapped.trials)
         low, high = reference_returns(_objects_and_sets(eval_env)[1],
-                                      eval_env.unwrapped.max_attempts)  # fmt: skip
-        record = _record(plan, objects, train_refs, dataset_sha256, code_version)
+                                      eval_env.unwrapped.max_attempts,
+                                      eval_env.unwrapped.trials)  # fmt: skip
+        record = _record(plan, objects, train_refs, dataset_sha256, code_version,
+                         env.unwrapped.trials)  # fmt: skip
         if overwrite and dataset_exists(plan.dataset_id):
             _delete(plan.dataset_id)
         with warnings.catch_warnings():  # the project publishes no e-mail address
@@ -222,7 +224,11 @@ def _objects_and_sets(env: Any) -> tuple[tuple[str, ...], list[CandidateSet]]:
 
 
 def _record(plan: ExportPlan, objects: Sequence[str], train_refs: tuple[float, float],
-            dataset_sha256: str | None, code_version: str | None) -> dict[str, Any]:  # fmt: skip
+            dataset_sha256: str | None, code_version: str | None,
+            trials: int = 0) -> dict[str, Any]:  # fmt: skip
+    drawn = (f"the grip's recorded trial k, one k in 0..{trials - 1} drawn an episode and "
+             "replayed by every attempt of it (the shared draws)" if trials else
+             "a Bernoulli draw of the grip's recorded success rate (successes / trials)")
     return {
         "behaviour_policy": {"name": plan.policy.name, "epsilon": plan.policy.epsilon,
                              "description": plan.policy.describe()},
@@ -231,8 +237,8 @@ def _record(plan: ExportPlan, objects: Sequence[str], train_refs: tuple[float, f
         "env_kwargs": plan.env_kwargs(), "dataset_sha256": dataset_sha256,
         "code_version": code_version,
         "train_reference_returns": {"random": train_refs[0], "oracle": train_refs[1]},
-        "reward": "1 when the executed grip holds, 0 when it drops: a Bernoulli draw of the "
-                  "grip's recorded success rate (successes / trials), as replay executes it",
+        "reward": f"1 when the executed grip holds, 0 when it drops: {drawn}, as replay "
+                  "executes it",
     }  # fmt: skip
 
 
