@@ -165,6 +165,21 @@ def test_the_reference_returns_are_exact_expectations():
     assert comb(4, 4) == 1 and random_return(rates, 9) == pytest.approx(1.0)
 
 
+def test_the_shared_draw_reference_returns_by_hand():
+    from grip_env.offline.reference import shared_oracle_return, shared_random_return
+
+    held = np.array([[1, 1, 0, 0], [1, 0, 0, 0], [0, 0, 1, 0]], dtype=bool)  # 3 grips, 4 trials
+    rates = held.mean(axis=1)
+    # one pick: the mean rate, as without shared draws
+    assert shared_random_return(held, 1) == pytest.approx(rates.mean())
+    assert shared_oracle_return(held, rates, 1) == pytest.approx(0.5)
+    # two picks: at k = 0..3, 1, 2, 2, 3 grips failed; a pair all fails w.p. C(f, 2) / 3
+    assert shared_random_return(held, 2) == pytest.approx(1 - (0 + 1 + 1 + 3) / 3 / 4)
+    assert shared_oracle_return(held, rates, 2) == pytest.approx(0.5)  # grips 0, 1: k 0, 1
+    assert shared_oracle_return(held, rates, 3) == pytest.approx(0.75)  # k = 3 defeats all
+    assert oracle_return(rates, 2) == pytest.approx(1 - 0.5 * 0.75)  # independence: 0.625
+
+
 def test_an_existing_id_is_refused_unless_overwrite(exported, generated_dataset_dir, minari_root):
     files = sorted((p, p.stat().st_mtime_ns) for p in minari_root.rglob("*"))
     refused = cli("export", "minari", "--data", generated_dataset_dir, "--id",
@@ -192,3 +207,26 @@ def test_a_missing_dataset_is_refused(tmp_path: Path, minari_root: Path):
     assert_refused(*cli("export", "minari", "--data", tmp_path / "none", "--id", "ab/c-v0"),
                    "none")
     assert not any(minari_root.rglob("*.hdf5"))
+
+
+def test_a_retry_export_keeps_the_failed_key(generated_dataset_dir: Path, minari_root: Path):
+    code, output = cli("export", "minari", "--data", generated_dataset_dir, "--id",
+                       "grip-test/retry-v0", "--episodes", EPISODES, "--seed", 3,
+                       "--max-attempts", 3)
+    assert code == 0, output
+    dataset = minari.load_dataset("grip-test/retry-v0")
+    assert set(dataset.observation_space.spaces) == {"features", "mask", "failed"}
+    assert "Dict(features, mask, failed)" in dataset.storage.metadata["description"]
+    record = dataset.storage.metadata[RECORD_KEY]
+    assert "replayed by every attempt" in record["reward"]  # generate records every trial
+    retried = 0
+    for episode in dataset.iterate_episodes():
+        failed, mask = episode.observations["failed"], episode.observations["mask"]
+        assert len(episode) <= 3 and not failed[0].any()
+        for t, (action, reward) in enumerate(zip(episode.actions, episode.rewards, strict=True)):
+            expected = failed[t].copy()
+            expected[action] = reward == 0  # a drop marks the slot failed, a hold ends it
+            assert np.array_equal(failed[t + 1], expected)
+            assert mask[t + 1][action] == 0
+        retried += len(episode) > 1
+    assert retried > 0

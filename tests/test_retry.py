@@ -66,6 +66,56 @@ def test_attempts_within_an_episode_replay_the_same_trial(table: pd.DataFrame) -
     assert seen > 40  # some episodes retried
 
 
+def test_the_failed_key_marks_exactly_the_failed_picks(table: pd.DataFrame) -> None:
+    env = _env(table)
+    assert set(env.observation_space.spaces) == {"features", "mask", "failed"}
+    retried = 0
+    for episode in range(40):
+        observation, info = env.reset(seed=episode)
+        assert not observation["failed"].any()
+        k, tried_and_failed = info["trial"], set()
+        terminated, slot = False, 2
+        while not terminated:
+            observation, _, terminated, _, step = env.step(slot)
+            if not step["success"]:
+                tried_and_failed.add(slot)
+            assert set(np.flatnonzero(observation["failed"])) == tried_and_failed
+            assert not observation["mask"][slot]  # executed: masked, whatever the outcome
+            assert int(observation["failed"].sum()) == step["attempts"] - step["success"]
+            assert step["success"] == _recorded(table, step["grip_id"], k)
+            assert observation in env.observation_space
+            slot = int(np.flatnonzero(observation["mask"])[0]) if not terminated else slot
+        retried += len(tried_and_failed) > 1
+    assert retried > 0  # some episodes failed twice or more
+
+
+def test_one_attempt_keeps_the_two_key_observation(table: pd.DataFrame) -> None:
+    env = _env(table, max_attempts=1)
+    assert set(env.observation_space.spaces) == {"features", "mask"}
+    observation, _ = env.reset(seed=0)
+    assert set(observation) == {"features", "mask"}
+    assert set(env.step(0)[0]) == {"features", "mask"}
+
+
+def test_an_invalid_pick_marks_nothing_failed(table: pd.DataFrame) -> None:
+    env = _env(table)
+    observation, _ = env.reset(seed=0)
+    padded = int(np.flatnonzero(observation["mask"] == 0)[0])
+    observation, reward, terminated, _, info = env.step(padded)
+    assert info["invalid_action"] and terminated and reward == -1.0
+    assert not observation["failed"].any()
+
+
+def test_replaying_an_object_without_its_trials_is_refused(table: pd.DataFrame) -> None:
+    partial = table.assign(trial_success_2=table["trial_success_2"].astype(float))
+    first = str(partial["object_id"].iloc[0])
+    partial.loc[partial["object_id"] == partial["object_id"].iloc[0], "trial_success_2"] = np.nan
+    env = _env(partial)
+    env.reset(seed=0, options={"object_id": first, "trial": 0})
+    with pytest.raises(ValueError, match=rf"object '{first}' lacks some of its trials'"):
+        env.step(0)
+
+
 def test_accept_env_replays_the_episode_trial(table: pd.DataFrame) -> None:
     env = _env(table, GripAcceptEnv)
     for episode in range(20):
@@ -226,6 +276,11 @@ def test_gymnasiums_checker_passes_with_trials_replayed(table: pd.DataFrame, cls
     env = _env(table, cls)
     assert env.trials == TRIALS
     check_env(env, skip_render_check=True)  # seeded resets (the trial draw included) repeat
+    if cls is GripSelectEnv:  # its retry observation has the failed key
+        from stable_baselines3.common.env_checker import check_env as sb3_check_env
+
+        assert "failed" in env.observation_space.spaces
+        sb3_check_env(env)
 
 
 # ----------------------------------------------------------------------------- the selector's own

@@ -173,6 +173,9 @@ def small_config():
 @pytest.mark.slow
 @pytest.mark.parametrize("policy", ["set", "flat"])
 def test_run_selector_writes_report_model_and_curve(grips, small_config, tmp_path, policy):
+    from test_retry import with_trials
+
+    grips = with_trials(grips)  # two attempts an episode replay one trial k: they need them
     report = run_selector(grips, tmp_path, small_config, policy=policy, timesteps=128,
                           progress=False)  # fmt: skip
     assert json.loads((tmp_path / REPORT_FILE).read_text()) == report

@@ -147,7 +147,12 @@ class ReplayBackend:
             from grip_env.columns import trial_success_columns
 
             columns = list(trial_success_columns(self.trials))
-            found = candidates.rows[columns].to_numpy(bool)
+            values = candidates.rows[columns]
+            if values.isna().to_numpy().any():  # a NaN cast to bool would read as a hold
+                raise ValueError(f"object {candidates.object_id!r} lacks some of its trials' "
+                                 f"outcomes (trial_success_0..{self.trials - 1}): replay "
+                                 f"objects that record every trial, or replay='rate'")
+            found = values.to_numpy(bool)
             self._trial_success[key] = found
         return found
 

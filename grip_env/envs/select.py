@@ -38,7 +38,13 @@ class GripSelectEnv(GripEnvBase):
 
     ``Dict(features=Box(-b, b, (K, F), float32), mask=MultiBinary(K))``, ``F = len(features)``.
     Slots hold the object's K best candidates, lowest ``Q_C`` first (or shuffled each episode,
-    ``candidate_order="shuffled"``); padded slots are zero and masked.
+    ``candidate_order="shuffled"``); padded slots are zero and masked. With ``max_attempts > 1``
+    (the retry setting) the Dict also holds ``failed=MultiBinary(K)``: 1 at the slots executed
+    this episode that dropped the object, 0 elsewhere (all 0 at reset). The mask alone cannot tell
+    a failed slot from padding; ``failed`` says which grips the episode's draw defeated, which is
+    what a retry can use. The episode's attempt count is ``failed.sum()`` (every attempt but a
+    successful last one failed), so it is not a key of its own. With ``max_attempts = 1`` the
+    space is the two keys only.
 
     ## Rewards
 
@@ -120,12 +126,14 @@ class GripSelectEnv(GripEnvBase):
                 dtype=np.float32,
             ),
             "mask": spaces.MultiBinary(k),
+            **({"failed": spaces.MultiBinary(k)} if self.retries else {}),
         })
         self.action_space = spaces.Discrete(k)
         self._found: CandidateSet | None = None
         self._slots = np.arange(k)
         self._features = np.zeros((k, width), dtype=np.float32)
         self._mask = np.zeros(k, dtype=np.int8)
+        self._failed = np.zeros(k, dtype=np.int8)
         self._attempts = 0
         self._remaining = 0
         self._chosen: int | None = None
@@ -136,6 +144,7 @@ class GripSelectEnv(GripEnvBase):
         slots = self._slots
         self._features = found.features if slots is self._identity else found.features[slots]
         self._mask = found.mask.copy()
+        self._failed = np.zeros(self.max_candidates, dtype=np.int8)
         self._remaining = found.count
         self._chosen = None
 
@@ -155,6 +164,7 @@ class GripSelectEnv(GripEnvBase):
         success = self._execute(found, row)
         self._attempts += 1
         self._mask[slot] = 0
+        self._failed[slot] = not success
         self._remaining -= 1
         self._chosen, self._outcome = row, success
         reward = self.success_reward if success else self.failure_reward
@@ -171,8 +181,17 @@ class GripSelectEnv(GripEnvBase):
         """Valid actions (real candidates not yet failed), for sb3-contrib's MaskablePPO."""
         return self._mask.astype(bool)
 
+    @property
+    def retries(self) -> bool:
+        """Whether an episode may execute more than one grip (``max_attempts > 1``): then the
+        observation also says which slots were tried and failed (``"failed"``)."""
+        return self.max_attempts > 1
+
     def _observation(self) -> Observation:
-        return {"features": self._features.copy(), "mask": self._mask.copy()}
+        observation = {"features": self._features.copy(), "mask": self._mask.copy()}
+        if self.retries:
+            observation["failed"] = self._failed.copy()
+        return observation
 
     def _draw(self) -> NDArray[np.uint8]:
         found = self._found

@@ -14,7 +14,8 @@ generator), so one seed gives the same episodes, step for step.
 What Minari lacks is kept inside the episode:
 
 - the action mask: the observation is ``GripSelect-v0``'s own ``Dict(features, mask)``, so
-  ``episode.observations["mask"][t]`` is the mask at step ``t``;
+  ``episode.observations["mask"][t]`` is the mask at step ``t``; with ``max_attempts > 1`` it
+  also holds ``failed`` (the slots tried and failed so far in the episode);
 - the reward's source: ``infos`` hold, per step, the object's index in the metadata's
   ``objects`` list (``object_index``), the executed ``slot``, its recorded ``success_rate``
   (successes / trials of the grip's recorded trials: replay draws the reward as a Bernoulli of
@@ -139,10 +140,12 @@ def export_minari(
         ids, sets = _objects_and_sets(env)
         objects = tuple(o for o, found in zip(ids, sets, strict=True) if found.count)
         episodes = collect_episodes(env, plan, objects)
-        train_refs = reference_returns(sets, env.unwrapped.max_attempts)
+        train_refs = reference_returns(sets, env.unwrapped.max_attempts, env.unwrapped.trials)
         low, high = reference_returns(_objects_and_sets(eval_env)[1],
-                                      eval_env.unwrapped.max_attempts)  # fmt: skip
-        record = _record(plan, objects, train_refs, dataset_sha256, code_version)
+                                      eval_env.unwrapped.max_attempts,
+                                      eval_env.unwrapped.trials)  # fmt: skip
+        record = _record(plan, objects, train_refs, dataset_sha256, code_version,
+                         env.unwrapped.trials)  # fmt: skip
         if overwrite and dataset_exists(plan.dataset_id):
             _delete(plan.dataset_id)
         with warnings.catch_warnings():  # the project publishes no e-mail address
@@ -197,7 +200,7 @@ def _run_episode(env: Any, policy: BehaviourPolicy, rng: np.random.Generator,
         done = terminated or truncated
     return {
         "observations": {key: np.stack([o[key] for o in observations])
-                         for key in ("features", "mask")},
+                         for key in observations[0]},  # features, mask (and failed: retries)
         "actions": np.asarray(actions, dtype=np.int64), "rewards": rewards,
         "terminations": terminations, "truncations": truncations,
         "infos": {key: np.asarray([i[key] for i in infos]) for key in infos[0]},
@@ -221,7 +224,11 @@ def _objects_and_sets(env: Any) -> tuple[tuple[str, ...], list[CandidateSet]]:
 
 
 def _record(plan: ExportPlan, objects: Sequence[str], train_refs: tuple[float, float],
-            dataset_sha256: str | None, code_version: str | None) -> dict[str, Any]:  # fmt: skip
+            dataset_sha256: str | None, code_version: str | None,
+            trials: int = 0) -> dict[str, Any]:  # fmt: skip
+    drawn = (f"the grip's recorded trial k, one k in 0..{trials - 1} drawn an episode and "
+             "replayed by every attempt of it (the shared draws)" if trials else
+             "a Bernoulli draw of the grip's recorded success rate (successes / trials)")
     return {
         "behaviour_policy": {"name": plan.policy.name, "epsilon": plan.policy.epsilon,
                              "description": plan.policy.describe()},
@@ -230,17 +237,18 @@ def _record(plan: ExportPlan, objects: Sequence[str], train_refs: tuple[float, f
         "env_kwargs": plan.env_kwargs(), "dataset_sha256": dataset_sha256,
         "code_version": code_version,
         "train_reference_returns": {"random": train_refs[0], "oracle": train_refs[1]},
-        "reward": "1 when the executed grip holds, 0 when it drops: a Bernoulli draw of the "
-                  "grip's recorded success rate (successes / trials), as replay executes it",
+        "reward": f"1 when the executed grip holds, 0 when it drops: {drawn}, as replay "
+                  "executes it",
     }  # fmt: skip
 
 
 def _description(plan: ExportPlan, objects: Sequence[str], held_out: Sequence[str]) -> str:
+    retry = ", failed" if (plan.max_attempts or 1) > 1 else ""
     return (f"{len(objects)} objects of the grip-env dataset {plan.data!r} (split "
             f"{plan.split!r}), {plan.episodes_per_object} episodes each of {ENV_ID} (replay), "
             f"logged by the behaviour policy: {plan.policy.describe()}, seed {plan.seed}. The "
-            f"observation is the environment's Dict(features, mask): the action mask is "
-            f"observations['mask']. The reference scores are the exact expected returns of the "
+            f"observation is the environment's Dict(features, mask{retry}): the action mask "
+            f"is observations['mask']. The reference scores are the exact expected returns of the "
             f"uniform-random and the oracle pick on the {len(held_out)} evaluation objects "
             f"(eval_env_spec).")  # fmt: skip
 

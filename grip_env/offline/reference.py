@@ -11,6 +11,13 @@ object uniformly; so both are exact expectations, not Monte-Carlo estimates:
 - oracle (the highest recorded success rates first): ``1 - prod_{top m} (1 - p_i)``;
 
 each averaged over the objects with a candidate.
+
+When the environment replays trials by index (data recording every trial's outcome: an
+episode's attempts replay one trial k), both are means over k instead
+(:func:`shared_random_return`, :func:`shared_oracle_return`): at k, ``f_k`` of the ``n``
+candidates failed, and a uniform ``m``-subset all fails with probability
+``C(f_k, m) / C(n, m)``; the oracle's order (highest rates first, ties to the lower slot) fails
+when each of its first ``m`` grips failed at k. With one attempt they equal the formulas above.
 """
 
 from __future__ import annotations
@@ -45,11 +52,39 @@ def oracle_return(rates: NDArray[np.float64], max_attempts: int) -> float:
     return float(1.0 - np.prod(1.0 - top))
 
 
-def reference_returns(sets: Sequence[CandidateSet], max_attempts: int) -> tuple[float, float]:
-    """(random, oracle) expected return per episode over the objects of ``sets``."""
+def shared_random_return(held: NDArray[np.bool_], max_attempts: int) -> float:
+    """:func:`random_return` when the attempts replay one trial k: ``held`` is (candidates,
+    trials), each candidate's recorded outcome at every k."""
+    n = held.shape[0]
+    m = min(max_attempts, n)
+    failed = n - held.sum(axis=0)
+    return float(1.0 - np.mean([comb(int(f), m) for f in failed]) / comb(n, m))
+
+
+def shared_oracle_return(held: NDArray[np.bool_], rates: NDArray[np.float64],
+                         max_attempts: int) -> float:
+    """:func:`oracle_return` when the attempts replay one trial k (highest ``rates`` first,
+    ties to the lower slot)."""
+    order = np.argsort(-rates, kind="stable")[:max_attempts]
+    return float(held[order].any(axis=0).mean())
+
+
+def reference_returns(sets: Sequence[CandidateSet], max_attempts: int,
+                      trials: int = 0) -> tuple[float, float]:
+    """(random, oracle) expected return per episode over the objects of ``sets``; with
+    ``trials`` the attempts replay one trial index k (``trial_success_0..trials-1``)."""
     rates = [s.success_rate[: s.count] for s in sets if s.count]
     if not rates or any(np.isnan(r).any() for r in rates):
         raise ValueError("reference returns need recorded success rates of every candidate")
+    if trials:
+        from grip_env.columns import trial_success_columns
+
+        columns = list(trial_success_columns(trials))
+        held = [s.rows[columns].to_numpy(bool) for s in sets if s.count]
+        low = float(np.mean([shared_random_return(h, max_attempts) for h in held]))
+        high = float(np.mean([shared_oracle_return(h, r, max_attempts)
+                              for h, r in zip(held, rates, strict=True)]))  # fmt: skip
+        return low, high
     low = float(np.mean([random_return(r, max_attempts) for r in rates]))
     high = float(np.mean([oracle_return(r, max_attempts) for r in rates]))
     return low, high

@@ -189,12 +189,32 @@ def check_policy_spaces(policy: Any, sets: Sequence[CandidateSet], spec: str) ->
         raise ValueError(f"{spec}: action space {action} does not match the split's "
                          f"GripSelect-v0 action space Discrete({k})")  # fmt: skip
     observation = getattr(policy, "observation_space", None)
-    if observation is not None and not (
-            isinstance(observation, spaces.Dict) and set(observation.spaces) == {"features", "mask"}
-            and tuple(observation["features"].shape) == (k, width)
-            and tuple(observation["mask"].shape) == (k,)):  # fmt: skip
+    if observation is not None and not select_observation_space(observation, k, width):
         raise ValueError(f"{spec}: observation space {observation} does not match the split's "
-                         f"GripSelect-v0 Dict(features=({k}, {width}), mask=({k},))")  # fmt: skip
+                         f"GripSelect-v0 Dict(features=({k}, {width}), mask=({k},)[, "
+                         f"failed=({k},)])")  # fmt: skip
+
+
+def select_observation_space(observation: Any, k: int, width: int) -> bool:
+    """Whether ``observation`` is ``GripSelect-v0``'s on K candidates of ``width`` features: the
+    Dict of ``features`` and ``mask``, and ``failed`` in the retry setting (max_attempts > 1)."""
+    from gymnasium import spaces
+
+    if not isinstance(observation, spaces.Dict):
+        return False
+    keys = set(observation.spaces)
+    return (keys in ({"features", "mask"}, {"features", "mask", "failed"})
+            and tuple(observation["features"].shape) == (k, width)
+            and all(tuple(observation[key].shape) == (k,) for key in keys - {"features"}))
+
+
+def first_observation(found: CandidateSet, retry: bool) -> dict[str, np.ndarray]:
+    """An episode's first ``GripSelect-v0`` observation of ``found`` (``failed`` all 0 when
+    ``retry``: nothing tried yet)."""
+    observation = {"features": found.features.copy(), "mask": found.mask.copy()}
+    if retry:
+        observation["failed"] = np.zeros_like(found.mask)
+    return observation
 
 
 def policy_scores(policy: Any, sets: Sequence[CandidateSet], seed: int, name: str,
@@ -203,9 +223,10 @@ def policy_scores(policy: Any, sets: Sequence[CandidateSet], seed: int, name: st
     first ``GripSelect-v0`` observation returns a slot (or SB3's ``(action, state)``), scored 1
     for that slot and 0 for the rest; a padded slot is refused."""
     check_policy_spaces(policy, sets, spec)
+    retry = "failed" in getattr(getattr(policy, "observation_space", None), "spaces", {})
     frames = []
     for found in sets:
-        observation = {"features": found.features.copy(), "mask": found.mask.copy()}
+        observation = first_observation(found, retry)
         where = f"{spec}.predict on object {found.object_id!r}"
         try:
             action = policy.predict(observation)
@@ -375,11 +396,8 @@ def check_sb3_spaces(model: Any, sets: Sequence[CandidateSet], path: Path) -> No
 
     k, width = sets[0].features.shape
     observation, action = model.observation_space, model.action_space
-    expected = f"Dict(features=({k}, {width}), mask=({k},)) and Discrete({k})"
-    ok = (isinstance(observation, spaces.Dict)
-          and set(observation.spaces) == {"features", "mask"}
-          and tuple(observation["features"].shape) == (k, width)
-          and tuple(observation["mask"].shape) == (k,)
+    expected = f"Dict(features=({k}, {width}), mask=({k},)[, failed=({k},)]) and Discrete({k})"
+    ok = (select_observation_space(observation, k, width)
           and isinstance(action, spaces.Discrete) and int(action.n) == k)  # fmt: skip
     if not ok:
         raise ValueError(f"{path}: observation {observation} / action {action} do not match the "
@@ -387,7 +405,13 @@ def check_sb3_spaces(model: Any, sets: Sequence[CandidateSet], path: Path) -> No
 
 
 def sb3_scores(path: Path, sets: Sequence[CandidateSet], seed: int, name: str) -> pd.DataFrame:
-    """Score table of an SB3 policy: its action probabilities on each object's observation."""
+    """Score table of an SB3 policy: its action probabilities on each object's observation.
+
+    A MaskablePPO policy of the retry setting (its observation has ``failed``) is scored by the
+    slots it picks in turn, each pick's failure shown to it as the environment shows it
+    (masked and marked failed): the k-th pick scores ``count - k``, so the table's order is
+    the deterministic policy's own order after each failure, and the retry board scores what it
+    does with a failure (its first pick is its most probable slot, as for any policy)."""
     import torch as th
 
     model = load_sb3(path)
@@ -395,6 +419,8 @@ def sb3_scores(path: Path, sets: Sequence[CandidateSet], seed: int, name: str) -
     from sb3_contrib.common.maskable.policies import MaskableActorCriticPolicy
 
     masked = isinstance(model.policy, MaskableActorCriticPolicy)
+    if masked and "failed" in model.observation_space.spaces:
+        return _adaptive_order_scores(model, sets, seed, name)
     frames = []
     with th.no_grad():
         for found in sets:
@@ -404,6 +430,20 @@ def sb3_scores(path: Path, sets: Sequence[CandidateSet], seed: int, name: str) -
             distribution = model.policy.get_distribution(tensor, **mask)
             probability = distribution.distribution.probs.cpu().numpy()[0, : found.count]
             frames.append(score_frame(name, seed, _slots(found), probability))
+    return pd.concat(frames, ignore_index=True)
+
+
+def _adaptive_order_scores(model: Any, sets: Sequence[CandidateSet], seed: int,
+                           name: str) -> pd.DataFrame:  # fmt: skip
+    """Scores ``count - k`` for the k-th slot a retry policy picks, every failure shown."""
+    from classifiers.experiments.selector.evaluation import policy_orders
+
+    orders = policy_orders(model, sets, max(found.count for found in sets))
+    frames = []
+    for found, order in zip(sets, orders, strict=True):
+        scores = np.empty(found.count)
+        scores[order] = found.count - np.arange(found.count)
+        frames.append(score_frame(name, seed, _slots(found), scores))
     return pd.concat(frames, ignore_index=True)
 
 

@@ -60,9 +60,11 @@ def training_record(objects: Iterable[str], dataset_sha256: str | None = None,
 
 def write_agent_record(zip_path: str | Path, env: Any, **split: Any) -> Path:
     """Write ``NAME.json`` beside an SB3 agent's ``NAME.zip``: the objects of ``env`` (a
-    ``GripSelect-v0``/``GripAccept-v0`` env, wrapped or vectorised) it was trained on."""
+    ``GripSelect-v0``/``GripAccept-v0`` env, wrapped or vectorised) it was trained on; ``split``
+    entries are added to the record (``split`` itself replaces the env's split name)."""
     path = Path(zip_path).with_suffix(".json")
-    record = training_record(env_objects(env), split=_env_split(env), **split)
+    split = {"split": _env_split(env), **split}
+    record = training_record(env_objects(env), **split)
     path.write_text(json.dumps({RECORD_KEY: record}, indent=2))
     return path
 

@@ -172,18 +172,26 @@ def policy_retry_metrics(table: pd.DataFrame, object_ids: Sequence[str], policy:
 
 def standard_retry_board(data: str = "standard", trials: str | Path | None = None,
                          scores: str | Path | None = None, reps: int = 2000,
-                         config: Config | None = None) -> dict[str, Any]:
+                         config: Config | None = None,
+                         agents: Sequence[tuple[str, str | Path]] = ()) -> dict[str, Any]:
     """The retry task on the standard split (v4) on the held-out objects whose every trial is
     recorded: in ``data`` itself, or (``trials``) in a folder of re-simulated shards
     (:func:`grip_env.dataset.trial_outcomes.with_trial_outcomes`). Methods: the baselines'
-    static orders (best-Q_C, best-Q_G, random, oracle) and, from a study's ``scores`` file
-    (``classifiers/scores.parquet``), its rankers and classifiers, every seed.
+    static orders (best-Q_C, best-Q_G, random, oracle), from a study's ``scores`` file
+    (``classifiers/scores.parquet``) its rankers and classifiers, every seed, and ``agents``:
+    ``(name, SB3 zip)`` pairs, a name given n times its runs 0..n-1 (a retry policy, whose
+    observation says which slots failed, is scored by the slots it picks after each failure:
+    :func:`~classifiers.experiments.benchmark.methods.sb3_scores`).
 
     Raises:
         ValueError: no held-out object has its trials recorded, or the scores file does not
             score the split's candidates.
     """
-    from classifiers.experiments.benchmark.methods import baseline_scores, drop_duplicates
+    from classifiers.experiments.benchmark.methods import (
+        baseline_scores,
+        drop_duplicates,
+        sb3_scores,
+    )
     from classifiers.experiments.benchmark.split import (
         candidate_sets,
         candidate_table,
@@ -206,8 +214,8 @@ def standard_retry_board(data: str = "standard", trials: str | Path | None = Non
         raise ValueError("no held-out object of the standard split has its trials recorded")
     bare = table.copy(deep=False)
     bare.attrs = {}
-    candidates = candidate_table(candidate_sets(bare, config, split))
-    candidates = candidates[candidates["object_id"].isin(held)].merge(
+    sets = [found for found in candidate_sets(bare, config, split) if found.object_id in held]
+    candidates = candidate_table(sets).merge(
         recorded[["grip_id", *trial_columns(count)]], on="grip_id", how="left",
         validate="one_to_one")
     frames = [baseline_scores(candidates).query("method != 'epsilon'")]
@@ -215,6 +223,10 @@ def standard_retry_board(data: str = "standard", trials: str | Path | None = Non
         learned = drop_duplicates(pd.read_parquet(scores))
         learned = learned[learned["object_id"].astype(str).isin(held)]
         frames.append(learned.assign(object_id=learned["object_id"].astype(str)))
+    runs: dict[str, int] = {}
+    for name, path in agents:
+        runs[name] = runs.get(name, -1) + 1
+        frames.append(sb3_scores(Path(path), sets, runs[name], name))
     metrics = retry_metrics(candidates, pd.concat(frames, ignore_index=True))
     board = retry_leaderboard(metrics, reps, config.learning.seed)
     board["split"] = {"name": split.name, "version": split.version,
@@ -235,8 +247,10 @@ def main(argv: list[str] | None = None) -> None:
                              "grip_env/data/standard_trials)")
     parser.add_argument("--scores", type=Path, default=None,
                         help="a study's classifiers/scores.parquet (rankers, classifiers)")
+    parser.add_argument("--agent", action="append", default=[], metavar="NAME=ZIP",
+                        help="an SB3 agent to score (repeat; one name n times: its n runs)")
     parser.add_argument("--methods", default="best_qc,ranker_lambdarank,oracle,random",
-                        help="the methods to tabulate, comma-separated")
+                        help="the methods to tabulate, comma-separated (agents added)")
     parser.add_argument("--reps", type=int, default=2000)
     parser.add_argument("--out", type=Path, default=None, help="write retry.json here")
     args = parser.parse_args(argv)
@@ -245,14 +259,18 @@ def main(argv: list[str] | None = None) -> None:
         from grip_env.dataset.trial_outcomes import STANDARD_TRIALS
 
         trials = STANDARD_TRIALS
+    agents = [tuple(spec.split("=", 1)) for spec in args.agent]
+    if any(len(agent) != 2 for agent in agents):
+        parser.exit(2, f"error: --agent takes NAME=ZIP, got {args.agent!r}\n")
     try:
-        board = standard_retry_board(args.data, trials, args.scores, args.reps)
+        board = standard_retry_board(args.data, trials, args.scores, args.reps, agents=agents)
     except ValueError as exc:
         parser.exit(2, f"error: {exc}\n")
     split = board["split"]
     print(f"{split['name']} v{split['version']}: {split['scored_objects']} of the "
           f"{split['held_out_objects']} held-out objects have every trial recorded\n")
-    for name in (m for m in args.methods.split(",") if m in board["methods"]):
+    methods = [*args.methods.split(","), *dict.fromkeys(name for name, _ in agents)]
+    for name in (m for m in methods if m in board["methods"]):
         row = board["methods"][name]
         print(f"{name:>20}: within 1, 2, 3 attempts " + ", ".join(
             f"{row[f'shared_at_{m}']['estimate']:.3f}" for m in (1, 2, 3))

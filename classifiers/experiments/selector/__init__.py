@@ -30,6 +30,7 @@ def run_selector(
     timesteps: int | None = None,
     live: bool = False,
     progress: bool = True,
+    recorded_only: bool = False,
 ) -> dict[str, Any]:
     """Train the selector on the training objects, evaluate it on the test objects.
 
@@ -37,7 +38,8 @@ def run_selector(
     :func:`~classifiers.experiments.selector.evaluation.evaluate_selectors` plus a ``training``
     section),
     ``model.zip``, ``tb/`` and ``learning_curve.png``; returns the report. Live training
-    is still evaluated on the dataset's recorded outcomes.
+    is still evaluated on the dataset's recorded outcomes. ``recorded_only``: the retry task on
+    the training objects whose trials are recorded (the training section says how many).
     """
     from classifiers.experiments.selector.data import check_grip_table
     from classifiers.experiments.selector.evaluation import evaluate_selectors
@@ -52,7 +54,8 @@ def run_selector(
     table = check_grip_table(table_or_dir)
     out = Path(out_dir)
     start = time.perf_counter()
-    trained = train_selector(table, config, out, policy, timesteps, live, progress)
+    trained = train_selector(table, config, out, policy, timesteps, live, progress,
+                             recorded_only)
     seconds = time.perf_counter() - start
     report = evaluate_selectors(trained.model, table, config)
     rewards = trained.rewards
@@ -68,5 +71,9 @@ def run_selector(
         "tensorboard": "tb",
         "held_out_curve": [[int(t), round(v, 6)] for t, v in trained.held_out],
     }
+    if trained.objects is not None:  # the retry task: the objects whose trials it replayed
+        report["training"]["objects"] = {"used": len(trained.objects.objects),
+                                         "of": trained.objects.total,
+                                         "summary": trained.objects.summary()}
     (out / REPORT_FILE).write_text(json.dumps(report, indent=2))
     return report

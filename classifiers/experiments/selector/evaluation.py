@@ -142,12 +142,15 @@ def recorded_outcomes(rows: pd.DataFrame, trials: int, object_id: str) -> NDArra
 def action_probabilities(model: Any, sets: Sequence[CandidateSet],
                          masks: NDArray[np.int8] | None = None) -> NDArray[np.float64]:
     """(sets, K) probability of the policy picking each slot of each set (masked softmax), in
-    one batched forward pass; ``masks`` replaces the sets' own masks (slots already tried)."""
+    one batched forward pass; ``masks`` replaces the sets' own masks (slots already tried, and
+    failed: a policy whose observation has ``failed`` (the retry setting) sees them there)."""
     import torch as th
 
     if masks is None:
         masks = np.stack([found.mask for found in sets])
     observation = {"features": np.stack([found.features for found in sets]), "mask": masks}
+    if "failed" in getattr(model.observation_space, "spaces", {}):
+        observation["failed"] = np.stack([found.mask for found in sets]) - masks
     tensor, _ = model.policy.obs_to_tensor(observation)
     with th.no_grad():
         distribution = model.policy.get_distribution(tensor, action_masks=masks > 0)
@@ -223,8 +226,10 @@ def bootstrap_interval(values: NDArray[np.float64], resamples: NDArray[np.intp])
     return {"mean": float(values.mean()), "ci": [float(low), float(high)]}
 
 
-def training_baselines(table: pd.DataFrame, config: Config) -> dict[str, float]:
-    """Expected episode reward of random, best-Q_C and oracle picks on the training objects.
+def training_baselines(table: pd.DataFrame, config: Config,
+                       objects: Sequence[str] | None = None) -> dict[str, float]:
+    """Expected episode reward of random, best-Q_C and oracle picks on the training objects
+    (those of them in ``objects`` when given: the ones a retry selector trained on).
 
     Objects are drawn uniformly per episode, each showing its ``max_candidates`` best by Q_C.
     Success reward: the chance of a hold within ``max_attempts``, with the attempts sharing
@@ -239,6 +244,9 @@ def training_baselines(table: pd.DataFrame, config: Config) -> dict[str, float]:
         return {}
     ids = table["object_id"].astype(str)
     train_ids, _ = held_out_objects(ids, learning)
+    if objects is not None:
+        kept = set(objects)
+        train_ids = tuple(o for o in train_ids if o in kept)
     trials = recorded_trial_successes(table.columns)
     rows: dict[str, list[float]] = {"random": [], "best Q_C": [], "oracle": []}
     for _, frame in table[ids.isin(train_ids).to_numpy()].groupby("object_id"):

@@ -44,6 +44,10 @@ import grip_env  # noqa: F401  (registers GripSelect-v0)
 from classifiers.experiments.selector.data import check_grip_table
 from classifiers.experiments.selector.plots import plot_learning_curve
 from classifiers.experiments.selector.policy import CandidateSetPolicy
+from classifiers.experiments.selector.recorded import (
+    RecordedTrainingObjects,
+    retry_training_objects,
+)
 from grip_env.config import Config, SelectorConfig
 
 POLICIES: tuple[str, ...] = ("set", "flat")
@@ -126,15 +130,20 @@ def make_selector_env(
     split: str = "train",
     n_envs: int = N_ENVS,
     seed: int = 0,
+    objects: tuple[str, ...] | None = None,
 ) -> DummyVecEnv:
     """``n_envs`` monitored ``GripSelect-v0`` copies in a DummyVecEnv (replay, or live if None),
-    rewarded as ``config.selector.reward`` says."""
+    rewarded as ``config.selector.reward`` says; ``objects`` (replay) draws the episodes from
+    these objects only, replaying their trials by index (the retry task's recorded objects)."""
 
     reward = check_reward(config, data is None)
+    where: dict[str, Any] = {"split": split}
+    if objects is not None:
+        where = {"split": "all", "objects": list(objects), "replay": "trial"}
 
     def factory(rank: int) -> Any:
         def build() -> gymnasium.Env:
-            env = gymnasium.make(ENV_ID, data=data, config=config, split=split)
+            env = gymnasium.make(ENV_ID, data=data, config=config, **where)
             if reward == "robustness":
                 env = RobustnessReward(env, data, config.sim.reference_level_g)
             elif reward == "expected_success":
@@ -248,6 +257,7 @@ class SelectorTraining:
     timesteps: np.ndarray
     rewards: np.ndarray
     held_out: tuple[tuple[int, float], ...] = ()
+    objects: RecordedTrainingObjects | None = None
 
 
 @contextmanager
@@ -269,6 +279,7 @@ def train_selector(
     timesteps: int | None = None,
     live: bool = False,
     progress: bool = True,
+    recorded_only: bool = False,
 ) -> SelectorTraining:
     """Train a selector on the training objects; writes ``model.zip``, ``tb/`` and the curve PNG.
 
@@ -280,6 +291,10 @@ def train_selector(
         timesteps: environment steps (default ``config.selector.timesteps``).
         live: execute grips in PyBullet instead of replaying recorded outcomes.
         progress: show a progress bar.
+        recorded_only: the retry task (``selector.max_attempts > 1``) on the training objects
+            whose trials are recorded only, the others left out and counted
+            (:func:`~classifiers.experiments.selector.recorded.retry_training_objects`);
+            without it such objects are refused.
 
     Returns:
         The model with its episode curve and its held-out evaluations.
@@ -290,9 +305,11 @@ def train_selector(
     if int(steps) != steps or steps < 1:
         raise ValueError(f"timesteps must be a positive integer, got {timesteps!r}")
     table = None if live else check_grip_table(data)
+    recorded = None if table is None else retry_training_objects(table, config, recorded_only)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    env = make_selector_env(table, config, "train", 1 if live else settings.n_envs, settings.seed)
+    env = make_selector_env(table, config, "train", 1 if live else settings.n_envs, settings.seed,
+                            None if recorded is None else recorded.objects)  # fmt: skip
     callbacks: list[BaseCallback] = [EpisodeRecorder()]
     if table is not None:
         callbacks.append(HeldOutEvaluation(table, config))
@@ -304,16 +321,18 @@ def train_selector(
     model.save(out / MODEL_FILE)
     from classifiers.experiments.benchmark.provenance import write_agent_record
 
-    write_agent_record(out / MODEL_FILE, env)  # model.json: the objects it was trained on
+    subset = {} if recorded is None else {"split": "train", "trials_recorded": recorded.summary()}
+    write_agent_record(out / MODEL_FILE, env, **subset)  # model.json: the objects trained on
     recorder = callbacks[0]
     baselines = None
     if table is not None:
         from classifiers.experiments.selector.evaluation import training_baselines
 
-        baselines = training_baselines(table, config)
+        baselines = training_baselines(table, config,
+                                       None if recorded is None else recorded.objects)
     plot_learning_curve(recorder.timesteps, recorder.rewards, out / CURVE_FILE,
                         baselines=baselines)  # fmt: skip
     env.close()
     held_out = tuple(callbacks[1].curve) if table is not None else ()
     return SelectorTraining(model, np.asarray(recorder.timesteps), np.asarray(recorder.rewards),
-                            held_out)  # fmt: skip
+                            held_out, recorded)  # fmt: skip
