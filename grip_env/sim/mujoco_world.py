@@ -64,7 +64,9 @@ from grip_env.sim.gantry import ARM_JOINTS, mounted_urdf
 #: Elliptic cones' ratio of frictional to normal impedance: 10 as in DexGraspBench and MuJoCo's
 #: docs' advice against slow slip (mujoco #3328 measured creep 10-30x lower than at 1).
 IMPRATIO = 10.0
-#: NoSlip post-iterations: 2 as in DexGraspBench (mujoco #3328: 10 cut creep about 110-fold).
+#: NoSlip post-iterations, chosen by measurement (mujoco #3328: 10 cut creep about 110-fold): on
+#: the held box with the rubber's pads, 2 let it creep out at 34 % of mu times its normal forces;
+#: 5, 10 and 20 hold it to within 0.11 % (BENCHMARKS.md, "label model mujoco-2026.12-pads").
 NOSLIP_ITERATIONS = 5
 #: A motor's velocity gain, in joint inertias per timestep: 10 reaches 91 % of a target speed in
 #: one implicit step (Bullet's motor constraint reaches it in one step within its torque).
@@ -72,7 +74,9 @@ MOTOR_STIFFNESS = 10.0
 #: The largest phase (rad) a pad's spring may turn in one physics step: MuJoCo integrates a
 #: contact's spring semi-implicitly, and the pad against its 80 g object (85 Hz) at the
 #: protocol's 240 Hz turns 2.2 rad a step and diverges (measured: the object flew off at the first
-#: touch). The world steps the physics in substeps short enough to resolve the pad.
+#: touch). The world steps the physics in substeps short enough to resolve the pad: 5 at 240 Hz.
+#: Outcomes against the substep count (3 to 16, 100 grips; BENCHMARKS.md) do not converge
+#: monotonically, and 3 drop grips at the lift, so the count is not cut.
 PAD_PHASE_PER_STEP = 0.5
 #: The mass whose natural frequency against a pad sets the substeps (``PAD_PHASE_PER_STEP``): the
 #: 80 g object the pad's damping was derived for (``sim.pad_damping_n_s_per_m``).
@@ -81,8 +85,11 @@ PAD_REFERENCE_MASS_KG = 0.08
 #: ``f = (a_ref - a) / R`` with ``R = (1 - d) / d * A`` (``A`` the contact's inverse weight,
 #: ``d`` the impedance), so besides its spring and damper it carries an inertia ``1 / R`` that
 #: resists the contact's own acceleration: ``d / (1 - d)`` times the contact's effective mass,
-#: which no rubber pad has. 0.01 keeps it at 1 % (MuJoCo's default, 0.9 to 0.95, made it 9 to 19
-#: times the mass, and with the spring given per 80 g the pads 5 times too stiff).
+#: which no rubber pad has. Measured on the held box (BENCHMARKS.md): force over depth is the
+#: rubber's at every impedance, and the outcome the same from 0.2 to 0.5 (held up to 45.3 g);
+#: at 0.05 and below the object never comes to rest in the hand and drops, at 0.9 (MuJoCo's
+#: default, an inertia 9 times the contact's) the close's impact locks in a 40 % larger squeeze.
+#: 0.3, inside that plateau: an inertia of 0.43 times the contact's.
 PAD_IMPEDANCE = 0.3
 #: The arm's servo constraints' time constant (s, damping ratio 1). The idealised arm reaches its
 #: targets within its force (``Hand.max_palm_force_n``, 400 N), so its servo is the stiffest whose
