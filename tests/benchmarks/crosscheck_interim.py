@@ -48,6 +48,24 @@ def main() -> None:
     found = _figures(checks, runs, engine_of(manifest), args.seed)
     print(f"{len(checks)} of {args.objects} objects finished\n")
     print(crosscheck_markdown({"objects": len(checks), **found.as_dict()}))
+    print(disagreements(runs, found.engine, found.other))
+
+
+def disagreements(runs: list, engine: str, other: str) -> str:
+    """Where the engines judge a trial differently, and which way robustness leans."""
+    import numpy as np
+    import pandas as pd
+
+    own = pd.concat([r.draws[engine] for r in runs], ignore_index=True)
+    theirs = pd.concat([r.draws[other] for r in runs], ignore_index=True)
+    a, b = own["success"].to_numpy(bool), theirs["success"].to_numpy(bool)
+    ra, rb = own["robustness"].to_numpy(float), theirs["robustness"].to_numpy(float)
+    ratio = np.median(rb[ra > 0] / ra[ra > 0]) if (ra > 0).any() else float("nan")
+    return (f"\ntrials judged differently: {int((a != b).sum())} of {len(a)}; {other} succeeds "
+            f"where {engine} fails in {int((b & ~a).sum())}, the reverse in {int((a & ~b).sum())}; "
+            f"robustness higher in {other} in {int((rb > ra).sum())}, lower in "
+            f"{int((rb < ra).sum())}, equal in {int((rb == ra).sum())}; median ratio {other} / "
+            f"{engine} {ratio:.2f}; success {b.mean():.1%} in {other}, {a.mean():.1%} in {engine}")
 
 
 if __name__ == "__main__":
