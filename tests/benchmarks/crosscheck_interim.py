@@ -65,7 +65,9 @@ def disagreements(runs: list, engine: str, other: str) -> str:
             f"where {engine} fails in {int((b & ~a).sum())}, the reverse in {int((a & ~b).sum())}; "
             f"robustness higher in {other} in {int((rb > ra).sum())}, lower in "
             f"{int((rb < ra).sum())}, equal in {int((rb == ra).sum())}; median ratio {other} / "
-            f"{engine} {ratio:.2f}; success {b.mean():.1%} in {other}, {a.mean():.1%} in {engine}")
+            f"{engine} {ratio:.2f}; success {b.mean():.1%} in {other}, {a.mean():.1%} in {engine}; "
+            f"not held (robustness 0) in {int((rb == 0).sum())} in {other}, "
+            f"{int((ra == 0).sum())} in {engine}, both {int(((ra == 0) & (rb == 0)).sum())}")
 
 
 if __name__ == "__main__":
