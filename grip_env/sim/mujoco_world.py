@@ -37,10 +37,10 @@ convex hull, with no margin to erode), and the same mounted URDF through MuJoCo'
 * **Rotor inertia** (``add_axis_inertia``) is added to the link's inertia tensor about its own
   axis, as the PyBullet world does.
 * **Constants renewed.** MuJoCo sizes every constraint's softness from inverse weights computed
-  when the model is compiled (``body_invweight0``, ``dof_invweight0``), and the world sizes its
-  motors' gains from the joints' inertias. Every change of a mass or an inertia after compiling
-  (the rotor inertia, the object's trial mass) renews them (``mj_setConst``) before the next
-  step, and with them the pads' ``solref`` and the motors' gains.
+  when the model is compiled (``body_invweight0``, ``dof_invweight0``). Every change of a mass
+  or an inertia after compiling (the rotor inertia, the object's trial mass) renews them
+  (``mj_setConst``) before the next step, and with them the pads' ``solref`` (the motors' gains
+  stay as compiled: ``MOTOR_STIFFNESS``).
 
 Solver: Newton with elliptic friction cones, ``IMPRATIO`` and ``NOSLIP_ITERATIONS`` (the creep
 controls; sources: ``/work/shared/notes/mujoco-grasping.md``), ``sim.solver_iterations`` at most.
@@ -69,7 +69,13 @@ IMPRATIO = 10.0
 #: 5, 10 and 20 hold it to within 0.11 % (BENCHMARKS.md, "label model mujoco-2026.12-pads").
 NOSLIP_ITERATIONS = 5
 #: A motor's velocity gain, in joint inertias per timestep: 10 reaches 91 % of a target speed in
-#: one implicit step (Bullet's motor constraint reaches it in one step within its torque).
+#: one implicit step (Bullet's motor constraint reaches it in one step within its torque). The
+#: inertia is the joint's as compiled, before ``add_axis_inertia`` adds a rotor's: with the
+#: rotor's (4.8 and 30 times the fingers' joints'), h kv / I = 10 makes a finger respond as if 11
+#: times as heavy as MuJoCo's contact solve assumes (the drive's implicit damping is applied after
+#: it, mujoco #3443, the defect that shook the arm's grips loose), and grips drop at the lift
+#: (BENCHMARKS.md, "label model mujoco-2026.12-pads"). Solving the fingers' drives with the
+#: contacts, as the arm's servos are, is the faithful fix, not built yet.
 MOTOR_STIFFNESS = 10.0
 #: The largest phase (rad) a pad's spring may turn in one physics step: MuJoCo integrates a
 #: contact's spring semi-implicitly, and the pad against its 80 g object (85 Hz) at the
@@ -558,12 +564,11 @@ class MujocoWorld:
         return m, d
 
     def _renew_constants(self, m: mujoco.MjModel) -> None:
-        """Renew what MuJoCo and this world derive from masses and inertias: MuJoCo's constants
-        (``mj_setConst``, on scratch data at the model's reference pose, so the world's state is
-        untouched), the motors' joint inertias and the pads' ``solref``."""
-        scratch = mujoco.MjData(m)
-        mujoco.mj_setConst(m, scratch)
-        self._inertia = _joint_inertias(m, scratch, list(self._actuator))
+        """Renew what MuJoCo derives from masses and inertias (``mj_setConst``, on scratch data
+        at the model's reference pose, so the world's state is untouched) and the pads'
+        ``solref``. The motors' gains stay sized from the joints' inertias as compiled, without
+        the rotor inertia added since (``MOTOR_STIFFNESS``)."""
+        mujoco.mj_setConst(m, mujoco.MjData(m))
         self._update_pads(m)
         self._constants_stale = False
 
