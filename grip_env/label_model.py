@@ -50,7 +50,7 @@ MuJoCo's (``sim.engine: mujoco``):
   the contact's own inverse weight and a constant impedance of 0.3 (``pad_solref``,
   ``PAD_IMPEDANCE``), so that force over depth is 22.6 kN/m and the damping 8.5 N s/m, the
   rubber's (measured, ``tests/test_mujoco_world.py``). With the softer friction regularisation
-  this brings, the creep control NoSlip needs 5 iterations (2 let the held box creep out at 34 %
+  this brings, the creep control NoSlip needs 5 iterations (2 let the held box creep out at 41 %
   of Coulomb). BENCHMARKS.md, "MuJoCo's pads and worm gear: label model mujoco-2026.12-pads".
 """
 

@@ -65,8 +65,8 @@ from grip_env.sim.gantry import ARM_JOINTS, mounted_urdf
 #: docs' advice against slow slip (mujoco #3328 measured creep 10-30x lower than at 1).
 IMPRATIO = 10.0
 #: NoSlip post-iterations, chosen by measurement (mujoco #3328: 10 cut creep about 110-fold): on
-#: the held box with the rubber's pads, 2 let it creep out at 34 % of mu times its normal forces;
-#: 5, 10 and 20 hold it to within 0.11 % (BENCHMARKS.md, "label model mujoco-2026.12-pads").
+#: the held box with the rubber's pads, 2 let it creep out at 41 % of mu times its normal forces;
+#: 5 and 10 hold it to within 0.01 % (BENCHMARKS.md, "label model mujoco-2026.12-pads").
 NOSLIP_ITERATIONS = 5
 #: A motor's velocity gain, in joint inertias per timestep: 10 reaches 91 % of a target speed in
 #: one implicit step (Bullet's motor constraint reaches it in one step within its torque). The
@@ -92,10 +92,10 @@ PAD_REFERENCE_MASS_KG = 0.08
 #: ``d`` the impedance), so besides its spring and damper it carries an inertia ``1 / R`` that
 #: resists the contact's own acceleration: ``d / (1 - d)`` times the contact's effective mass,
 #: which no rubber pad has. Measured on the held box (BENCHMARKS.md): force over depth is the
-#: rubber's at every impedance, and the outcome the same from 0.2 to 0.5 (held up to 45.3 g);
-#: at 0.05 and below the object never comes to rest in the hand and drops, at 0.9 (MuJoCo's
-#: default, an inertia 9 times the contact's) the close's impact locks in a 40 % larger squeeze.
-#: 0.3, inside that plateau: an inertia of 0.43 times the contact's.
+#: rubber's at every impedance from 0.1, and the outcome the same from 0.1 to 0.9 (held up to
+#: 38.1 g); at 0.05 and below the object never comes to rest in the hand and slides out, at 0.9
+#: (MuJoCo's default, an inertia 9 times the contact's) the close's impact locks in 11 % more
+#: squeeze. 0.3, inside that plateau: an inertia of 0.43 times the contact's.
 PAD_IMPEDANCE = 0.3
 #: The arm's servo constraints' time constant (s, damping ratio 1). The idealised arm reaches its
 #: targets within its force (``Hand.max_palm_force_n``, 400 N), so its servo is the stiffest whose
