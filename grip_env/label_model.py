@@ -36,6 +36,22 @@ MuJoCo's (``sim.engine: mujoco``):
   solves its motors; everything else as the draft. Known defects, for the next: the worm-gear
   stops give up to 8 mrad (MuJoCo's constants are not renewed after the rotor inertia is added)
   and the pads are about five times the rubber's stiffness.
+- ``mujoco-2026.12-pads``: both defects of ``mujoco-2026.12-servo`` fixed, together (fixing only
+  the first doubled the squeeze at the close: a stop that holds locks in what a too-stiff pad
+  rings to). (1) *Stale constants*: MuJoCo sizes every constraint's softness from inverse weights
+  computed at compile time, and the world then added the fingers' rotor inertia (10-100 times the
+  links') and the object's trial mass; the worm-gear stops were as soft as for the bare links,
+  loaded joints sat up to 8.05 mrad below their floors (PyBullet 0.34). Now every mass or inertia
+  change renews MuJoCo's constants (``mj_setConst``) and the pads' ``solref`` before the next step
+  (the motors' gains stay sized as compiled: renewed with the rotor inertia they dropped grips at
+  the lift through mujoco #3443). (2) *Pads five times too stiff*: force over depth was 106-122
+  kN/m against the rubber's 22.6, because MuJoCo's impedance (0.9-0.95) mixes into a direct
+  ``solref`` given per 80 g. Now a pad's ``solref`` is derived from MuJoCo's constraint model with
+  the contact's own inverse weight and a constant impedance of 0.3 (``pad_solref``,
+  ``PAD_IMPEDANCE``), so that force over depth is 22.6 kN/m and the damping 8.5 N s/m, the
+  rubber's (measured, ``tests/test_mujoco_world.py``). With the softer friction regularisation
+  this brings, the creep control NoSlip needs 5 iterations (2 let the held box creep out at 41 %
+  of Coulomb). BENCHMARKS.md, "MuJoCo's pads and worm gear: label model mujoco-2026.12-pads".
 """
 
 from __future__ import annotations
@@ -44,7 +60,7 @@ LABEL_MODEL = "2026.12-xm"
 #: MuJoCo's label model (``sim.engine: mujoco``), pinned by its own golden recording
 #: (``python -m tests.golden --engine mujoco --record`` renews it; BENCHMARKS.md, "PyBullet
 #: beside MuJoCo").
-MUJOCO_LABEL_MODEL = "mujoco-2026.12-servo"
+MUJOCO_LABEL_MODEL = "mujoco-2026.12-pads"
 #: Each engine's label model: PyBullet's is the standard dataset's.
 ENGINE_LABEL_MODELS = {"pybullet": LABEL_MODEL, "mujoco": MUJOCO_LABEL_MODEL}
 #: What a manifest written before label models were recorded is taken to hold.

@@ -61,10 +61,7 @@ def test_the_close_settles_before_the_cap(best_grips):
 
 
 @pytest.mark.slow
-def test_loaded_fingers_hold_where_they_closed(best_grips, request):
-    """The worm gear: after the lift no flexion joint sits more than 1 mrad below its floor."""
-    if best_grips["engine"] == "mujoco":
-        request.applymarker(pytest.mark.xfail(
-            strict=True, reason="MuJoCo's worm-gear stop is a soft joint limit: loaded joints sit "
-            "up to 8 mrad below their floors (BENCHMARKS.md, 'PyBullet beside MuJoCo')"))
+def test_loaded_fingers_hold_where_they_closed(best_grips):
+    """The worm gear: after the lift no flexion joint sits more than 1 mrad below its floor (in
+    MuJoCo since its constants are renewed after the rotor inertia is added: 8 mrad before)."""
     assert len(best_grips["slips"]) >= 40 and best_grips["slips"].max() <= 1.0

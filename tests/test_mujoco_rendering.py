@@ -238,8 +238,8 @@ def test_a_mujoco_gl_that_breaks_mujoco_s_import_is_refused_in_one_line():
 
 @needs_opengl
 def test_show_draws_a_trial_in_mujoco(tmp_path):
-    """``grip-env show --sim`` runs and draws the trial in the config's engine: its outcome is
-    not PyBullet's."""
+    """``grip-env show --sim`` runs and draws the trial in the config's engine, and says which: the
+    two engines' frames differ (MuJoCo's background is black, PyBullet's grey)."""
     from cli_runs import cli
     from PIL import Image
 
@@ -251,5 +251,8 @@ def test_show_draws_a_trial_in_mujoco(tmp_path):
         code, output = cli("show", "rectangle", "--sim", "--config", config, "--out", out)
         assert code == 0, output
         assert Image.open(out).size[0] > 1000  # four phases side by side
-        [outcomes[engine]] = [line for line in output.splitlines() if line.startswith("trial of")]
-    assert outcomes["mujoco"] != outcomes["pybullet"]
+        [line] = [line for line in output.splitlines() if line.startswith("trial of")]
+        assert f" in {engine}: " in line
+        outcomes[engine] = np.asarray(Image.open(out).convert("RGB"))
+    assert outcomes["mujoco"].shape == outcomes["pybullet"].shape
+    assert not np.array_equal(outcomes["mujoco"], outcomes["pybullet"])

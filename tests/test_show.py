@@ -149,7 +149,7 @@ def test_show_sim_draws_the_phases_and_outcome_of_each_asked_grip(
         figure_rows, simulated, best["grip_id"], lines, strict=True
     ):
         # the words are the real trial's: its robustness against its reference, or its phase
-        assert line == f"trial of {grip_id}: {trial.describe()}"
+        assert line == f"trial of {grip_id} in pybullet: {trial.describe()}"
         assert title.endswith(trial.describe())
         if trial.held:
             assert f"up to {grams(trial.robustness_g)}" in line

@@ -154,7 +154,7 @@ def _render_trial(item: PlannedObject, cfg: Config, grips: int, seed: int, out: 
         zip(best.iterrows(), trials, strict=True), start=1
     ):
         outcome = result.describe()
-        typer.echo(f"trial of {grip['grip_id']}: {outcome}")
+        typer.echo(f"trial of {grip['grip_id']} in {cfg.sim.engine}: {outcome}")
         phases = [(_phase_title(phase, result), frames.get(phase)) for phase in TRIAL_PHASES]
         rows.append((f"#{rank} by Q_C ({grip['Q_C']:.2f}), grip {grip['grip_id']}: {outcome}",
                      phases))

@@ -30,10 +30,17 @@ convex hull, with no margin to erode), and the same mounted URDF through MuJoCo'
   two timesteps, the stiffest MuJoCo recommends. MuJoCo limits have no force cap: the stop holds
   whatever load (Bullet's holds ``holds`` N·m).
 * **Compliant pads.** A link made compliant (``set_contact_compliance``) contacts through a
-  spring-damper of the given stiffness and damping per ``PAD_REFERENCE_MASS_KG`` (MuJoCo's
-  direct ``solref`` is per unit mass).
+  spring of the given stiffness and a damper of the given damping, in N/m and N s/m as PyBullet's
+  pads (``pad_solref``): a constant impedance ``PAD_IMPEDANCE`` and a direct ``solref`` scaled
+  by the contact's own inverse weight, so that force over depth is the stiffness whatever the
+  bodies' masses (MuJoCo's constraint model, derived at ``pad_solref``).
 * **Rotor inertia** (``add_axis_inertia``) is added to the link's inertia tensor about its own
   axis, as the PyBullet world does.
+* **Constants renewed.** MuJoCo sizes every constraint's softness from inverse weights computed
+  when the model is compiled (``body_invweight0``, ``dof_invweight0``). Every change of a mass
+  or an inertia after compiling (the rotor inertia, the object's trial mass) renews them
+  (``mj_setConst``) before the next step, and with them the pads' ``solref`` (the motors' gains
+  stay as compiled: ``MOTOR_STIFFNESS``).
 
 Solver: Newton with elliptic friction cones, ``IMPRATIO`` and ``NOSLIP_ITERATIONS`` (the creep
 controls; sources: ``/work/shared/notes/mujoco-grasping.md``), ``sim.solver_iterations`` at most.
@@ -61,19 +68,39 @@ from grip_env.sim.gantry import ARM_JOINTS, mounted_urdf
 #: Elliptic cones' ratio of frictional to normal impedance: 10 as in DexGraspBench and MuJoCo's
 #: docs' advice against slow slip (mujoco #3328 measured creep 10-30x lower than at 1).
 IMPRATIO = 10.0
-#: NoSlip post-iterations: 2 as in DexGraspBench (mujoco #3328: 10 cut creep about 110-fold).
-NOSLIP_ITERATIONS = 2
+#: NoSlip post-iterations, chosen by measurement (mujoco #3328: 10 cut creep about 110-fold): on
+#: the held box with the rubber's pads, 2 let it creep out at 41 % of mu times its normal forces;
+#: 5 and 10 hold it to within 0.01 % (BENCHMARKS.md, "label model mujoco-2026.12-pads").
+NOSLIP_ITERATIONS = 5
 #: A motor's velocity gain, in joint inertias per timestep: 10 reaches 91 % of a target speed in
-#: one implicit step (Bullet's motor constraint reaches it in one step within its torque).
+#: one implicit step (Bullet's motor constraint reaches it in one step within its torque). The
+#: inertia is the joint's as compiled, before ``add_axis_inertia`` adds a rotor's: with the
+#: rotor's (4.8 and 30 times the fingers' joints'), h kv / I = 10 makes a finger respond as if 11
+#: times as heavy as MuJoCo's contact solve assumes (the drive's implicit damping is applied after
+#: it, mujoco #3443, the defect that shook the arm's grips loose), and grips drop at the lift
+#: (BENCHMARKS.md, "label model mujoco-2026.12-pads"). Solving the fingers' drives with the
+#: contacts, as the arm's servos are, is the faithful fix, not built yet.
 MOTOR_STIFFNESS = 10.0
 #: The largest phase (rad) a pad's spring may turn in one physics step: MuJoCo integrates a
 #: contact's spring semi-implicitly, and the pad against its 80 g object (85 Hz) at the
 #: protocol's 240 Hz turns 2.2 rad a step and diverges (measured: the object flew off at the first
-#: touch). The world steps the physics in substeps short enough to resolve the pad.
+#: touch). The world steps the physics in substeps short enough to resolve the pad: 5 at 240 Hz.
+#: Outcomes against the substep count (100 grips against 16 substeps; BENCHMARKS.md): 3 drop
+#: grips, 4 to 8 agree in 97-99 % of trials with the mean 2-3.5 g low, 12 on are converged.
 PAD_PHASE_PER_STEP = 0.5
-#: The mass a pad's spring-damper is normalised by: the 80 g object its damping was derived for
-#: (``sim.pad_damping_n_s_per_m``).
+#: The mass whose natural frequency against a pad sets the substeps (``PAD_PHASE_PER_STEP``): the
+#: 80 g object the pad's damping was derived for (``sim.pad_damping_n_s_per_m``).
 PAD_REFERENCE_MASS_KG = 0.08
+#: A pad contact's impedance, constant over its depth. MuJoCo's contact force is
+#: ``f = (a_ref - a) / R`` with ``R = (1 - d) / d * A`` (``A`` the contact's inverse weight,
+#: ``d`` the impedance), so besides its spring and damper it carries an inertia ``1 / R`` that
+#: resists the contact's own acceleration: ``d / (1 - d)`` times the contact's effective mass,
+#: which no rubber pad has. Measured on the held box (BENCHMARKS.md): force over depth is the
+#: rubber's at every impedance from 0.1, and the outcome the same from 0.1 to 0.9 (held up to
+#: 38.1 g); at 0.05 and below the object never comes to rest in the hand and slides out, at 0.9
+#: (MuJoCo's default, an inertia 9 times the contact's) the close's impact locks in 11 % more
+#: squeeze. 0.3, inside that plateau: an inertia of 0.43 times the contact's.
+PAD_IMPEDANCE = 0.3
 #: The arm's servo constraints' time constant (s, damping ratio 1). The idealised arm reaches its
 #: targets within its force (``Hand.max_palm_force_n``, 400 N), so its servo is the stiffest whose
 #: force never exceeds that limit in a trial: the approach asks the 3.3 kg the z axis carries for
@@ -119,6 +146,8 @@ class MujocoWorld:
         self._saved_servos: dict[int, NDArray[np.float64]] = {}
         self._addresses: dict[tuple[int, tuple[int, ...]], tuple[NDArray, NDArray]] = {}
         self._stale = False
+        self._constants_stale = False
+        self._pads: dict[int, tuple[float, float]] = {}  # geom: stiffness N/m, damping N s/m
         self._servo_names: list[str] = []  # the arm's joints, held by servo constraints
         self.servo_peak_n = np.zeros(0)  # the largest |force| each servo exerted so far
         self._renderers: dict[tuple[int, int], _Renderer] = {}  # by (width, height)
@@ -142,7 +171,7 @@ class MujocoWorld:
 
         The arm's servos track a reference that moves at constant speed from the last target to
         the new one through the step, with that speed as their velocity reference."""
-        m, d = self._compiled()
+        m, d = self._ready()
         fraction, servos, peak = self._substep_fraction, self._servo_rows, self.servo_peak_n
         for _ in range(steps):
             start, speed = self._servo_from, (self._servo_target - self._servo_from) / self.timestep
@@ -258,6 +287,7 @@ class MujocoWorld:
         base = self._body_id(body.uid, -1)
         m.body_mass[base] = mass_kg
         m.body_inertia[base] = [i * mass_kg for i in body.inertia_per_kg]
+        self._constants_stale = True
         for link in body.links:
             self._set_friction(body.uid, link, friction, spinning_friction)
 
@@ -341,6 +371,7 @@ class MujocoWorld:
         mujoco.mju_mat2Quat(quat, vectors.ravel())
         m.body_inertia[index] = values
         m.body_iquat[index] = quat
+        self._constants_stale = True
 
     def set_pad_friction(self, body: int, link: int, lateral: float, torsion_mm: float) -> None:
         """Friction of one link: lateral coefficient and torsional arm (mm)."""
@@ -348,19 +379,17 @@ class MujocoWorld:
 
     def set_contact_compliance(self, body: int, link: int, stiffness_n_per_m: float,
                                damping_n_s_per_m: float) -> None:
-        """Make one link's contacts a spring-damper of ``stiffness_n_per_m`` and
-        ``damping_n_s_per_m`` (per ``PAD_REFERENCE_MASS_KG``)."""
+        """Make one link's contacts a spring of ``stiffness_n_per_m`` and a damper of
+        ``damping_n_s_per_m`` (``pad_solref``), and step the physics in substeps that resolve
+        the spring against ``PAD_REFERENCE_MASS_KG`` (``PAD_PHASE_PER_STEP``)."""
         m, _ = self._compiled()
-        solref = (-stiffness_n_per_m / PAD_REFERENCE_MASS_KG,
-                  -damping_n_s_per_m / PAD_REFERENCE_MASS_KG)
         omega = math.sqrt(stiffness_n_per_m / PAD_REFERENCE_MASS_KG)
         self.substeps = max(self.substeps, math.ceil(omega * self.timestep / PAD_PHASE_PER_STEP))
         m.opt.timestep = self.timestep / self.substeps
         self._set_servo_stiffness(m)
-        geoms = self._link_geoms(body, link)
-        m.geom_solref[geoms] = solref
-        touched = np.isin(self._pair_geoms, geoms).any(axis=1)
-        m.pair_solref[touched] = solref
+        for geom in self._link_geoms(body, link).tolist():
+            self._pads[geom] = (float(stiffness_n_per_m), float(damping_n_s_per_m))
+        self._constants_stale = True
 
     def set_joint(self, body: int, joint: int, position: float) -> None:
         """Teleport one joint (rad or m), at rest."""
@@ -557,6 +586,44 @@ class MujocoWorld:
             self._compile()
         return self._model, self._data  # type: ignore[return-value]
 
+    def _ready(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
+        """Model and data with the constants renewed after any mass or inertia change."""
+        m, d = self._compiled()
+        if self._constants_stale:
+            self._renew_constants(m)
+        return m, d
+
+    def _renew_constants(self, m: mujoco.MjModel) -> None:
+        """Renew what MuJoCo derives from masses and inertias (``mj_setConst``, on scratch data
+        at the model's reference pose, so the world's state is untouched) and the pads'
+        ``solref``. The motors' gains stay sized from the joints' inertias as compiled, without
+        the rotor inertia added since (``MOTOR_STIFFNESS``)."""
+        mujoco.mj_setConst(m, mujoco.MjData(m))
+        self._update_pads(m)
+        self._constants_stale = False
+
+    def _update_pads(self, m: mujoco.MjModel) -> None:
+        """Each compliant geom's contacts: pairs from both bodies' inverse weights (a pair of two
+        compliant geoms: their springs in series); other contacts (with static bodies) from the
+        geom's own, its impedance winning the mix."""
+        if not self._pads:
+            return
+        invweight = m.body_invweight0[:, 0]
+        for geom, (stiffness, damping) in self._pads.items():
+            body = m.geom_bodyid[geom]
+            m.geom_solref[geom] = pad_solref(stiffness, damping, invweight[body])
+            m.geom_solimp[geom, :2] = PAD_IMPEDANCE
+            m.geom_solmix[geom] = 1.0 / mujoco.mjMINVAL
+        for k, (a, b) in enumerate(self._pair_geoms.tolist()):
+            springs = [self._pads[g] for g in (a, b) if g in self._pads]
+            if not springs:
+                continue
+            stiffness = 1.0 / sum(1.0 / s for s, _ in springs)
+            damping = 1.0 / sum(1.0 / c for _, c in springs) if all(c for _, c in springs) else 0.0
+            weight = invweight[m.geom_bodyid[a]] + invweight[m.geom_bodyid[b]]
+            m.pair_solref[k] = pad_solref(stiffness, damping, weight)
+            m.pair_solimp[k, :2] = PAD_IMPEDANCE
+
     def _current(self) -> tuple[mujoco.MjModel, mujoco.MjData]:
         """Model and data with positions computed from the current joint values."""
         m, d = self._compiled()
@@ -589,10 +656,7 @@ class MujocoWorld:
         self._actuator = {int(m.actuator_trnid[a, 0]): a for a in range(m.nu)}
         self._index_servos(m)
         mujoco.mj_forward(m, self._data)
-        full = np.zeros((m.nv, m.nv))
-        mujoco.mj_fullM(m, self._data, full)
-        inertia = np.diag(full)[m.jnt_dofadr[list(self._actuator)]]
-        self._inertia = dict(zip(self._actuator, inertia, strict=True))
+        self._inertia = _joint_inertias(m, mujoco.MjData(m), list(self._actuator))
         self._update_pairs()
 
     def _index_servos(self, m: mujoco.MjModel) -> None:
@@ -647,6 +711,7 @@ class MujocoWorld:
         return index
 
     def _motor(self, body: int, joint: int) -> tuple[int, float]:
+        self._ready()
         index = self._joint_id(body, joint)
         gain = MOTOR_STIFFNESS * self._inertia[index] / self._model.opt.timestep
         return self._actuator[index], float(gain)
@@ -779,6 +844,33 @@ def _no_opengl(platform: str, exc: Exception) -> str:
             f"set it to egl")
 
 
+def pad_solref(stiffness_n_per_m: float, damping_n_s_per_m: float,
+               inverse_weight: float) -> tuple[float, float]:
+    """The direct ``solref`` that makes a contact of impedance ``PAD_IMPEDANCE`` and inverse
+    weight ``inverse_weight`` (MuJoCo's ``efc_diagApprox`` of its normal: the two bodies'
+    ``body_invweight0``) a spring of ``stiffness_n_per_m`` and a damper of ``damping_n_s_per_m``.
+
+    MuJoCo (``mj_makeImpedance``; docs, "Computation: soft constraints"): a direct solref
+    ``(-s, -c)`` gives the reference acceleration ``a_ref = -(s / d) r - (c / d) v`` (``k = s /
+    d^2`` times the impedance ``d``, ``b = c / d``) and the contact force ``f = (a_ref - a) / R``
+    with ``R = (1 - d) / d * A``. So ``f = -s / ((1 - d) A) r - c / ((1 - d) A) v - a / R``: a
+    spring ``s / ((1 - d) A)``, a damper ``c / ((1 - d) A)`` and the inertia ``1 / R``
+    (``PAD_IMPEDANCE``). At rest (``a = 0``) force over depth is exactly the spring.
+    """
+    scale = (1.0 - PAD_IMPEDANCE) * float(inverse_weight)
+    return -stiffness_n_per_m * scale, -damping_n_s_per_m * scale
+
+
+def _joint_inertias(m: mujoco.MjModel, scratch: mujoco.MjData,
+                    joints: list[int]) -> dict[int, float]:
+    """Each joint's own inertia (the mass matrix's diagonal) at the model's reference pose."""
+    mujoco.mj_forward(m, scratch)
+    full = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, scratch, full)
+    inertia = np.diag(full)[m.jnt_dofadr[joints]]
+    return dict(zip(joints, inertia.tolist(), strict=True))
+
+
 def _prism(piece: NDArray[np.float64], thickness_mm: float) -> list[list[float]]:
     """Vertices (m) of the prism of a convex piece from z = 0 to the top."""
     top = thickness_mm * MM
@@ -797,5 +889,5 @@ def _urdf_joints(path: Path) -> tuple[list[tuple[str, str, str]], dict[str, str]
     return joints, parents  # type: ignore[return-value]
 
 
-__all__ = ["IMPRATIO", "MOTOR_STIFFNESS", "NOSLIP_ITERATIONS", "SERVO_TIME_CONSTANT_S",
-           "MujocoWorld"]
+__all__ = ["IMPRATIO", "MOTOR_STIFFNESS", "NOSLIP_ITERATIONS", "PAD_IMPEDANCE",
+           "SERVO_TIME_CONSTANT_S", "MujocoWorld", "pad_solref"]

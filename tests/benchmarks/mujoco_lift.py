@@ -5,7 +5,6 @@
     python -m tests.benchmarks.mujoco_lift --grips 20                # 20 grips' cost table
     python -m tests.benchmarks.mujoco_lift --finger-caps --grips 20  # a diagnostic finger drive
     python -m tests.benchmarks.mujoco_lift --pads                    # the pads' stiffness
-    python -m tests.benchmarks.mujoco_lift --renew-constants --pads  # ... with mj_setConst
 
 Runs the held box's trial (``tests.benchmarks.engines.held_box_grip``: the default rectangle's
 best grip by Q_C, no execution error) in MuJoCo and, from the named phase on, prints for each
@@ -14,10 +13,12 @@ arm's vertical (gantry z) drive, the vertical force the contacts put on the obje
 every contact's force turned out of its own frame) beside the object's weight, each contact's
 penetration, and the finger joints.
 
-``--finger-caps`` and ``--renew-constants`` are diagnostics, not the model. ``--grips N`` runs
-``tests.benchmarks.engines --grips N`` (both engines) instead of the trace. The arm's drives
-that this trace showed chattering (``--arm-stiffness``, ``--arm-constraint`` before label model
-``mujoco-2026.12-servo``) are now servo constraints (``grip_env.sim.mujoco_world``).
+``--finger-caps`` is a diagnostic, not the model (``--renew-constants``, the diagnostic that
+found the stale constants, is gone: label model ``mujoco-2026.12-pads`` renews them itself).
+``--grips N`` runs ``tests.benchmarks.engines --grips N`` (both engines) instead of the trace.
+The arm's drives that this trace showed chattering (``--arm-stiffness``, ``--arm-constraint``
+before label model ``mujoco-2026.12-servo``) are now servo constraints
+(``grip_env.sim.mujoco_world``).
 """
 
 from __future__ import annotations
@@ -99,25 +100,6 @@ def set_finger_caps() -> None:
     world_class.velocity_motors = velocity_motors
     world_class.position_motors = drive
     world_class.step = capped_step
-
-
-def renew_constants() -> None:
-    """A diagnostic, not the model: renew MuJoCo's model constants (``mj_setConst`` on a scratch
-    ``MjData``: ``body_invweight0`` and ``dof_invweight0``, from which MuJoCo sizes every
-    constraint's softness) after ``add_axis_inertia`` and ``set_dynamics`` change inertias and
-    masses of the compiled model. Without it the worm-gear stops are as soft as for the bare
-    links (the rotor's inertia, 50 times theirs, is added after compiling)."""
-    import grip_env.sim.mujoco_world as mujoco_world
-
-    world_class = mujoco_world.MujocoWorld
-    for name in ("add_axis_inertia", "set_dynamics"):
-        method = getattr(world_class, name)
-
-        def renewing(world, *args, _method=method, **kwargs) -> None:
-            _method(world, *args, **kwargs)
-            mujoco.mj_setConst(world._model, mujoco.MjData(world._model))
-
-        setattr(world_class, name, renewing)
 
 
 def pad_stiffness_at_hold(config: Config) -> list[tuple[float, float]]:
@@ -209,8 +191,6 @@ def main() -> None:
     parser.add_argument("--finger-caps", action="store_true",
                         help="diagnostic: the fingers' velocity motors as a torque and a speed cap "
                         "solved with the contacts")
-    parser.add_argument("--renew-constants", action="store_true",
-                        help="diagnostic: mj_setConst after inertias and masses change")
     parser.add_argument("--pads", action="store_true",
                         help="print each pad contact's depth, force and stiffness at the hold")
     parser.add_argument("--grips", type=int, default=0,
@@ -218,8 +198,6 @@ def main() -> None:
     args = parser.parse_args()
     if args.finger_caps:
         set_finger_caps()
-    if args.renew_constants:
-        renew_constants()
     if args.pads:
         for depth, force in pad_stiffness_at_hold(Config().override(sim={"engine": "mujoco"})):
             print(f"depth {depth:.4f} mm, normal force {force:.2f} N: {force / depth:.1f} kN/m")
