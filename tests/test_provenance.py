@@ -7,7 +7,7 @@ import importlib.metadata
 
 import pytest
 
-from classifiers.experiments import study
+from classifiers.experiments import stage_code, study
 from classifiers.experiments.study import (
     QUICK_OVERRIDES,
     describe_quick,
@@ -26,6 +26,57 @@ def test_an_upgrade_of_grip_env_changes_every_stage_key(monkeypatch):
     monkeypatch.setattr(study, "package_version", lambda: "99.0")
     assert all(stage_key(name, Config(), "d") != base[name] for name in STAGES)
     assert stage_record("ablation", Config(), "d")["package_version"] == "99.0"
+
+
+ALL_STAGES = tuple(study.STAGE_RUNS)
+
+
+def _edited(monkeypatch, module: str) -> None:
+    """As if ``module``'s source had been edited (one comment line added)."""
+    real = stage_code._source
+    monkeypatch.setattr(stage_code, "_source",
+                        lambda name: real(name) + (b"# edited\n" if name == module else b""))
+
+
+@pytest.mark.parametrize(("module", "recomputed"), [
+    # the selector's evaluation: the selector, and what reads its scores or its learners' code
+    ("classifiers.experiments.selector.evaluation",
+     {"classifiers", "selector", "images", "benchmark"}),
+    # the CNN: every learning stage (the model registry names it), not the simulating ones
+    ("classifiers.learners.cnn", {"classifiers", "ablation", "selector", "images", "benchmark"}),
+    ("grip_env.config", set(ALL_STAGES)),  # every stage reads its config
+])
+def test_an_edit_recomputes_the_stages_whose_code_it_is_and_no_other(monkeypatch, module,
+                                                                    recomputed):
+    """At the same grip-env version, a stage's key changes exactly when a module it runs does."""
+    base = {name: stage_key(name, Config(), "d") for name in ALL_STAGES}
+    _edited(monkeypatch, module)
+    changed = {name for name in ALL_STAGES if stage_key(name, Config(), "d") != base[name]}
+    assert changed == recomputed
+
+
+def test_a_stage_whose_code_changed_says_so(monkeypatch):
+    before = stage_record("selector", Config(), "d")
+    _edited(monkeypatch, "classifiers.experiments.selector.training")
+    assert study.changed_inputs(before, stage_record("selector", Config(), "d")) == "its code"
+
+
+def test_the_calibration_stage_covers_the_helpers_it_calls_in_the_study_module():
+    """A stage's run function calls helpers of its own module: their imports count too."""
+    record = stage_record("calibration", Config(), "d")
+    assert record["code_sha256"] == stage_code.stage_code_digest(study.STAGE_RUNS["calibration"])
+    assert "grip_env.calibration" in _reached("calibration")
+    assert "classifiers.experiments.selector" not in _reached("calibration")
+
+
+def _reached(name: str) -> set[str]:
+    import ast
+    import inspect
+
+    tree = ast.parse(inspect.getsource(study))
+    functions = stage_code._called_functions(tree, study.STAGE_RUNS[name].__name__)
+    return stage_code.reachable_modules(stage_code._imported(
+        ast.Module(body=functions, type_ignores=[]), study.__name__, is_package=False))
 
 
 def test_the_package_version_is_the_installed_one():

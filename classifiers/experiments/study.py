@@ -2,7 +2,8 @@
 the answers to the study's questions, report.
 
 Every stage records what it read in ``<stage>/stage.json``: the config fields it depends on
-(:data:`STAGE_INPUTS`), the dataset's checksum and the grip-env version, hashed into its key
+(:data:`STAGE_INPUTS`), the dataset's checksum, the grip-env version and a digest of the code it
+runs (:mod:`classifiers.experiments.stage_code`), hashed into its key
 (:func:`stage_key`). A rerun into the same folder reuses a stage whose key is unchanged and
 recomputes, and says so, a stage whose inputs changed. The dataset is the dataset layer's own
 resumable run: it is reused unless a setting it depends on changed, so adding a model to
@@ -23,6 +24,7 @@ from typing import Any
 
 import pandas as pd
 
+from classifiers.experiments.stage_code import stage_code_digest
 from grip_env.config import Config
 
 #: ``--quick``: a tiny profile for tests; a field is replaced only where the config leaves it at
@@ -170,6 +172,9 @@ REPLICATION_GRIPS, REPLICATION_GRIPS_QUICK = 100, 10
 #: The config fields each stage reads, by stage name.
 STAGE_INPUTS: dict[str, tuple[str, ...]] = {
     stage.name: stage.inputs for stage in (REPLICATION, *STAGES)}
+#: What runs each stage, by stage name (its code is part of the stage's key).
+STAGE_RUNS: dict[str, Callable[[StudyRun], object]] = {
+    stage.name: stage.run for stage in (REPLICATION, *STAGES)}
 #: Where a study records which dataset it learned on.
 DATA_FILE = "data.json"
 
@@ -361,7 +366,8 @@ def check_label_model(data_dir: Path) -> None:
 def stage_record(
     name: str, config: Config, dataset_sha256: str, quick: bool = False
 ) -> dict[str, Any]:
-    """What stage ``name`` reads (its config fields, the dataset, the version) and its key."""
+    """What stage ``name`` reads (its config fields, the dataset, the version, its code) and its
+    key."""
     inputs = stage_inputs(name, config)
     if name == "calibration":  # its sizes are its own (quick or not), not the config's
         from dataclasses import asdict
@@ -372,17 +378,19 @@ def stage_record(
         inputs["settings"] = asdict(CalibrationSettings.quick(1) if quick
                                     else CalibrationSettings(workers=1))  # fmt: skip
         inputs["settings"].pop("workers")  # the outcome does not depend on it
-    return {"stage": name, "key": _hash(inputs, dataset_sha256, package_version()),
+    code = stage_code_digest(STAGE_RUNS[name])
+    return {"stage": name, "key": _hash(inputs, dataset_sha256, package_version(), code),
             "package_version": package_version(), "dataset_sha256": dataset_sha256,
-            "inputs": inputs}  # fmt: skip
+            "code_sha256": code, "inputs": inputs}  # fmt: skip
 
 
 def stage_key(name: str, config: Config, dataset_sha256: str, quick: bool = False) -> str:
-    """SHA-256 of what stage ``name`` reads: its config fields, the dataset, the version.
+    """SHA-256 of what stage ``name`` reads: its config fields, the dataset, the version, and the
+    source of every project module it runs (:func:`stage_code_digest`).
 
     A rerun reuses a stage only when its key is unchanged, so a new learning seed recomputes
-    the learning stages (on the same dataset) and leaves the calibration alone, and an upgrade of
-    grip-env recomputes every stage.
+    the learning stages (on the same dataset) and leaves the calibration alone, an upgrade of
+    grip-env recomputes every stage, and a change to the code a stage runs recomputes it.
     """
     return stage_record(name, config, dataset_sha256, quick)["key"]
 
@@ -412,6 +420,8 @@ def changed_inputs(old: dict[str, Any] | None, new: dict[str, Any]) -> str:
         names.append("the dataset")
     if old.get("package_version") != new["package_version"]:
         names.append(f"grip-env {old.get('package_version')} -> {new['package_version']}")
+    if old.get("code_sha256") != new["code_sha256"]:
+        names.append("its code")
     return ", ".join(names) or "its inputs"
 
 
@@ -427,8 +437,9 @@ def package_version() -> str:
         return __version__
 
 
-def _hash(inputs: dict[str, Any], dataset_sha256: str, version: str) -> str:
-    depends = {"inputs": inputs, "dataset": dataset_sha256, "package_version": version}
+def _hash(inputs: dict[str, Any], dataset_sha256: str, version: str, code_sha256: str) -> str:
+    depends = {"inputs": inputs, "dataset": dataset_sha256, "package_version": version,
+               "code": code_sha256}
     return hashlib.sha256(json.dumps(depends, sort_keys=True).encode()).hexdigest()
 
 

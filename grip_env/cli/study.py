@@ -51,7 +51,8 @@ def study(
     method on the benchmark's split, checks the labels (the calibration the dataset records
     for its label model and recipe, or grip-env calibrate's checks run anew), and writes the
     report. A rerun reuses every stage whose inputs
-    (config fields, dataset, grip-env version) are unchanged and recomputes the others.
+    (config fields, dataset, grip-env version, the code it runs) are unchanged and recomputes the
+    others.
     Exit codes: 0 done, 1 internal error, 2 bad input, 130/143/129 stopped by a signal.
     """
     with stop_on_signals(f"rerun the same command to finish {out}"), user_errors(), shown():
