@@ -23,15 +23,19 @@ the critical load a block slides about 18 mm in that time, while the creep of a 
 
 from __future__ import annotations
 
+import tempfile
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from numpy.typing import NDArray
 
 from grip_env.config import Config
 from grip_env.objects import PlanarObject
 from grip_env.sim import pose
+from grip_env.sim.body import Body
 from grip_env.sim.engine import Engine, make_world
 
 GRAVITY = 9.81
@@ -193,6 +197,133 @@ def two_pad_squeeze(config: Config, mu: float = 0.4, compliant: bool = True) -> 
     found = critical_load(slides, mu, 3.0 * mu)
     name = "two-pad squeeze" + ("" if compliant else " (rigid pads)")
     return CaseResult(name, sim.engine, 2.0 * mu, found, "pull / F")
+
+
+#: The twisted case's body: an octahedron whose two tips (on y, ``TIP_MM`` from its centre) are
+#: its only contacts, one point on each pad; its girth (x and z) ``GIRTH_MM``; ``TIP_KG``.
+TIP_MM = 20.0
+GIRTH_MM = 15.0
+TIP_KG = 0.1
+#: Turn of the tipped body about the squeeze axis, relative to the pads, that counts as slip
+#: (at 1 % over the critical torque it turns about 25 rad within ``SLIP_TIME_S``).
+SLIP_RAD = 0.05
+#: Its pads are held as the fingers hold theirs: a servo (natural frequency ``HOLD_RAD_S``,
+#: critically damped) keeps each pad's x, z and turn where it began, leaving it free along the
+#: squeeze; the pads turn as if ``PAD_TURN_INERTIA`` times heavier (as a finger's turn is carried
+#: by its joints and the arm). The squeezed column pad-body-pad buckles under a turning
+#: stiffness below about F times its length (0.3 N m/rad): free pads roll over and squirt the
+#: body out within a second, and so do pads of their own inertia on a servo stable at the step.
+HOLD_RAD_S = 60.0
+PAD_TURN_INERTIA = 1000.0
+TWIST_SETTLE_S = 0.3
+
+
+class _PadServo:
+    """Holds a free pad's x, z and orientation (by pushes and twists, from its pose each step)."""
+
+    def __init__(self, world: Engine, body: Body, timestep: float) -> None:
+        self.world, self.uid, self.dt = world, body.uid, timestep
+        inertia = np.asarray(body.inertia_per_kg) * PAD_KG
+        self.gains = (PAD_KG * HOLD_RAD_S ** 2, 2 * PAD_KG * HOLD_RAD_S,
+                      inertia * HOLD_RAD_S ** 2, 2 * inertia * HOLD_RAD_S)
+        self.home = self._state()
+        self.last = self.home
+
+    def _state(self) -> NDArray[np.float64]:
+        position, (x, y, z, w) = self.world.pose_floats_mm(self.uid)
+        return np.array([*position, *(2 * np.sign(w) * np.array([x, y, z]))])  # mm, rad
+
+    def __call__(self, force_n: NDArray[np.float64], torque_nm: NDArray[np.float64]) -> None:
+        state = self._state()
+        error, rate = state - self.home, (state - self.last) / self.dt
+        self.last = state
+        k, c, k_turn, c_turn = self.gains
+        hold = -(k * error[:3] + c * rate[:3]) * 1e-3
+        hold[1] = 0.0  # free along the squeeze
+        self.world.push(self.uid, force_n + hold)
+        self.world.twist(self.uid, torque_nm - k_turn * error[3:] - c_turn * rate[3:])
+
+
+def _write_octahedron(path: Path) -> None:
+    tip, girth = TIP_MM, GIRTH_MM
+    corners = [(0, tip, 0), (0, -tip, 0), (girth, 0, 0), (-girth, 0, 0), (0, 0, girth),
+               (0, 0, -girth)]
+    faces = [(a, b, c) for a in (1, 2) for b in (3, 4) for c in (5, 6)]
+    path.write_text("o octahedron\n" + "".join(f"v {x} {y} {z}\n" for x, y, z in corners)
+                    + "".join(f"f {a} {b} {c}\n" for a, b, c in faces))
+
+
+def _turn_about_y(quaternion: tuple[float, float, float, float]) -> float:
+    """The angle (rad) a body's x axis has turned about world y (x towards -z)."""
+    x, y, z, w = quaternion
+    return float(np.arctan2(-2 * (x * z - w * y), 1 - 2 * (y * y + z * z)))
+
+
+def twisted_squeeze(config: Config, mu: float = 0.4,
+                    torsion_mm: float | None = None) -> CaseResult:
+    """The torque about the squeeze axis (in squeeze times torsional arm) that a body held at two
+    points between two of the hand's rubber pads resists, against 2 mu: each pad's torsional
+    friction (arm ``torsion_mm``, by default the hand's ``sim.pad_torsion_mm``) resists mu F arm.
+
+    No gravity: the body (an octahedron touching each pad with one tip) and the pads float; each
+    pad is pressed on along y with ``SQUEEZE_N`` and held against the reaction of the twist (half
+    of it each), as the fingers hold them.
+    """
+    sim = config.sim
+    arm_m = (sim.pad_torsion_mm if torsion_mm is None else torsion_mm) * 1e-3
+    squeeze = SQUEEZE_N
+    centre = np.array([0.0, 0.0, BLOCK_THICKNESS_MM / 2])
+    inertia = (2 * GIRTH_MM ** 2 / 10 * 1e-6, (TIP_MM ** 2 + GIRTH_MM ** 2) / 10 * 1e-6)
+
+    def slides(twists: float, mesh: Path) -> bool:
+        world = make_world(sim)
+        try:
+            body = world.add_mesh(mesh, 1.0, np.zeros(3), centre, (0.0, 0.0, 0.0, 1.0), TIP_KG,
+                                  mu, (inertia[1], inertia[0], inertia[1]))
+            pads = [world.add_object(_pad(y0), BLOCK_THICKNESS_MM, PAD_KG, friction=1.0,
+                                     tolerance_mm=config.objects.sim_tolerance_mm)
+                    for y0 in (TIP_MM, -TIP_MM - 20.0)]
+            pads = [replace(pad, inertia_per_kg=tuple(PAD_TURN_INERTIA * i
+                                                      for i in pad.inertia_per_kg))
+                    for pad in pads]
+            for pad in pads:
+                world.set_dynamics(pad, PAD_KG, 1.0)
+                world.set_pad_friction(pad.uid, -1, 1.0, arm_m * 1e3)
+                world.set_contact_compliance(pad.uid, -1, sim.pad_stiffness_n_per_m,
+                                             sim.pad_damping_n_s_per_m)
+            world.set_gravity((0.0, 0.0, 0.0))
+            servos = [_PadServo(world, pad, sim.timestep) for pad in pads]
+            torque = twists * squeeze * arm_m
+
+            def load(twisting: bool) -> None:
+                tau = torque if twisting else 0.0
+                world.twist(body.uid, np.array([0.0, tau, 0.0]))
+                for servo, side in zip(servos, (-1.0, 1.0), strict=True):
+                    servo(np.array([0.0, side * squeeze, 0.0]), np.array([0.0, -tau / 2, 0.0]))
+
+            def turn() -> float:
+                pad_turn = np.mean([_turn_about_y(world.pose_floats_mm(p.uid)[1]) for p in pads])
+                return _turn_about_y(world.pose_floats_mm(body.uid)[1]) - float(pad_turn)
+
+            for _ in range(round(TWIST_SETTLE_S / sim.timestep)):
+                load(False)
+                world.step()
+            start = turn()
+            for _ in range(round(SLIP_TIME_S / sim.timestep)):
+                load(True)
+                world.step()
+                if abs(turn() - start) > SLIP_RAD:
+                    return True
+            return False
+        finally:
+            world.close()
+
+    with tempfile.TemporaryDirectory() as folder:
+        mesh = Path(folder) / "octahedron.obj"
+        _write_octahedron(mesh)
+        found = critical_load(lambda twists: slides(twists, mesh), mu, 3.0 * mu)
+    return CaseResult(f"twisted squeeze ({arm_m * 1e3:g} mm arm)", sim.engine, 2.0 * mu, found,
+                      "torque / (F arm)")
 
 
 class _Held(Exception):
