@@ -222,6 +222,7 @@ SLIP_RAD = 0.05
 HOLD_RAD_S = 60.0
 PAD_TURN_INERTIA = 1000.0
 TWIST_SETTLE_S = 0.3
+RAMP_S = 0.25
 
 
 class _PadServo:
@@ -268,9 +269,10 @@ def _turn_about_y(quaternion: tuple[float, float, float, float]) -> float:
 def _tips_slip(config: Config, mu: float, arm_m: float, mesh: Path, body_kg: float,
                offset_mm: float, torque_nm: float) -> bool:
     """Whether the octahedron between the two held pads turns (``SLIP_RAD``) or slides
-    (``SLIP_MM``) within ``SLIP_TIME_S`` under ``torque_nm`` about y, plus its weight if
-    ``offset_mm`` (its centre of mass that far along x from the tips' line) is not None; the
-    pads held against the reactions (half each), after ``TWIST_SETTLE_S`` unloaded."""
+    (``SLIP_MM``) within ``SLIP_TIME_S`` under ``torque_nm`` about y, or, if ``offset_mm`` (its
+    centre of mass that far along x from the tips' line) is not None, its weight instead; the
+    pads held against the reactions (half each); after ``TWIST_SETTLE_S`` unloaded, the load
+    ramped up over ``RAMP_S`` and held (a step load would jolt the contacts past it)."""
     sim = config.sim
     weighed = offset_mm is not None
     com = np.array([offset_mm or 0.0, 0.0, 0.0])
@@ -296,14 +298,16 @@ def _tips_slip(config: Config, mu: float, arm_m: float, mesh: Path, body_kg: flo
         world.set_gravity((0.0, 0.0, 0.0))
         servos = [_PadServo(world, pad, sim.timestep) for pad in pads]
 
-        def load(loaded: bool) -> None:
-            tau = torque_nm if loaded else 0.0
-            if not weighed or not loaded:
-                world.twist(body.uid, np.array([0.0, tau, 0.0]))
-            lift = (weight_n / 2 if loaded else 0.0) + (PAD_KG * GRAVITY if weighed else 0.0)
+        def load(share: float) -> None:
+            """``share`` of the load: the torque, the weight and the pads' reactions to both."""
+            if weighed:
+                world.set_gravity((0.0, 0.0, -GRAVITY * share))
+            else:
+                world.twist(body.uid, np.array([0.0, share * torque_nm, 0.0]))
+            lift = share * (weight_n / 2 + (PAD_KG * GRAVITY if weighed else 0.0))
             for servo, side in zip(servos, (-1.0, 1.0), strict=True):
-                servo(np.array([0.0, side * SQUEEZE_N, lift if loaded or weighed else 0.0]),
-                      np.array([0.0, -tau / 2, 0.0]))
+                servo(np.array([0.0, side * SQUEEZE_N, lift]),
+                      np.array([0.0, -share * torque_nm / 2, 0.0]))
 
         def turn_and_place() -> tuple[float, NDArray[np.float64]]:
             poses = [world.pose_floats_mm(p.uid) for p in pads]
@@ -313,13 +317,11 @@ def _tips_slip(config: Config, mu: float, arm_m: float, mesh: Path, body_kg: flo
             return _turn_about_y(orientation) - pad_turn, place
 
         for _ in range(round(TWIST_SETTLE_S / sim.timestep)):
-            load(False)
+            load(0.0)
             world.step()
-        if weighed:
-            world.set_gravity((0.0, 0.0, -GRAVITY))
         start_turn, start_place = turn_and_place()
-        for _ in range(round(SLIP_TIME_S / sim.timestep)):
-            load(True)
+        for step in range(round(SLIP_TIME_S / sim.timestep)):
+            load(min(1.0, (step + 1) * sim.timestep / RAMP_S))
             world.step()
             turn, place = turn_and_place()
             if abs(turn - start_turn) > SLIP_RAD or np.linalg.norm(place - start_place) > SLIP_MM:
