@@ -211,7 +211,7 @@ TIP_MM = 20.0
 GIRTH_MM = 15.0
 TIP_KG = 0.1
 #: Turn of the tipped body about the squeeze axis, relative to the pads, that counts as slip
-#: (at 1 % over the critical torque it turns about 25 rad within ``SLIP_TIME_S``).
+#: (at 1 % over the critical torque the 100 g body turns over 10 rad in the 0.75 s at full load).
 SLIP_RAD = 0.05
 #: Its pads are held as the fingers hold theirs: a servo (natural frequency ``HOLD_RAD_S``,
 #: critically damped) keeps each pad's x, z and turn where it began, leaving it free along the
