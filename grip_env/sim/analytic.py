@@ -10,6 +10,12 @@ Coulomb's law:
   blocks, each pressed on with F) slides out when the pull exceeds mu F per pad, 2 mu F in all
   (the pads are held against the pull by half of it each; all three stand on a frictionless
   table, which carries their weights and resists nothing sideways);
+* ``twisted_squeeze``: a body touching each of two such pads at one point (an octahedron's tips),
+  twisted about the squeeze axis, turns when the torque exceeds mu F s per pad, 2 mu F s in all,
+  s the pads' torsional arm (``sim.pad_torsion_mm``: the torsional friction alone);
+* ``pivoting_body``: the same body with its centre of mass off the contacts' line, under its
+  weight: each contact carries half the weight sideways and half its torque as twist at once,
+  so it pivots below 2 mu F s / (m g) offset, by the limit surface of a disc contact;
 * ``held_box``: a box held by the hand (the real trial up to the hold of a grip the caller
   planned, e.g. the default rectangle's best by Q_C; paper's mu = 0.4) slides
   out along the fingers when the pull plus its weight exceeds mu times the sum of the pads'
@@ -23,15 +29,19 @@ the critical load a block slides about 18 mm in that time, while the creep of a 
 
 from __future__ import annotations
 
+import tempfile
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from numpy.typing import NDArray
 
 from grip_env.config import Config
 from grip_env.objects import PlanarObject
 from grip_env.sim import pose
+from grip_env.sim.body import Body
 from grip_env.sim.engine import Engine, make_world
 
 GRAVITY = 9.81
@@ -195,6 +205,201 @@ def two_pad_squeeze(config: Config, mu: float = 0.4, compliant: bool = True) -> 
     return CaseResult(name, sim.engine, 2.0 * mu, found, "pull / F")
 
 
+#: The twisted case's body: an octahedron whose two tips (on y, ``TIP_MM`` from its centre) are
+#: its only contacts, one point on each pad; its girth (x and z) ``GIRTH_MM``; ``TIP_KG``.
+TIP_MM = 20.0
+GIRTH_MM = 15.0
+TIP_KG = 0.1
+#: Turn of the tipped body about the squeeze axis, relative to the pads, that counts as slip
+#: (at 1 % over the critical torque the 100 g body turns over 10 rad in the 0.75 s at full load).
+SLIP_RAD = 0.05
+#: Its pads are held as the fingers hold theirs: a servo (natural frequency ``HOLD_RAD_S``,
+#: critically damped) keeps each pad's x, z and turn where it began, leaving it free along the
+#: squeeze; the pads turn as if ``PAD_TURN_INERTIA`` times heavier (as a finger's turn is carried
+#: by its joints and the arm). The squeezed column pad-body-pad buckles under a turning
+#: stiffness below about F times its length (0.3 N m/rad): free pads roll over and squirt the
+#: body out within a second, and so do pads of their own inertia on a servo stable at the step.
+HOLD_RAD_S = 60.0
+PAD_TURN_INERTIA = 1000.0
+TWIST_SETTLE_S = 0.3
+RAMP_S = 0.25
+
+
+class _PadServo:
+    """Holds a free pad's x, z and orientation (by pushes and twists, from its pose each step)."""
+
+    def __init__(self, world: Engine, body: Body, timestep: float) -> None:
+        self.world, self.uid, self.dt = world, body.uid, timestep
+        inertia = np.asarray(body.inertia_per_kg) * PAD_KG
+        self.gains = (PAD_KG * HOLD_RAD_S ** 2, 2 * PAD_KG * HOLD_RAD_S,
+                      inertia * HOLD_RAD_S ** 2, 2 * inertia * HOLD_RAD_S)
+        self.home = self._state()
+        self.last = self.home
+
+    def _state(self) -> NDArray[np.float64]:
+        position, (x, y, z, w) = self.world.pose_floats_mm(self.uid)
+        return np.array([*position, *(2 * np.sign(w) * np.array([x, y, z]))])  # mm, rad
+
+    def __call__(self, force_n: NDArray[np.float64], torque_nm: NDArray[np.float64]) -> None:
+        state = self._state()
+        error, rate = state - self.home, (state - self.last) / self.dt
+        self.last = state
+        k, c, k_turn, c_turn = self.gains
+        hold = -(k * error[:3] + c * rate[:3]) * 1e-3
+        hold[1] = 0.0  # free along the squeeze
+        self.world.push(self.uid, force_n + hold)
+        self.world.twist(self.uid, torque_nm - k_turn * error[3:] - c_turn * rate[3:])
+
+
+def _write_octahedron(path: Path) -> None:
+    tip, girth = TIP_MM, GIRTH_MM
+    corners = [(0, tip, 0), (0, -tip, 0), (girth, 0, 0), (-girth, 0, 0), (0, 0, girth),
+               (0, 0, -girth)]
+    faces = [(a, b, c) for a in (1, 2) for b in (3, 4) for c in (5, 6)]
+    path.write_text("o octahedron\n" + "".join(f"v {x} {y} {z}\n" for x, y, z in corners)
+                    + "".join(f"f {a} {b} {c}\n" for a, b, c in faces))
+
+
+def _turn_about_y(quaternion: tuple[float, float, float, float]) -> float:
+    """The angle (rad) a body's x axis has turned about world y (x towards -z)."""
+    x, y, z, w = quaternion
+    return float(np.arctan2(-2 * (x * z - w * y), 1 - 2 * (y * y + z * z)))
+
+
+def _tips_slip(config: Config, mu: float, arm_m: float, mesh: Path, body_kg: float,
+               offset_mm: float, torque_nm: float) -> bool:
+    """Whether the octahedron between the two held pads turns (``SLIP_RAD``) or slides
+    (``SLIP_MM``) within ``SLIP_TIME_S`` under ``torque_nm`` about y, or, if ``offset_mm`` (its
+    centre of mass that far along x from the tips' line) is not None, its weight instead; the
+    pads held against the reactions (half each); after ``TWIST_SETTLE_S`` unloaded, the load
+    ramped up over ``RAMP_S`` and held (a step load would jolt the contacts past it)."""
+    sim = config.sim
+    weighed = offset_mm is not None
+    com = np.array([offset_mm or 0.0, 0.0, 0.0])
+    weight_n = body_kg * GRAVITY if weighed else 0.0
+    torque_nm = torque_nm + weight_n * com[0] * 1e-3
+    inertia = (2 * GIRTH_MM ** 2 / 10 * 1e-6, (TIP_MM ** 2 + GIRTH_MM ** 2) / 10 * 1e-6)
+    world = make_world(sim)
+    try:
+        body = world.add_mesh(mesh, 1.0, com, com + [0.0, 0.0, BLOCK_THICKNESS_MM / 2],
+                              (0.0, 0.0, 0.0, 1.0), body_kg, mu,
+                              (inertia[1], inertia[0], inertia[1]))
+        pads = [world.add_object(_pad(y0), BLOCK_THICKNESS_MM, PAD_KG, friction=1.0,
+                                 tolerance_mm=config.objects.sim_tolerance_mm)
+                for y0 in (TIP_MM, -TIP_MM - 20.0)]
+        pads = [replace(pad, inertia_per_kg=tuple(PAD_TURN_INERTIA * i
+                                                  for i in pad.inertia_per_kg))
+                for pad in pads]
+        for pad in pads:
+            world.set_dynamics(pad, PAD_KG, 1.0)
+            world.set_pad_friction(pad.uid, -1, 1.0, arm_m * 1e3)
+            world.set_contact_compliance(pad.uid, -1, sim.pad_stiffness_n_per_m,
+                                         sim.pad_damping_n_s_per_m)
+        world.set_gravity((0.0, 0.0, 0.0))
+        servos = [_PadServo(world, pad, sim.timestep) for pad in pads]
+
+        def load(share: float) -> None:
+            """``share`` of the load: the torque, the weight and the pads' reactions to both."""
+            if weighed:
+                world.set_gravity((0.0, 0.0, -GRAVITY * share))
+            else:
+                world.twist(body.uid, np.array([0.0, share * torque_nm, 0.0]))
+            lift = share * (weight_n / 2 + (PAD_KG * GRAVITY if weighed else 0.0))
+            for servo, side in zip(servos, (-1.0, 1.0), strict=True):
+                servo(np.array([0.0, side * SQUEEZE_N, lift]),
+                      np.array([0.0, -share * torque_nm / 2, 0.0]))
+
+        def turn_and_place() -> tuple[float, NDArray[np.float64]]:
+            poses = [world.pose_floats_mm(p.uid) for p in pads]
+            position, orientation = world.pose_floats_mm(body.uid)
+            pad_turn = float(np.mean([_turn_about_y(q) for _, q in poses]))
+            place = np.subtract(position, np.mean([x for x, _ in poses], axis=0))
+            return _turn_about_y(orientation) - pad_turn, place
+
+        for _ in range(round(TWIST_SETTLE_S / sim.timestep)):
+            load(0.0)
+            world.step()
+        start_turn, start_place = turn_and_place()
+        for step in range(round(SLIP_TIME_S / sim.timestep)):
+            load(min(1.0, (step + 1) * sim.timestep / RAMP_S))
+            world.step()
+            turn, place = turn_and_place()
+            if abs(turn - start_turn) > SLIP_RAD or np.linalg.norm(place - start_place) > SLIP_MM:
+                return True
+        return False
+    finally:
+        world.close()
+
+
+def twisted_squeeze(config: Config, mu: float = 0.4,
+                    torsion_mm: float | None = None) -> CaseResult:
+    """The torque about the squeeze axis (in squeeze times torsional arm) that a body held at two
+    points between two of the hand's rubber pads resists, against 2 mu: each pad's torsional
+    friction (arm ``torsion_mm``, by default the hand's ``sim.pad_torsion_mm``) resists mu F arm.
+
+    No gravity: the body (an octahedron touching each pad with one tip) and the pads float; each
+    pad is pressed on along y with ``SQUEEZE_N`` and held against the reaction of the twist (half
+    of it each), as the fingers hold them.
+    """
+    arm_m = (config.sim.pad_torsion_mm if torsion_mm is None else torsion_mm) * 1e-3
+    with tempfile.TemporaryDirectory() as folder:
+        mesh = Path(folder) / "octahedron.obj"
+        _write_octahedron(mesh)
+        found = critical_load(lambda twists: _tips_slip(
+            config, mu, arm_m, mesh, TIP_KG, None, twists * SQUEEZE_N * arm_m), mu, 3.0 * mu)
+    return CaseResult(f"twisted squeeze ({arm_m * 1e3:g} mm arm)", config.sim.engine, 2.0 * mu,
+                      found, "torque / (F arm)")
+
+
+#: The pivot case's body: heavy enough that its weight loads each contact's lateral friction to
+#: about half (m g / 2 against mu F = 4 N at mu 0.4).
+PIVOT_KG = 0.4
+
+
+def disc_moment_fraction(force_fraction: float, hertz: bool = False, cells: int = 400) -> float:
+    """The largest moment about its normal a sliding disc contact carries while it carries
+    ``force_fraction`` of mu N sideways, as a fraction of the moment alone (its limit surface,
+    Goyal, Ruina & Papadopoulos 1991), for uniform or Hertzian pressure: from Coulomb's law at
+    every point of the disc, over the instantaneous centres of rotation on one line."""
+    axis = np.linspace(-1.0, 1.0, cells)
+    x, y = np.meshgrid(axis, axis)
+    inside = x * x + y * y < 1.0
+    pressure = np.sqrt(np.clip(1.0 - x * x - y * y, 0.0, None)) if hertz else np.ones_like(x)
+    weights = np.where(inside, pressure, 0.0) / np.where(inside, pressure, 0.0).sum()
+    alone = float((weights * np.hypot(x, y)).sum())
+    centres = np.concatenate([np.linspace(0.0, 1.0, 50), np.geomspace(1.0, 1e4, 100)])
+    vx, vy = -(y[None] - centres[:, None, None]), np.broadcast_to(x, (len(centres), *x.shape))
+    speed = np.hypot(vx, vy) + 1e-12
+    force = np.abs((weights * vx / speed).sum(axis=(1, 2)))
+    moment = np.abs((weights * (x * vy - y * vx) / speed).sum(axis=(1, 2))) / alone
+    return float(np.interp(force_fraction, force, moment))
+
+
+def pivoting_body(config: Config, mu: float = 0.4) -> CaseResult:
+    """The offset of its centre of mass from the contacts' line at which a body held at two
+    points between the hand's pads (squeezed with F) pivots about that line under its weight m g,
+    as a fraction of 2 mu F arm / (m g), the offset torsion alone would carry.
+
+    Each contact carries m g / 2 sideways and m g d / 2 of twist at once. A real disc contact
+    then carries less twist than alone (its limit surface: :func:`disc_moment_fraction`, the
+    answer); Bullet's friction, a box (each bound alone), carries all of it; MuJoCo's elliptic
+    cone ``(f / mu N)^2 + (tau / mu s N)^2 <= 1`` carries sqrt(1 - (m g / 2 mu F)^2).
+    """
+    arm_m = config.sim.pad_torsion_mm * 1e-3
+    full_mm = 2 * mu * SQUEEZE_N * arm_m / (PIVOT_KG * GRAVITY) * 1e3
+    sideways = PIVOT_KG * GRAVITY / 2 / (mu * SQUEEZE_N)
+    with tempfile.TemporaryDirectory() as folder:
+        mesh = Path(folder) / "octahedron.obj"
+        _write_octahedron(mesh)
+        found = critical_load(lambda share: _tips_slip(
+            config, mu, arm_m, mesh, PIVOT_KG, share * full_mm, 0.0), 0.3, 1.5)
+    detail = (f"m g / (2 mu F) = {sideways:.3f}; uniform disc {disc_moment_fraction(sideways):.3f}"
+              f", Hertz disc {disc_moment_fraction(sideways, hertz=True):.3f}, ellipse "
+              f"{np.sqrt(1 - sideways ** 2):.3f}, box 1")
+    return CaseResult("pivoting body", config.sim.engine, disc_moment_fraction(sideways), found,
+                      "m g d / (2 mu F arm)", detail)
+
+
 class _Held(Exception):
     """Raised from the trial's ``held`` phase to stop it once the case is measured."""
 
@@ -266,9 +471,9 @@ def run_cases(config: Config, box: PlanarObject, grip: pd.DataFrame,
     ``box`` held by ``grip`` (see :func:`held_box`)."""
     cases: list[Callable[[Config], CaseResult]] = [
         tilted_plane, pushed_block, lambda c: two_pad_squeeze(c, compliant=False),
-        two_pad_squeeze, lambda c: held_box(c, box, grip)]
+        two_pad_squeeze, twisted_squeeze, pivoting_body, lambda c: held_box(c, box, grip)]
     names = ("tilted plane", "pushed block", "two-pad squeeze (rigid pads)", "two-pad squeeze",
-             "held box")
+             "twisted squeeze", "pivoting body", "held box")
     results = []
     for engine in engines:
         engine_config = config.override(sim={"engine": engine})
