@@ -145,7 +145,9 @@ class MujocoWorld:
         self._saved: dict[int, mujoco.MjData] = {}
         self._saved_servos: dict[int, NDArray[np.float64]] = {}
         self._addresses: dict[tuple[int, tuple[int, ...]], tuple[NDArray, NDArray]] = {}
+        self._joint_rows: dict[tuple[int, tuple[int, ...]], NDArray[np.int64]] = {}
         self._stale = False
+        self._loaded = False  # a push or twist is applied (``xfrc_applied``)
         self._constants_stale = False
         self._pads: dict[int, tuple[float, float]] = {}  # geom: stiffness N/m, damping N s/m
         self._servo_names: list[str] = []  # the arm's joints, held by servo constraints
@@ -183,7 +185,9 @@ class MujocoWorld:
                 if self.watch_servos:
                     np.maximum(peak, np.abs(d.efc_force[servos]), out=peak)
             self._servo_from = self._servo_target.copy()
-            d.xfrc_applied[:] = 0.0
+            if self._loaded:  # a push or twist lasts one step
+                d.xfrc_applied[:] = 0.0
+                self._loaded = False
         self._stale = True
 
     def servos_within_limits(self) -> bool:
@@ -317,7 +321,7 @@ class MujocoWorld:
         uid = len(self._bodies)
         prefix = f"robot{uid}/"
         joints, parents = _urdf_joints(path)
-        root = ET.parse(path).getroot().find("link").get("name")  # type: ignore[union-attr]
+        root = _urdf_root_link(path)
         links = [root] + [child for _, _, child in joints]
         self._new_body([prefix + name for name in links],
                        [None if kind == "fixed" else prefix + name for name, kind, _ in joints],
@@ -436,10 +440,13 @@ class MujocoWorld:
                      uppers: list[float], holds: list[float]) -> None:
         """Set joints' lower and upper limits (stops; MuJoCo's hold any load, ``holds`` aside)."""
         m, _ = self._compiled()
-        for joint, low, high in zip(joints, lowers, uppers, strict=True):
-            index = self._joint_id(body, joint)
-            m.jnt_range[index] = (low, high)
-            m.jnt_solref[index] = (2.0 * m.opt.timestep, 1.0)
+        key = (body, tuple(joints))
+        if key not in self._joint_rows:  # a per-step call: ids cached
+            self._joint_rows[key] = np.array([self._joint_id(body, j) for j in joints], int)
+        rows = self._joint_rows[key]
+        self._jnt_range[rows, 0] = lowers
+        self._jnt_range[rows, 1] = uppers
+        self._jnt_solref[rows] = (2.0 * m.opt.timestep, 1.0)
 
     def joint_limits(self, body: int, joint: int) -> tuple[float, float]:
         """A joint's lower and upper limits (rad) as loaded (the URDF's)."""
@@ -462,14 +469,14 @@ class MujocoWorld:
     def joint_positions_velocities(self, body: int,
                                    joints: list[int]) -> tuple[list[float], list[float]]:
         """Positions and velocities of ``joints``, as lists (addresses cached: a per-step call)."""
-        _, d = self._compiled()
+        self._compiled()
         key = (body, tuple(joints))
         if key not in self._addresses:
             m = self._model
             ids = [self._joint_id(body, j) for j in joints]
             self._addresses[key] = (m.jnt_qposadr[ids].copy(), m.jnt_dofadr[ids].copy())
         positions, velocities = self._addresses[key]
-        return d.qpos[positions].tolist(), d.qvel[velocities].tolist()
+        return self._qpos[positions].tolist(), self._qvel[velocities].tolist()
 
     def touching_links(self, body: int, other: int) -> set[int]:
         """The links of ``body`` in contact with ``other`` (in the last step)."""
@@ -523,11 +530,13 @@ class MujocoWorld:
         """A world-frame force (N) through ``body``'s centre of mass, for the next step."""
         _, d = self._compiled()
         d.xfrc_applied[self._body_id(body, -1), :3] = np.asarray(force_n, float)
+        self._loaded = True
 
     def twist(self, body: int, torque_nm: NDArray) -> None:
         """A world-frame torque (N·m) on ``body``, for the next step."""
         _, d = self._compiled()
         d.xfrc_applied[self._body_id(body, -1), 3:] = np.asarray(torque_nm, float)
+        self._loaded = True
 
     def set_gravity(self, gravity: tuple[float, float, float]) -> None:
         """Gravity (m/s², world frame)."""
@@ -598,7 +607,8 @@ class MujocoWorld:
         at the model's reference pose, so the world's state is untouched) and the pads'
         ``solref``. The motors' gains stay sized from the joints' inertias as compiled, without
         the rotor inertia added since (``MOTOR_STIFFNESS``)."""
-        mujoco.mj_setConst(m, mujoco.MjData(m))
+        mujoco.mj_resetData(m, self._scratch)  # as a new MjData: the reference pose
+        mujoco.mj_setConst(m, self._scratch)
         self._update_pads(m)
         self._constants_stale = False
 
@@ -648,6 +658,9 @@ class MujocoWorld:
             spec.add_pair(name=f"pair{k}", geomname1=a, geomname2=b, condim=4)
         self._model = m = spec.compile()
         self._data = mujoco.MjData(m)
+        # views of arrays read or written every step (the model and data live as long as these)
+        self._qpos, self._qvel = self._data.qpos, self._data.qvel
+        self._jnt_range, self._jnt_solref = m.jnt_range, m.jnt_solref
         self._pair_geoms = np.stack([m.pair_geom1, m.pair_geom2], axis=1) if m.npair else (
             np.zeros((0, 2), int))
         self._friction = m.geom_friction[:, :2].copy()  # lateral, torsional arm (m), per geom
@@ -656,7 +669,8 @@ class MujocoWorld:
         self._actuator = {int(m.actuator_trnid[a, 0]): a for a in range(m.nu)}
         self._index_servos(m)
         mujoco.mj_forward(m, self._data)
-        self._inertia = _joint_inertias(m, mujoco.MjData(m), list(self._actuator))
+        self._scratch = mujoco.MjData(m)  # for computing constants; never stepped
+        self._inertia = _joint_inertias(m, self._scratch, list(self._actuator))
         self._update_pairs()
 
     def _index_servos(self, m: mujoco.MjModel) -> None:
@@ -878,15 +892,22 @@ def _prism(piece: NDArray[np.float64], thickness_mm: float) -> list[list[float]]
             + [[x * MM, y * MM, top] for x, y in piece])
 
 
+@functools.cache  # the mounted URDF's path names its content (``mounted_urdf``)
 def _urdf_joints(path: Path) -> tuple[list[tuple[str, str, str]], dict[str, str]]:
     """The URDF's joints in file order (PyBullet's joint indices here): name, type, child link;
-    and each link's parent link."""
+    and each link's parent link (cached: do not modify)."""
     joints, parents = [], {}
     for joint in ET.parse(path).getroot().iter("joint"):
         child = joint.find("child").get("link")  # type: ignore[union-attr]
         parents[child] = joint.find("parent").get("link")  # type: ignore[union-attr]
         joints.append((joint.get("name"), joint.get("type"), child))
     return joints, parents  # type: ignore[return-value]
+
+
+@functools.cache
+def _urdf_root_link(path: Path) -> str:
+    """The name of the URDF's first link, its root."""
+    return ET.parse(path).getroot().find("link").get("name")  # type: ignore[union-attr]
 
 
 __all__ = ["IMPRATIO", "MOTOR_STIFFNESS", "NOSLIP_ITERATIONS", "PAD_IMPEDANCE",
