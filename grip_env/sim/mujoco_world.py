@@ -174,13 +174,13 @@ class MujocoWorld:
         The arm's servos track a reference that moves at constant speed from the last target to
         the new one through the step, with that speed as their velocity reference."""
         m, d = self._ready()
-        fraction, servos, peak = self._substep_fraction, self._servo_rows, self.servo_peak_n
+        offsets, servos, peak = self._substep_offsets, self._servo_rows, self.servo_peak_n
+        held = self._servo_references  # a view of the servos' rows of ``m.eq_data``
         for _ in range(steps):
             start, speed = self._servo_from, (self._servo_target - self._servo_from) / self.timestep
             lead = 2.0 * self._servo_time_constant * speed
-            references = start + np.multiply.outer(fraction * self.timestep, speed) + lead
-            for reference in references:
-                m.eq_data[servos, 0] = reference
+            for reference in start + np.multiply.outer(offsets, speed) + lead:
+                held[:] = reference
                 mujoco.mj_step(m, d)
                 if self.watch_servos:
                     np.maximum(peak, np.abs(d.efc_force[servos]), out=peak)
@@ -697,7 +697,8 @@ class MujocoWorld:
         self._servo_time_constant = max(SERVO_TIME_CONSTANT_S, 2.0 * m.opt.timestep)
         m.eq_solref[:] = (self._servo_time_constant, 1.0)
         m.eq_solimp[:, :2] = m.eq_solimp[:, 1:2]
-        self._substep_fraction = np.arange(self.substeps) / self.substeps
+        self._substep_offsets = np.arange(self.substeps) / self.substeps * self.timestep
+        self._servo_references = m.eq_data[self._servo_rows, 0]
 
     def _index_bodies(self, m: mujoco.MjModel) -> None:
         self._body_ids: list[list[int]] = []
