@@ -176,10 +176,14 @@ class MujocoWorld:
         m, d = self._ready()
         offsets, servos, peak = self._substep_offsets, self._servo_rows, self.servo_peak_n
         held = self._servo_references  # a view of the servos' rows of ``m.eq_data``
+        references = np.empty((len(offsets), len(self._servo_from)))
         for _ in range(steps):
             start, speed = self._servo_from, (self._servo_target - self._servo_from) / self.timestep
             lead = 2.0 * self._servo_time_constant * speed
-            for reference in start + np.multiply.outer(offsets, speed) + lead:
+            np.multiply(offsets, speed, out=references)  # in place, the bits of
+            references += start  # start + offsets * speed + lead (its sums in its order)
+            references += lead
+            for reference in references:
                 held[:] = reference
                 mujoco.mj_step(m, d)
                 if self.watch_servos:
@@ -697,7 +701,7 @@ class MujocoWorld:
         self._servo_time_constant = max(SERVO_TIME_CONSTANT_S, 2.0 * m.opt.timestep)
         m.eq_solref[:] = (self._servo_time_constant, 1.0)
         m.eq_solimp[:, :2] = m.eq_solimp[:, 1:2]
-        self._substep_offsets = np.arange(self.substeps) / self.substeps * self.timestep
+        self._substep_offsets = (np.arange(self.substeps) / self.substeps * self.timestep)[:, None]
         self._servo_references = m.eq_data[self._servo_rows, 0]
 
     def _index_bodies(self, m: mujoco.MjModel) -> None:
