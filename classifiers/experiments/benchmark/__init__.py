@@ -258,5 +258,7 @@ def _board(candidates: pd.DataFrame, scores: pd.DataFrame, split: dict[str, Any]
     board = build_leaderboard(metrics, split, reps=reps, seed=seed)
     board["per_object"] = metrics.round(6).to_dict(orient="records")
     if recorded_trial_successes(candidates.columns):  # the retry task, from the shared draws
-        board["retry"] = retry_leaderboard(retry_metrics(candidates, scores), reps, seed)
+        retry = retry_metrics(candidates, scores)
+        board["retry"] = retry_leaderboard(retry, reps, seed)
+        board["retry"]["per_object"] = retry.round(6).to_dict(orient="records")
     return board
