@@ -693,13 +693,14 @@ class MujocoWorld:
     def _set_servo_stiffness(self, m: mujoco.MjModel) -> None:
         """Critically damped servos of ``SERVO_TIME_CONSTANT_S``, with a constant impedance
         (MuJoCo's damping over stiffness is then exactly twice the time constant, which the
-        reference's lead in ``step`` relies on)."""
+        reference's lead in ``step`` relies on); and the hand motors' rows at the stiffest time
+        constant, two physics steps, with ``DRIVE_IMPEDANCE``."""
         # MuJoCo stiffens no constraint beyond two physics steps (its refsafe)
         self._servo_time_constant = max(SERVO_TIME_CONSTANT_S, 2.0 * m.opt.timestep)
         m.eq_solref[:] = (self._servo_time_constant, 1.0)
         m.eq_solimp[:, :2] = m.eq_solimp[:, 1:2]
         self._substep_fraction = np.arange(self.substeps) / self.substeps
-        m.tendon_solref_fri[:] = (2.0 * m.opt.timestep, 1.0)  # the stiffest (refsafe)
+        m.tendon_solref_fri[:] = (2.0 * m.opt.timestep, 1.0)
         m.tendon_solimp_fri[:, :2] = DRIVE_IMPEDANCE
 
     def _index_bodies(self, m: mujoco.MjModel) -> None:
