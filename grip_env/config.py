@@ -328,6 +328,11 @@ class SelectorConfig(_Section):
     timesteps: int = Field(20_000, ge=1, le=100_000_000, description="training timesteps")
     max_candidates: int = Field(64, ge=2, le=4096, description="K, candidates per observation")
     max_attempts: int = Field(1, ge=1, le=100, description="attempts per episode")
+    retry_attempts: int = Field(
+        3, ge=1, le=100,
+        description="the study's retry selector: attempts an episode, replaying one trial index "
+        "(1: none); trained only on a dataset that records every trial's outcome",
+    )
     reward: Literal["success", "expected_success", "robustness"] = Field(
         "success", description="reward of a pick: success (0/1), expected_success (the grip's "
         "recorded success rate: a variance-reduction baseline) or robustness / reference level"
@@ -355,9 +360,10 @@ class SelectorConfig(_Section):
 
     @model_validator(mode="after")
     def _attempts_within_candidates(self) -> SelectorConfig:
-        if self.max_attempts > self.max_candidates:
-            raise ValueError(f"max_attempts {self.max_attempts} exceeds max_candidates "
-                             f"{self.max_candidates}: an episode shows no more candidates")
+        for name in ("max_attempts", "retry_attempts"):
+            if getattr(self, name) > self.max_candidates:
+                raise ValueError(f"{name} {getattr(self, name)} exceeds max_candidates "
+                                 f"{self.max_candidates}: an episode shows no more candidates")
         return self
 
 

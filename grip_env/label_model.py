@@ -52,6 +52,14 @@ MuJoCo's (``sim.engine: mujoco``):
   rubber's (measured, ``tests/test_mujoco_world.py``). With the softer friction regularisation
   this brings, the creep control NoSlip needs 5 iterations (2 let the held box creep out at 41 %
   of Coulomb). BENCHMARKS.md, "MuJoCo's pads and worm gear: label model mujoco-2026.12-pads".
+- ``mujoco-2026.12-drives``: the hand's motors solved with the contacts, as Bullet solves its
+  motors and the arm's servos are. Each motor was an actuator whose velocity gain ``implicitfast``
+  applies after the contact solve (mujoco #3443), sized from the joints' inertias without their
+  rotors (a stop-gap: sized with them, grips dropped at the lift), which also left joint 3's
+  stall torque short of its cap (0.513 N m for 0.53-0.56). Each motor is now a fixed tendon from
+  its joint to a reference joint turning at the motor's target speed, whose friction loss, the
+  motor's torque, the solver bounds: it holds the joint to its speed within its torque and, stalled,
+  presses exactly its torque. BENCHMARKS.md, "label model mujoco-2026.12-drives".
 """
 
 from __future__ import annotations
@@ -60,7 +68,7 @@ LABEL_MODEL = "2026.12-xm"
 #: MuJoCo's label model (``sim.engine: mujoco``), pinned by its own golden recording
 #: (``python -m tests.golden --engine mujoco --record`` renews it; BENCHMARKS.md, "PyBullet
 #: beside MuJoCo").
-MUJOCO_LABEL_MODEL = "mujoco-2026.12-pads"
+MUJOCO_LABEL_MODEL = "mujoco-2026.12-drives"
 #: Each engine's label model: PyBullet's is the standard dataset's.
 ENGINE_LABEL_MODELS = {"pybullet": LABEL_MODEL, "mujoco": MUJOCO_LABEL_MODEL}
 #: What a manifest written before label models were recorded is taken to hold.

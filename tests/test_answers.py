@@ -241,3 +241,62 @@ def test_the_gallery_shows_meshes_beside_drawn_shapes():
     chosen = gallery_choice(objects, grips, per_kind=3)
     assert list(chosen["object_id"]) == ["x1", "x3", "x7", "x0", "x4"]
     assert list(chosen["kind"]) == ["drawn"] * 3 + ["mesh"] * 2
+
+
+def _retry_board(rl_shift: float, seed: int = 3) -> dict:
+    """A retry board of 30 objects, within 1-3 attempts on shared draws: lambdarank's order 0.05
+    above best-Q_C's, the oracle's 0.2, the RL retry selector ``rl_shift`` (two runs, noisy)."""
+    from classifiers.experiments.benchmark.retry import retry_leaderboard
+
+    rng = np.random.default_rng(seed)
+    base = rng.uniform(0.3, 0.6, 30)
+    shifts = {
+        "best_qc": (0.0, 0.0, 1),
+        "ranker_lambdarank": (0.05, 0.0, 1),
+        "oracle": (0.2, 0.0, 1),
+        "rl_retry": (rl_shift, 0.02, 2),
+    }
+    rows = []
+    for method, (shift, noise, runs) in shifts.items():
+        for run in range(runs):
+            for i in range(30):
+                held = np.clip(base[i] + shift + noise * rng.normal() + [0.0, 0.05, 0.08], 0, 1)
+                rows.append({"method": method, "seed": run, "object_id": f"o{i:02d}",
+                             **{f"shared_at_{m}": held[m - 1] for m in (1, 2, 3)},
+                             **{f"overstatement_at_{m}": 0.0 for m in (1, 2, 3)},
+                             "ceiling": 1.0})  # fmt: skip
+    metrics = pd.DataFrame(rows)
+    retry = retry_leaderboard(metrics, reps=400, seed=seed)
+    return {"retry": {**retry, "per_object": metrics.to_dict(orient="records")}}
+
+
+def test_the_retry_answer_is_the_retry_boards_paired_difference() -> None:
+    from classifiers.experiments.answers import retry_answers
+
+    board = _retry_board(rl_shift=0.1)
+    found = retry_answers(board, seed=3, reps=400)
+    versus_qc = found["picks"]["rl_retry - best_qc"]
+    assert versus_qc["estimate"] == pytest.approx(
+        board["retry"]["methods"]["rl_retry"]["shared_at_3_minus_best_qc"]["estimate"]
+    )
+    assert (
+        versus_qc["ci"] == board["retry"]["methods"]["rl_retry"]["shared_at_3_minus_best_qc"]["ci"]
+    )
+    assert found["picks"]["rl_retry - ranker_lambdarank"]["estimate"] == pytest.approx(
+        0.05, abs=0.01
+    )
+    sentence = answer_sentences({"picks": {}, "retry": found})[-1]
+    assert sentence.startswith("**Does a retry policy use what a failure tells?** Within 3 ")
+    assert "**beats** best-Q_C" in sentence and "**beats** `ranker_lambdarank`'s order" in sentence
+    worse = retry_answers(_retry_board(rl_shift=-0.1), seed=3, reps=400)
+    assert "**is worse than** best-Q_C" in answer_sentences({"picks": {}, "retry": worse})[-1]
+
+
+def test_without_a_retry_selector_there_is_no_retry_answer() -> None:
+    from classifiers.experiments.answers import retry_answers
+
+    board = _retry_board(rl_shift=0.0)
+    del board["retry"]["methods"]["rl_retry"]
+    assert retry_answers(board, seed=3) is None
+    assert retry_answers({}, seed=3) is None
+    assert len(answer_sentences({"picks": {}, "retry": None})) == 4

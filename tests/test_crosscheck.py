@@ -78,11 +78,22 @@ def test_a_rerun_takes_each_object_from_its_part_and_remakes_a_stale_one(tiny, c
     alike = round(found.overall.agreement * 24)
     assert edited.overall.agreement > found.overall.agreement or alike == 24
     assert edited.overall.trials == sum(trials)
-    stored["key"]["fingerprint"] = "another dataset"
+    stored["key"]["label_models"]["mujoco"] = "an older MuJoCo label model"
     files[0].write_text(json.dumps(stored))
-    remade = crosscheck(tiny, 2, seed=0, parts=parts)  # not this run's part: simulated again
+    remade = crosscheck(tiny, 2, seed=0, parts=parts)  # MuJoCo's runs alone made again
     assert remade.overall.agreement == found.overall.agreement
-    assert json.loads(files[0].read_text())["key"]["fingerprint"] != "another dataset"
+    part = json.loads(files[0].read_text())
+    assert part["key"]["label_models"]["mujoco"] != "an older MuJoCo label model"
+    assert part["draws"]["pybullet"] == stored["draws"]["pybullet"]  # kept, not re-simulated
+    assert part["seconds"]["pybullet"] == stored["seconds"]["pybullet"]
+    assert part["draws"]["mujoco"] != stored["draws"]["mujoco"] or alike == 24
+    stored = part | {"key": {**part["key"], "fingerprint": "another dataset"}}
+    stored["seconds"] = {engine: -1.0 for engine in stored["seconds"]}
+    files[0].write_text(json.dumps(stored))
+    crosscheck(tiny, 2, seed=0, parts=parts)  # not this dataset's part: both simulated again
+    part = json.loads(files[0].read_text())
+    assert part["key"]["fingerprint"] != "another dataset"
+    assert min(part["seconds"].values()) > 0
 
 
 def test_trials_for_a_trustworthy_label_follow_spearman_brown():

@@ -285,3 +285,67 @@ def test_a_pad_pressed_on_a_free_block_yields_like_rubber():
             assert mj.contact_normal_force_n(body.uid, table.uid) == pytest.approx(total, rel=1e-3)
     assert pad_solref(1.0, 2.0, 3.0) == pytest.approx((-3.0 * (1 - PAD_IMPEDANCE),
                                                        -6.0 * (1 - PAD_IMPEDANCE)))
+
+
+def test_a_hand_motor_holds_its_speed_and_presses_exactly_its_torque_when_stalled():
+    """Bullet's motor, solved with the contacts: free, a finger joint closes at its target speed
+    (within 0.5 %) with less than its torque; stopped by its upper limit, it presses exactly its
+    torque, never more; a position motor covers ``gain`` of the way to its target in a step."""
+    from grip_env.sim.hand import FLEX_JOINTS
+
+    joint2, joint3 = FLEX_JOINTS[0]
+    with MujocoWorld() as mj:
+        uid = mj.load_robot(HAND_URDF)
+        mj.set_contact_compliance(uid, joint3, 22_600.0, 8.5)  # a trial's 5 substeps
+        mj.velocity_motors(uid, [joint2], [0.5], [1.2])
+        mj.position_motors(uid, [joint3], [0.2], [1.0], 0.5)
+        mj.step()
+        q, speed, torque = mj.joint_states(uid, [joint2, joint3])
+        assert 0.085 < q[1] < 0.1  # about half of the way to 0.2 in one step (from rest)
+        mj.step(9)
+        assert mj.joint_states(uid, [joint3])[0][0] == pytest.approx(0.2, abs=2e-3)
+        _, speed, torque = mj.joint_states(uid, [joint2])
+        assert speed[0] == pytest.approx(0.5, rel=5e-3) and abs(torque[0]) < 1.2
+        stop = float(mj.joint_states(uid, [joint2])[0][0]) + 0.01
+        mj.joint_floors(uid, [joint2], [0.0], [stop], [6.0])
+        torques = []
+        for _ in range(20):
+            mj.step()
+            torques.append(mj.joint_states(uid, [joint2])[2][0])
+        assert max(np.abs(torques)) <= 1.2
+        assert torques[-1] == pytest.approx(1.2, rel=1e-9)  # stalled: exactly its torque
+        assert mj.joint_states(uid, [joint2])[1][0] == pytest.approx(0.0, abs=1e-3)
+
+
+@pytest.mark.slow
+def test_the_fingers_press_their_torques_on_the_held_box_and_never_more():
+    """On the held box every flexion motor's torque stays within its cap in every step, and
+    after the close each presses exactly its cap (``mujoco-2026.12-pads``' drives pressed 0.513
+    N m at joint 3 for a cap of 0.53-0.56)."""
+    from grip_env.sim.trial import TrialScene, grip_plans
+    from grip_env.sim.uncertainty import TrialNoise
+    from tests.benchmarks.engines import held_box_grip
+    from tests.benchmarks.mujoco_drives import caps
+
+    config = Config().override(sim={"engine": "mujoco"})
+    box, grip = held_box_grip(config)
+    over, held = [0.0], []
+
+    def on_phase(name: str, scene: TrialScene) -> None:
+        if name == "approach":
+            step = scene.world.step
+
+            def watched(n: int = 1) -> None:
+                step(n)
+                ratio = np.abs(scene.hand.motor_torques()) / caps(scene)
+                over[0] = max(over[0], float(ratio.max()))
+            scene.world.step = watched
+        if name == "held":
+            held.append((scene.hand.motor_torques(), caps(scene)))
+
+    with TrialScene(box, config) as scene:
+        result = scene.run(grip_plans(grip)[0], TrialNoise((0.0, 0.0), 0.0, 0.4, 1.0), on_phase)
+    assert result.held
+    assert over[0] <= 1.0 + 1e-12
+    torques, limits = held[0]
+    np.testing.assert_allclose(torques, limits, rtol=1e-9)

@@ -41,9 +41,10 @@ def _edited(monkeypatch, module: str) -> None:
 @pytest.mark.parametrize(("module", "recomputed"), [
     # the selector's evaluation: the selector, and what reads its scores or its learners' code
     ("classifiers.experiments.selector.evaluation",
-     {"classifiers", "selector", "images", "benchmark"}),
+     {"classifiers", "selector", "selector_retry", "images", "benchmark"}),
     # the CNN: every learning stage (the model registry names it), not the simulating ones
-    ("classifiers.learners.cnn", {"classifiers", "ablation", "selector", "images", "benchmark"}),
+    ("classifiers.learners.cnn", {"classifiers", "ablation", "selector", "selector_retry",
+                                  "images", "benchmark"}),
     ("grip_env.config", set(ALL_STAGES)),  # every stage reads its config
 ])
 def test_an_edit_recomputes_the_stages_whose_code_it_is_and_no_other(monkeypatch, module,

@@ -11,6 +11,7 @@ import sys
 import time
 from pathlib import Path
 
+import pandas as pd
 import pytest
 from PIL import Image
 from typer.testing import CliRunner
@@ -66,6 +67,7 @@ def test_quick_study_reports_and_a_rerun_recomputes_only_what_changed(tmp_path):
     selector = json.loads((out / "selector" / "selector.json").read_text())
     assert "oracle" in selector["policies"]
     _assert_one_split(out, metrics, selector)
+    _assert_retry_selector_on_the_boards(out)
     manifest = (out / "dataset" / "manifest.json").read_text()
 
     config = tmp_path / "more.yaml"
@@ -83,6 +85,7 @@ def test_quick_study_reports_and_a_rerun_recomputes_only_what_changed(tmp_path):
     assert (out / "dataset" / "manifest.json").read_text() == manifest  # not regenerated
     assert "classifiers: learning changed, recomputing" in again.output
     assert "selector: learning.models changed, recomputing" in again.output
+    assert "selector_retry: learning.models changed, recomputing" in again.output
     assert "ablation: reusing" in again.output and "calibration: reusing" in again.output
     assert "benchmark: learning changed, recomputing" in again.output
     assert (out / "benchmark" / "leaderboard.json").exists()
@@ -98,6 +101,22 @@ def test_quick_study_reports_and_a_rerun_recomputes_only_what_changed(tmp_path):
     if board.get("methods"):  # the benchmark page shows the run's leaderboard
         text = page.read_text()
         assert "old board" not in text and "Split `" in text and "| best_qc |" in text
+
+
+def _assert_retry_selector_on_the_boards(out: Path) -> None:
+    """The quick dataset records every trial, so the retry selector is trained for three
+    attempts and scored on both boards by the grips it picks after each failure."""
+    retry = json.loads((out / "selector_retry" / "selector.json").read_text())
+    assert retry["max_attempts"] == 3 and "rl" in retry["policies"]
+    scores = pd.read_parquet(out / "selector_retry" / "scores.parquet")
+    assert set(scores["method"]) == {"rl_retry"}
+    for (_, _), order in scores.groupby(["object_id", "seed"])["score"]:
+        # an order, not probabilities: count, count - 1, ... down the slots it picks in turn
+        assert sorted(order.to_numpy()) == list(range(1, len(order) + 1))
+    board = json.loads((out / "benchmark" / "leaderboard.json").read_text())
+    if board.get("methods"):
+        assert "environment steps" in board["methods"]["rl_retry"]["budget"]["text"]
+        assert "rl_retry" in board["retry"]["methods"]
 
 
 def _assert_one_split(out: Path, metrics: dict, selector: dict) -> None:

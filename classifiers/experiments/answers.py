@@ -9,6 +9,9 @@
    of each image model (``cnn``, ``cnn_measures``) against the measures' learner, and, at
    picking, each image model against the measures' learner, lambdarank and best-Q_C, over all
    held-out objects and by family (meshes, procedural and named shapes).
+5. Does a retry policy use what a failure tells? On a dataset that records every trial, the RL
+   retry selector's success within the retry board's attempts, which share the object's draw,
+   against best-Q_C's and lambdarank's orders of the grips.
 
 A pick's comparison is the difference of top-1 success (the pick's recorded success rate),
 paired over every held-out object with the leaderboard's stratified bootstrap: the same resamples
@@ -32,7 +35,7 @@ from classifiers.experiments.benchmark.leaderboard import REFERENCE, metric_matr
 ANSWERS_FILE = "answers.json"
 #: Method name prefixes of the supervised learners on the leaderboard.
 SUPERVISED = SUPERVISED_PREFIXES
-RL, BEST_QG = "rl", "best_qg"
+RL, RL_RETRY, BEST_QG, ORACLE = "rl", "rl_retry", "best_qg", "oracle"
 #: The leaderboard method the image models are compared with at picking, beside best-Q_C.
 LAMBDARANK = "ranker_lambdarank"
 #: The leaderboard's bootstrap of top-1 success (:func:`study_benchmark`'s reps; its seed is
@@ -80,6 +83,7 @@ def study_answers(out: Path, seed: int) -> dict[str, Any]:
             "skipped": board.get("skipped"), "picks": picks,
             "hand_measures": hand_difference(_json(out / "ablation" / "ablation.json")),
             "image": image_answers(board, _json(out / "images" / "images.json"), seed),
+            "retry": retry_answers(board, seed),
             "leaderboard_dataset_sha256": board.get("split", {}).get("dataset_sha256")}  # fmt: skip
 
 
@@ -122,6 +126,30 @@ def image_answers(board: dict[str, Any], images: dict[str, Any],
             families[family] = pick_differences({"per_object": rows}, pairs, seed)
     return {"reference": cv.get("reference"), "models": models, "auc": auc, "picks": picks,
             "families": families, "resemblance": images.get("resemblance")}
+
+
+def retry_answers(board: dict[str, Any], seed: int, reps: int = REPS) -> dict[str, Any] | None:
+    """The retry board's answer: success within its most attempts of the RL retry selector,
+    best-Q_C, lambdarank and the oracle, and the selector's paired differences to best-Q_C and
+    lambdarank (the board's resamples); None without a retry selector on the board."""
+    from classifiers.experiments.benchmark.retry import retry_leaderboard
+
+    retry = board.get("retry") or {}
+    if RL_RETRY not in retry.get("methods", {}) or not retry.get("per_object"):
+        return None
+    attempts, metrics = int(retry["attempts"]), pd.DataFrame(retry["per_object"])
+    within = f"shared_at_{attempts}"
+    shown = [name for name in (RL_RETRY, REFERENCE, LAMBDARANK, ORACLE) if name in retry["methods"]]
+    differences = {}
+    for versus in (REFERENCE, LAMBDARANK):
+        if versus in retry["methods"]:
+            paired = retry_leaderboard(metrics, reps, seed, reference=versus, attempts=attempts)
+            differences[f"{RL_RETRY} - {versus}"] = {
+                "method": RL_RETRY, "versus": versus, "objects": retry["objects"],
+                **paired["methods"][RL_RETRY][f"{within}_minus_{versus}"]}
+    return {"attempts": attempts, "objects": retry["objects"],
+            "within": {name: retry["methods"][name][within] for name in shown},
+            "runs": retry["methods"][RL_RETRY]["runs"], "picks": differences}
 
 
 def write_answers(out: str | Path, seed: int) -> Path:

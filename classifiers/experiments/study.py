@@ -84,6 +84,19 @@ def _selector(run: StudyRun) -> object:
     return run_selectors(run.table, run.out / "selector", run.config)
 
 
+def _selector_retry(run: StudyRun) -> object:
+    from classifiers.experiments.selector.seeds import RETRY_METHOD, run_selectors
+    from grip_env.dataset.shards import recorded_trial_successes
+
+    attempts, result = run.config.selector.retry_attempts, run.out / SELECTOR_RETRY.result
+    if attempts < 2:
+        return _skipped(result, "selector.retry_attempts is 1")
+    if not recorded_trial_successes(run.table.columns):
+        return _skipped(result, "the dataset does not record every trial's outcome")
+    retry = run.config.override(selector={"max_attempts": attempts})
+    return run_selectors(run.table, result.parent, retry, method=RETRY_METHOD)
+
+
 def _images(run: StudyRun) -> object:
     if not run.config.learning.image_models:
         return _skipped(run.out / IMAGES.result, "learning.image_models is empty")
@@ -140,13 +153,18 @@ def _perception(run: StudyRun) -> object:
     return run_perception_effect(run.config, run.data_dir, run.out / "perception")
 
 
+#: The RL selector of the retry task (``selector.retry_attempts`` attempts an episode sharing one
+#: trial index), when the dataset records every trial's outcome.
+SELECTOR_RETRY = Stage("selector_retry", ("learning.models", "learning.seed",
+                                          "learning.test_fraction", "selector", "sim"),
+                       "selector_retry/selector.json", _selector_retry)
 #: The image models beside the measures' learner (:mod:`classifiers.experiments.image_evaluator`).
 IMAGES = Stage("images", ("learning.image_models", "learning.ablation_model", "learning.folds",
                           "learning.repeats", "learning.seed", "learning.seeds",
                           "learning.test_fraction", "selector.max_candidates"),
                "images/images.json", _images)
 #: The study's stages, in the order they run (the selector's baselines are the classifiers'
-#: learners; the benchmark reads the classifiers', the image models' and the selector's scores).
+#: learners; the benchmark reads the classifiers', the image models' and the selectors' scores).
 STAGES: tuple[Stage, ...] = (
     Stage("classifiers", ("learning", "selector.max_candidates", "sim.ramp_levels_g",
                           "sim.ramp_ratio"), "classifiers/metrics.json", _classifiers),
@@ -154,6 +172,7 @@ STAGES: tuple[Stage, ...] = (
                        "learning.seed"), "ablation/ablation.json", _ablation),
     Stage("selector", ("learning.models", "learning.seed", "learning.test_fraction", "selector",
                        "sim"), "selector/selector.json", _selector),
+    SELECTOR_RETRY,
     IMAGES,
     Stage("benchmark", ("learning", "selector", "sim", "grasp.mu"),
           "benchmark/leaderboard.json", _benchmark),

@@ -47,8 +47,9 @@ def answers_preamble(answers: dict[str, Any]) -> str:
 
 def answer_sentences(answers: dict[str, Any]) -> list[str]:
     """The three questions and their answers (Markdown), in the order the study asks them."""
+    retry = [_retry(answers)] if answers.get("retry") else []
     return [_learned_pick(answers), _hand_measures(answers), _rl_selector(answers),
-            _image(answers)]
+            _image(answers), *retry]
 
 
 def strong_methods(answers: dict[str, Any]) -> list[str]:
@@ -189,6 +190,25 @@ def _compare(answers: dict[str, Any], method: str, versus: str, shown: str) -> s
     if problem:
         return f"against {shown}: {signed(row)}, no verdict ({problem})"
     return f"**{relation(row['ci'])}** {shown} ({signed(row)})"
+
+
+def _retry(answers: dict[str, Any]) -> str:
+    """The retry answer: the RL retry selector within the board's attempts, against best-Q_C's
+    and lambdarank's orders of the grips."""
+    retry = answers["retry"]
+    question = "**Does a retry policy use what a failure tells?**"
+    within = retry["within"]
+    held = f"{within['rl_retry']['estimate']:.3f}"
+    others = "; ".join(f"`{name}` {within[name]['estimate']:.3f}" for name in within
+                       if name != "rl_retry")  # fmt: skip
+    compared = " and ".join(
+        _compare({"picks": retry["picks"], "ranked_objects": retry["objects"]}, "rl_retry",
+                 versus, _QC if versus == "best_qc" else f"`{versus}`'s order")
+        for versus in ("best_qc", "ranker_lambdarank")
+        if f"rl_retry - {versus}" in retry["picks"])  # fmt: skip
+    return (f"{question} Within {retry['attempts']} attempts that share the object's draw "
+            f"({retry['objects']} held-out objects, {retry['runs']} runs), the RL retry selector, "
+            f"which sees which grips failed, holds {held} ({others}): it {compared}.")
 
 
 def _no_board(answers: dict[str, Any]) -> str:

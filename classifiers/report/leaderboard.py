@@ -114,7 +114,8 @@ def retry_lines(board: Mapping[str, Any], heading: bool = True) -> list[str]:
     title = "Retry: success within m attempts that share the object's draw"
     return [*([f"## {title}", ""] if heading else [f"**{title}.**"]),
             retry_table(retry), "",
-            f"Static order of each method; attempt m replays the same trial index k as the first "
+            f"Each method's order of the grips (an RL retry selector's: the grips it picks "
+            f"after each failure); attempt m replays the same trial index k as the first "
             f"(same friction, mass and pose noise), averaged over k, on {retry['objects']} "
             f"objects; paired 95 % intervals. \"Independence overstates\": the column above "
             f"(1 - prod(1 - p)) minus this.", ""]

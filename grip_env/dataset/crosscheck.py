@@ -18,7 +18,9 @@ objects and by family (mesh, procedural, named...), with 95 % bootstrap interval
   (Spearman-Brown from the measured retest) times a trial's cost.
 
 Each object's outcomes are kept in ``parts`` (when given) as it finishes: an interrupted run
-given the same folder again simulates only the objects not done.
+given the same folder again simulates only the objects not done, and after a new label model of
+one engine only that engine's runs (an engine's runs depend on its own label model alone; its
+CPU seconds are then those of the run that made them).
 """
 
 from __future__ import annotations
@@ -184,25 +186,36 @@ def _run_key(manifest: dict[str, Any], ceilings: bool) -> dict[str, Any]:
 
 
 def _object_runs(item: tuple[_ObjectCheck, Path | None, dict[str, Any]]) -> _Runs:
-    """One object's outcomes in both engines: from its part when one of this run is kept, else
-    simulated (and kept)."""
+    """One object's outcomes in both engines: each engine's from the object's part when it was
+    made under this run's key for that engine, else simulated (and the part kept)."""
     check, folder, key = item
     file = None if folder is None else folder / f"{check.task.index:05d}.json"
     key = {**key, "object_id": check.task.object_id}
-    if file is not None and file.is_file():
-        stored = json.loads(file.read_text(encoding="utf-8"))
-        if stored.get("key") == key:
-            return _from_json(stored)
-    runs = _simulate(check, key["ceilings"])
+    stored = (json.loads(file.read_text(encoding="utf-8"))
+              if file is not None and file.is_file() else {})  # fmt: skip
+    kept = [e for e in ENGINES if stored and _same_runs(stored.get("key", {}), key, e)]
+    if len(kept) == len(ENGINES):
+        return _from_json(stored)
+    runs = _simulate(check, key["ceilings"], _from_json(stored) if kept else None, kept)
     if file is not None:
         write_text_atomically(file, json.dumps({"key": key, **_to_json(runs)}) + "\n")
     return runs
 
 
-def _simulate(check: _ObjectCheck, ceilings: bool) -> _Runs:
-    """Both engines' runs of one object, each timed by the CPU of this process (where the trials
-    run when its kernels are portable; else they run in the held worker, and the wall time of
-    the call stands for their CPU)."""
+def _same_runs(stored: dict[str, Any], key: dict[str, Any], engine: str) -> bool:
+    """Whether a part made under ``stored`` holds ``engine``'s runs of ``key``: the same
+    dataset, object and retest setting, and that engine's label model."""
+    same = all(stored.get(k) == key[k] for k in ("fingerprint", "ceilings", "object_id"))
+    models = stored.get("label_models") or {}
+    return same and models.get(engine) == key["label_models"][engine]
+
+
+def _simulate(check: _ObjectCheck, ceilings: bool, stored: _Runs | None = None,
+              kept: list[str] | tuple[str, ...] = ()) -> _Runs:  # fmt: skip
+    """Both engines' runs of one object (those of the engines in ``kept`` taken from
+    ``stored``), each timed by the CPU of this process (where the trials run when its kernels
+    are portable; else they run in the held worker, and the wall time of the call stands for
+    their CPU)."""
     from grip_env.portable_math import math_is_portable
     from grip_env.sim import run_trial_outcomes
 
@@ -212,6 +225,10 @@ def _simulate(check: _ObjectCheck, ceilings: bool) -> _Runs:
     trials, seed = config.dataset.trials, config.dataset.seed
     draws, retest, seconds = {}, {}, {}
     for engine in (config.sim.engine, other_engine(config.sim.engine)):
+        if stored is not None and engine in kept:
+            draws[engine], retest[engine] = stored.draws[engine], stored.retest[engine]
+            seconds[engine] = stored.seconds[engine]
+            continue
         in_engine = config.override(sim={"engine": engine})
         started = clock()
         draws[engine] = run_trial_outcomes(check.task.obj, grips, in_engine, trials, seed)

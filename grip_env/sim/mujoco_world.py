@@ -13,10 +13,21 @@ convex hull, with no margin to erode), and the same mounted URDF through MuJoCo'
   multiplies lateral frictions and combines torsional ones as ``s0 mu1 + s1 mu0``. Every contact
   of a free body is therefore an explicit contact pair carrying Bullet's product (condim 4 where
   it has torsion), rewritten whenever a friction changes (``set_dynamics``, ``set_pad_friction``).
-* **Motors as Bullet's.** A velocity motor drives a joint to its target speed within its torque;
-  a position motor to ``gain (target - q) / dt``. Each is one actuator with a velocity gain of
-  ``MOTOR_STIFFNESS`` times the joint's inertia per timestep (integrated implicitly:
-  ``implicitfast``) and a force range of its torque.
+* **Motors as Bullet's, solved with the contacts.** A velocity motor drives a joint to its
+  target speed within its torque; a position motor to ``gain (target - q) / dt`` (the speed
+  computed once a protocol step, from where the joint is, as Bullet computes it once a step).
+  Bullet solves each motor as a velocity constraint bounded by its torque, together with the
+  contacts. MuJoCo's constraint of that form is friction loss: a velocity row bounded by a
+  force. Each hand joint ``q`` is therefore tied by a fixed tendon ``q - q_ref`` to a reference
+  joint of its own (a hinge of ``DRIVE_REFERENCE_INERTIA_KG_M2``, its speed set to the motor's
+  target speed every protocol step); the tendon's friction loss is the motor's torque. The
+  solver holds the joint to the target speed within that torque (``DRIVE_IMPEDANCE``; NoSlip,
+  which also iterates friction-loss rows, tightens it), and a stalled motor presses exactly its
+  torque (``drive_torques``).
+  MuJoCo's actuators would not do: ``implicitfast`` applies a drive's velocity gain after the
+  contact solve (mujoco #3443), so the contacts are solved for a hand lighter than it moves,
+  and an explicit drive stable at the coupled finger joints' mass matrix is too weak to press its
+  torque at a stall (BENCHMARKS.md, "label model mujoco-2026.12-drives").
 * **The arm's joints as servo constraints** (the gantry's ``ARM_JOINTS``): MuJoCo adds a drive's
   implicit damping after the constraint solve (mujoco #3443), and the arm's drives, loaded by a
   grip, chattered at their 400 N limit every substep and shook the object loose. Each arm joint
@@ -39,8 +50,7 @@ convex hull, with no margin to erode), and the same mounted URDF through MuJoCo'
 * **Constants renewed.** MuJoCo sizes every constraint's softness from inverse weights computed
   when the model is compiled (``body_invweight0``, ``dof_invweight0``). Every change of a mass
   or an inertia after compiling (the rotor inertia, the object's trial mass) renews them
-  (``mj_setConst``) before the next step, and with them the pads' ``solref`` (the motors' gains
-  stay as compiled: ``MOTOR_STIFFNESS``).
+  (``mj_setConst``) before the next step, and with them the pads' ``solref``.
 
 Solver: Newton with elliptic friction cones, ``IMPRATIO`` and ``NOSLIP_ITERATIONS`` (the creep
 controls; sources: ``/work/shared/notes/mujoco-grasping.md``), ``sim.solver_iterations`` at most.
@@ -72,15 +82,16 @@ IMPRATIO = 10.0
 #: the held box with the rubber's pads, 2 let it creep out at 41 % of mu times its normal forces;
 #: 5 and 10 hold it to within 0.01 % (BENCHMARKS.md, "label model mujoco-2026.12-pads").
 NOSLIP_ITERATIONS = 5
-#: A motor's velocity gain, in joint inertias per timestep: 10 reaches 91 % of a target speed in
-#: one implicit step (Bullet's motor constraint reaches it in one step within its torque). The
-#: inertia is the joint's as compiled, before ``add_axis_inertia`` adds a rotor's: with the
-#: rotor's (4.8 and 30 times the fingers' joints'), h kv / I = 10 makes a finger respond as if 11
-#: times as heavy as MuJoCo's contact solve assumes (the drive's implicit damping is applied after
-#: it, mujoco #3443, the defect that shook the arm's grips loose), and grips drop at the lift
-#: (BENCHMARKS.md, "label model mujoco-2026.12-pads"). Solving the fingers' drives with the
-#: contacts, as the arm's servos are, is the faithful fix, not built yet.
-MOTOR_STIFFNESS = 10.0
+#: A hand motor's constraint impedance (constant), with the stiffest time constant MuJoCo allows
+#: (two physics steps): the share of a speed error its friction-loss row removes in a step; the
+#: arm's servos' 0.95. Not a tuning knob: 0.9, 0.95 and 0.99 give the same squeeze on the held
+#: box (79.9 N) and the same outcomes on 150 cross-check trials within one trial (BENCHMARKS.md,
+#: "label model mujoco-2026.12-drives").
+DRIVE_IMPEDANCE = 0.95
+#: The inertia (kg m^2) of a motor's reference joint: so heavy that the motor's torque (at most
+#: a few N·m) changes its speed by under 1e-6 rad/s in a protocol step, and so light against the
+#: fingers' joints (about 1e-3) that its share of the drive's inverse weight is below 1e-7.
+DRIVE_REFERENCE_INERTIA_KG_M2 = 1e4
 #: The largest phase (rad) a pad's spring may turn in one physics step: MuJoCo integrates a
 #: contact's spring semi-implicitly, and the pad against its 80 g object (85 Hz) at the
 #: protocol's 240 Hz turns 2.2 rad a step and diverges (measured: the object flew off at the first
@@ -144,6 +155,7 @@ class MujocoWorld:
         self._model: mujoco.MjModel | None = None
         self._saved: dict[int, mujoco.MjData] = {}
         self._saved_servos: dict[int, NDArray[np.float64]] = {}
+        self._saved_drives: dict[int, NDArray[np.float64]] = {}
         self._addresses: dict[tuple[int, tuple[int, ...]], tuple[NDArray, NDArray]] = {}
         self._joint_rows: dict[tuple[int, tuple[int, ...]], NDArray[np.int64]] = {}
         self._stale = False
@@ -151,6 +163,7 @@ class MujocoWorld:
         self._constants_stale = False
         self._pads: dict[int, tuple[float, float]] = {}  # geom: stiffness N/m, damping N s/m
         self._servo_names: list[str] = []  # the arm's joints, held by servo constraints
+        self._drive_names: list[str] = []  # the hand's joints, driven by motors (``_add_drives``)
         self.servo_peak_n = np.zeros(0)  # the largest |force| each servo exerted so far
         self._renderers: dict[tuple[int, int], _Renderer] = {}  # by (width, height)
 
@@ -161,6 +174,7 @@ class MujocoWorld:
         self._model = None
         self._saved.clear()
         self._saved_servos.clear()
+        self._saved_drives.clear()
 
     def __enter__(self) -> MujocoWorld:
         return self
@@ -178,6 +192,7 @@ class MujocoWorld:
         held = self._servo_references  # a view of the servos' rows of ``m.eq_data``
         references = np.empty((len(offsets), len(self._servo_from)))
         for _ in range(steps):
+            self._set_drive_speeds(m, d)
             start, speed = self._servo_from, (self._servo_target - self._servo_from) / self.timestep
             lead = 2.0 * self._servo_time_constant * speed
             np.multiply(offsets, speed, out=references)  # in place, the bits of
@@ -342,11 +357,7 @@ class MujocoWorld:
                 self._servo_names.append(prefix + name)
                 self._spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=prefix + name)
             elif kind != "fixed":
-                self._spec.add_actuator(name=prefix + name, target=prefix + name,
-                                        trntype=mujoco.mjtTrn.mjTRN_JOINT,
-                                        gaintype=mujoco.mjtGain.mjGAIN_FIXED,
-                                        biastype=mujoco.mjtBias.mjBIAS_AFFINE,
-                                        forcelimited=True, forcerange=[-1.0, 1.0])
+                self._drive_names.append(prefix + name)
         return uid
 
     def link_count(self, body: int) -> int:
@@ -413,32 +424,33 @@ class MujocoWorld:
     def velocity_motors(self, body: int, joints: list[int], speeds: list[float],
                         torques: list[float]) -> None:
         """Velocity-controlled joint motors of limited torque (N·m)."""
-        m, d = self._compiled()
-        for joint, speed, torque in zip(joints, speeds, torques, strict=True):
-            act, gain = self._motor(body, joint)
-            m.actuator_gainprm[act, 0] = gain
-            m.actuator_biasprm[act, :3] = (0.0, 0.0, -gain)
-            m.actuator_forcerange[act] = (-torque, torque)
-            d.ctrl[act] = speed
+        self._compiled()
+        drives = self._drives(body, joints)
+        self._drive_is_position[drives] = False
+        self._drive_command[drives] = speeds
+        self._set_drive_torques(drives, torques)
 
     def position_motors(self, body: int, joints: list[int], targets: list[float],
                         torques: list[float], gain: float | None = None) -> None:
         """Position-controlled joint motors of limited torque (N·m): each drives its joint at
         ``gain (target - q) / dt`` (Bullet's default gain if None)."""
-        m, d = self._compiled()
+        self._compiled()
         position_gain = DEFAULT_POSITION_GAIN if gain is None else gain
-        for joint, target, torque in zip(joints, targets, torques, strict=True):
+        hand = []
+        for k, (joint, target, torque) in enumerate(zip(joints, targets, torques, strict=True)):
             servo = self._servo_of.get(self._joint_id(body, joint))
             if servo is not None:  # the arm: a constraint solved with the contacts
                 self._servo_target[servo] = target
                 self._servo_limit[servo] = torque
-                continue
-            act, velocity_gain = self._motor(body, joint)
-            stiffness = velocity_gain * position_gain / self.timestep
-            m.actuator_gainprm[act, 0] = stiffness
-            m.actuator_biasprm[act, :3] = (0.0, -stiffness, -velocity_gain)
-            m.actuator_forcerange[act] = (-torque, torque)
-            d.ctrl[act] = target
+            else:
+                hand.append(k)
+        if not hand:
+            return
+        drives = self._drives(body, [joints[k] for k in hand])
+        self._drive_is_position[drives] = True
+        self._drive_gain[drives] = position_gain
+        self._drive_command[drives] = [targets[k] for k in hand]
+        self._set_drive_torques(drives, [torques[k] for k in hand])
 
     def joint_floors(self, body: int, joints: list[int], lowers: list[float],
                      uppers: list[float], holds: list[float]) -> None:
@@ -465,8 +477,9 @@ class MujocoWorld:
         servo constraint's force in the last physics step)."""
         m, d = self._compiled()
         ids = [self._joint_id(body, j) for j in joints]
+        drive_torques = self.drive_torques()
         forces = [float(d.efc_force[self._servo_of[i]]) if i in self._servo_of
-                  else float(d.actuator_force[self._actuator[i]]) for i in ids]
+                  else float(drive_torques[self._drive_of[i]]) for i in ids]
         return (d.qpos[m.jnt_qposadr[ids]].copy(), d.qvel[m.jnt_dofadr[ids]].copy(),
                 np.array(forces))
 
@@ -516,6 +529,7 @@ class MujocoWorld:
         key = max(self._saved, default=-1) + 1
         self._saved[key] = state
         self._saved_servos[key] = self._servo_from.copy()
+        self._saved_drives[key] = self._drive_command.copy()
         return key
 
     def restore(self, state: int) -> None:
@@ -523,12 +537,14 @@ class MujocoWorld:
         m, d = self._compiled()
         mujoco.mj_copyData(d, m, self._saved[state])
         self._servo_from = self._saved_servos[state].copy()
+        self._drive_command = self._saved_drives[state].copy()
         self._stale = True
 
     def forget(self, state: int) -> None:
         """Free a saved state."""
         self._saved.pop(state, None)
         self._saved_servos.pop(state, None)
+        self._saved_drives.pop(state, None)
 
     def push(self, body: int, force_n: NDArray) -> None:
         """A world-frame force (N) through ``body``'s centre of mass, for the next step."""
@@ -609,8 +625,7 @@ class MujocoWorld:
     def _renew_constants(self, m: mujoco.MjModel) -> None:
         """Renew what MuJoCo derives from masses and inertias (``mj_setConst``, on scratch data
         at the model's reference pose, so the world's state is untouched) and the pads'
-        ``solref``. The motors' gains stay sized from the joints' inertias as compiled, without
-        the rotor inertia added since (``MOTOR_STIFFNESS``)."""
+        ``solref``."""
         mujoco.mj_resetData(m, self._scratch)  # as a new MjData: the reference pose
         mujoco.mj_setConst(m, self._scratch)
         self._update_pads(m)
@@ -660,6 +675,7 @@ class MujocoWorld:
                  if body_of[other] != body_of[name] and rank.get(other, len(free)) > rank[name]]
         for k, (a, b) in enumerate(pairs):
             spec.add_pair(name=f"pair{k}", geomname1=a, geomname2=b, condim=4)
+        self._add_drives(spec)
         self._model = m = spec.compile()
         self._data = mujoco.MjData(m)
         # views of arrays read or written every step (the model and data live as long as these)
@@ -670,11 +686,10 @@ class MujocoWorld:
         self._friction = m.geom_friction[:, :2].copy()  # lateral, torsional arm (m), per geom
         self._index_bodies(m)
         self._loaded_ranges = m.jnt_range.copy()
-        self._actuator = {int(m.actuator_trnid[a, 0]): a for a in range(m.nu)}
         self._index_servos(m)
+        self._index_drives(m)
         mujoco.mj_forward(m, self._data)
         self._scratch = mujoco.MjData(m)  # for computing constants; never stepped
-        self._inertia = _joint_inertias(m, self._scratch, list(self._actuator))
         self._update_pairs()
 
     def _index_servos(self, m: mujoco.MjModel) -> None:
@@ -696,13 +711,16 @@ class MujocoWorld:
     def _set_servo_stiffness(self, m: mujoco.MjModel) -> None:
         """Critically damped servos of ``SERVO_TIME_CONSTANT_S``, with a constant impedance
         (MuJoCo's damping over stiffness is then exactly twice the time constant, which the
-        reference's lead in ``step`` relies on)."""
+        reference's lead in ``step`` relies on); and the hand motors' rows at the stiffest time
+        constant, two physics steps, with ``DRIVE_IMPEDANCE``."""
         # MuJoCo stiffens no constraint beyond two physics steps (its refsafe)
         self._servo_time_constant = max(SERVO_TIME_CONSTANT_S, 2.0 * m.opt.timestep)
         m.eq_solref[:] = (self._servo_time_constant, 1.0)
         m.eq_solimp[:, :2] = m.eq_solimp[:, 1:2]
         self._substep_offsets = (np.arange(self.substeps) / self.substeps * self.timestep)[:, None]
         self._servo_references = m.eq_data[self._servo_rows, 0]
+        m.tendon_solref_fri[:] = (2.0 * m.opt.timestep, 1.0)
+        m.tendon_solimp_fri[:, :2] = DRIVE_IMPEDANCE
 
     def _index_bodies(self, m: mujoco.MjModel) -> None:
         self._body_ids: list[list[int]] = []
@@ -729,11 +747,56 @@ class MujocoWorld:
             raise ValueError(f"joint {joint} of body {body} is fixed")
         return index
 
-    def _motor(self, body: int, joint: int) -> tuple[int, float]:
-        self._ready()
-        index = self._joint_id(body, joint)
-        gain = MOTOR_STIFFNESS * self._inertia[index] / self._model.opt.timestep
-        return self._actuator[index], float(gain)
+    def _add_drives(self, spec: mujoco.MjSpec) -> None:
+        """Each hand joint's motor: a reference joint of its own (a hinge of
+        ``DRIVE_REFERENCE_INERTIA_KG_M2``, turned at the motor's target speed) and a fixed
+        tendon ``q - q_ref`` whose friction loss, the motor's torque, holds the joint to it."""
+        for k, name in enumerate(self._drive_names):
+            body = spec.worldbody.add_body(name=f"drive{k}", mass=1.0, inertia=[1.0, 1.0, 1.0])
+            body.explicitinertial = True
+            body.add_joint(name=f"drive{k}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1],
+                           armature=DRIVE_REFERENCE_INERTIA_KG_M2)
+            tendon = spec.add_tendon(name=f"drive{k}", frictionloss=1.0)
+            tendon.wrap_joint(name, 1.0)
+            tendon.wrap_joint(f"drive{k}", -1.0)
+
+    def _index_drives(self, m: mujoco.MjModel) -> None:
+        """The hand's motors: drive ``k`` moves joint ``_drive_names[k]`` (tendon ``k``)."""
+        if m.ntendon != len(self._drive_names):
+            raise ValueError(f"expected only the hand's {len(self._drive_names)} drive tendons, "
+                             f"the model has {m.ntendon}")
+        joints = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, n) for n in self._drive_names]
+        references = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"drive{k}")
+                      for k in range(len(joints))]
+        self._drive_of = {j: k for k, j in enumerate(joints)}
+        self._drive_qpos = m.jnt_qposadr[joints].astype(int)
+        self._drive_reference_dof = m.jnt_dofadr[references].astype(int)
+        self._drive_is_position = np.zeros(len(joints), bool)
+        self._drive_command = np.zeros(len(joints))  # speed (rad/s) or target (rad)
+        self._drive_gain = np.full(len(joints), DEFAULT_POSITION_GAIN)
+
+    def _drives(self, body: int, joints: list[int]) -> NDArray[np.int64]:
+        return np.array([self._drive_of[self._joint_id(body, j)] for j in joints], int)
+
+    def _set_drive_torques(self, drives: NDArray[np.int64], torques: list[float]) -> None:
+        self._model.tendon_frictionloss[drives] = np.abs(torques)
+
+    def _set_drive_speeds(self, m: mujoco.MjModel, d: mujoco.MjData) -> None:
+        """Each motor's reference speed for the coming protocol step: a velocity motor's target
+        speed; a position motor's ``gain (target - q) / dt``, from the joint where it is now (as
+        Bullet's motor, once a step)."""
+        command = self._drive_command
+        to_target = self._drive_gain * (command - d.qpos[self._drive_qpos]) / self.timestep
+        d.qvel[self._drive_reference_dof] = np.where(self._drive_is_position, to_target, command)
+
+    def drive_torques(self) -> NDArray[np.float64]:
+        """The torque (N·m) each hand motor exerted on its joint in the last physics step (its
+        tendon's friction-loss force; 0 for a motor without torque)."""
+        m, d = self._compiled()
+        rows = np.flatnonzero(d.efc_type[: d.nefc] == mujoco.mjtConstraint.mjCNSTR_FRICTION_TENDON)
+        torques = np.zeros(m.ntendon)
+        torques[d.efc_id[rows]] = d.efc_force[rows]
+        return torques
 
     def _link_geoms(self, body: int, link: int) -> NDArray[np.int64]:
         m, _ = self._compiled()
@@ -880,16 +943,6 @@ def pad_solref(stiffness_n_per_m: float, damping_n_s_per_m: float,
     return -stiffness_n_per_m * scale, -damping_n_s_per_m * scale
 
 
-def _joint_inertias(m: mujoco.MjModel, scratch: mujoco.MjData,
-                    joints: list[int]) -> dict[int, float]:
-    """Each joint's own inertia (the mass matrix's diagonal) at the model's reference pose."""
-    mujoco.mj_forward(m, scratch)
-    full = np.zeros((m.nv, m.nv))
-    mujoco.mj_fullM(m, scratch, full)
-    inertia = np.diag(full)[m.jnt_dofadr[joints]]
-    return dict(zip(joints, inertia.tolist(), strict=True))
-
-
 def _prism(piece: NDArray[np.float64], thickness_mm: float) -> list[list[float]]:
     """Vertices (m) of the prism of a convex piece from z = 0 to the top."""
     top = thickness_mm * MM
@@ -915,5 +968,5 @@ def _urdf_root_link(path: Path) -> str:
     return ET.parse(path).getroot().find("link").get("name")  # type: ignore[union-attr]
 
 
-__all__ = ["IMPRATIO", "MOTOR_STIFFNESS", "NOSLIP_ITERATIONS", "PAD_IMPEDANCE",
+__all__ = ["DRIVE_IMPEDANCE", "IMPRATIO", "NOSLIP_ITERATIONS", "PAD_IMPEDANCE",
            "SERVO_TIME_CONSTANT_S", "MujocoWorld", "pad_solref"]

@@ -3,7 +3,6 @@
     python -m tests.benchmarks.mujoco_lift --steps 8            # the held box's lift
     python -m tests.benchmarks.mujoco_lift --phase approach     # the same hand, in free air
     python -m tests.benchmarks.mujoco_lift --grips 20                # 20 grips' cost table
-    python -m tests.benchmarks.mujoco_lift --finger-caps --grips 20  # a diagnostic finger drive
     python -m tests.benchmarks.mujoco_lift --pads                    # the pads' stiffness
 
 Runs the held box's trial (``tests.benchmarks.engines.held_box_grip``: the default rectangle's
@@ -13,8 +12,10 @@ arm's vertical (gantry z) drive, the vertical force the contacts put on the obje
 every contact's force turned out of its own frame) beside the object's weight, each contact's
 penetration, and the finger joints.
 
-``--finger-caps`` is a diagnostic, not the model (``--renew-constants``, the diagnostic that
-found the stale constants, is gone: label model ``mujoco-2026.12-pads`` renews them itself).
+``--finger-caps`` (a diagnostic finger drive: a constant torque under a moving joint limit) is
+gone: label model ``mujoco-2026.12-drives`` solves the hand's motors with the contacts itself
+(``grip_env.sim.mujoco_world``). ``--renew-constants``, the diagnostic that found the stale
+constants, is gone too: label model ``mujoco-2026.12-pads`` renews them itself.
 ``--grips N`` runs ``tests.benchmarks.engines --grips N`` (both engines) instead of the trace.
 The arm's drives that this trace showed chattering (``--arm-stiffness``, ``--arm-constraint``
 before label model ``mujoco-2026.12-servo``) are now servo constraints
@@ -35,71 +36,6 @@ from grip_env.sim.hand import ARM
 from grip_env.sim.trial import TrialScene, grip_plans
 from grip_env.sim.uncertainty import TrialNoise
 from tests.benchmarks.engines import cost, held_box_grip
-
-
-def set_finger_caps() -> None:
-    """A diagnostic finger motor solved with the contacts: every velocity motor of every
-    ``MujocoWorld`` becomes a constant torque (its limit; no velocity gain, so nothing implicit)
-    and a speed cap, an upper joint limit that advances at the motor's speed from where the
-    joint is at each step's start (led by twice the limit's time constant times that speed, as
-    the arm's servos are): free, the joint rides the cap at the motor's speed; stalled, the cap
-    runs ahead within one step of it and the torque presses (Bullet's velocity motor at its
-    torque limit)."""
-    import grip_env.sim.mujoco_world as mujoco_world
-
-    world_class = mujoco_world.MujocoWorld
-    step, position_motors = world_class.step, world_class.position_motors
-
-    def velocity_motors(world, body, joints, speeds, torques) -> None:
-        m, d = world._compiled()
-        caps = world.__dict__.setdefault("_caps", {})
-        for joint, speed, torque in zip(joints, speeds, torques, strict=True):
-            index = world._joint_id(body, joint)
-            act = world._actuator[index]
-            m.actuator_gainprm[act, 0], m.actuator_biasprm[act, :3] = 1.0, 0.0
-            m.actuator_forcerange[act] = (-torque, torque)
-            d.ctrl[act] = torque
-            m.jnt_solimp[index, 0] = m.jnt_solimp[index, 1]  # constant impedance: exact lead
-            caps[index] = float(speed)
-
-    def drive(world, body, joints, targets, torques, gain=None) -> None:
-        caps = world.__dict__.setdefault("_caps", {})
-        for joint in joints:
-            index = world._joint_id(body, joint)
-            if index in caps:
-                caps.pop(index)
-                world._model.jnt_range[index, 1] = world._loaded_ranges[index, 1]
-        position_motors(world, body, joints, targets, torques, gain)
-
-    def capped_step(world, steps: int = 1) -> None:
-        caps = world.__dict__.get("_caps")
-        if not caps:
-            step(world, steps)
-            return
-        m, d = world._compiled()
-        physics_step = mujoco.mj_step
-        for _ in range(steps):
-            starts = {index: float(d.qpos[m.jnt_qposadr[index]]) for index in caps}
-            sub = [0]
-
-            def substep(model, data, starts=starts, sub=sub) -> None:
-                for index, speed in caps.items():
-                    t = sub[0] * model.opt.timestep
-                    lead = 2.0 * model.jnt_solref[index, 0] * speed
-                    cap = starts[index] + speed * t + lead
-                    model.jnt_range[index, 1] = min(cap, world._loaded_ranges[index, 1])
-                sub[0] += 1
-                physics_step(model, data)
-
-            mujoco.mj_step = substep
-            try:
-                step(world, 1)
-            finally:
-                mujoco.mj_step = physics_step
-
-    world_class.velocity_motors = velocity_motors
-    world_class.position_motors = drive
-    world_class.step = capped_step
 
 
 def pad_stiffness_at_hold(config: Config) -> list[tuple[float, float]]:
@@ -188,16 +124,11 @@ def main() -> None:
     parser.add_argument("--phase", default="closed", choices=("approach", "closed"),
                         help="trace from the end of this phase (closed: the lift follows)")
     parser.add_argument("--steps", type=int, default=8, help="protocol steps to print")
-    parser.add_argument("--finger-caps", action="store_true",
-                        help="diagnostic: the fingers' velocity motors as a torque and a speed cap "
-                        "solved with the contacts")
     parser.add_argument("--pads", action="store_true",
                         help="print each pad contact's depth, force and stiffness at the hold")
     parser.add_argument("--grips", type=int, default=0,
                         help="run tests.benchmarks.engines --grips N --seed 0 instead")
     args = parser.parse_args()
-    if args.finger_caps:
-        set_finger_caps()
     if args.pads:
         for depth, force in pad_stiffness_at_hold(Config().override(sim={"engine": "mujoco"})):
             print(f"depth {depth:.4f} mm, normal force {force:.2f} N: {force / depth:.1f} kN/m")

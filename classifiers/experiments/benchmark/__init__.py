@@ -205,30 +205,38 @@ def study_benchmark(
     return board
 
 
+#: The study folder of each RL selector on its leaderboard (the one-pick and the retry task's).
+SELECTOR_FOLDERS = {"rl": "selector", "rl_retry": "selector_retry"}
 #: Name prefixes of the study's supervised learners on its leaderboard.
 SUPERVISED_PREFIXES = ("classifier_", "regressor_", "ranker_")
 
 
 def _study_budgets(board: dict[str, Any], out: Path, table: pd.DataFrame,
                    held_out: Sequence[str]) -> None:  # fmt: skip
-    """Each learned method's training budget on the study's board: the RL selector's
-    environment steps (its runs' zips, ``selector/seed_<s>/model.zip``), a supervised learner's
+    """Each learned method's training budget on the study's board: an RL selector's
+    environment steps (its runs' zips, ``selector/seed_<s>/model.zip`` and the retry task's
+    ``selector_retry/seed_<s>/model.zip``), a supervised learner's
     labelled grips of the training objects (every grip outside ``held_out``)."""
     from classifiers.experiments.benchmark.provenance import budget_text, recorded_budget
 
     train = table[~table["object_id"].astype(str).isin(set(held_out))]
     trials = int(train["trials"].sum()) if "trials" in train.columns else None
     grips = {"grips": len(train), "objects": int(train["object_id"].nunique()), "trials": trials}
-    zips = sorted((out / "selector").glob("seed_*/model.zip")) or [
-        p for p in [out / "selector" / "model.zip"] if p.is_file()]
     for name, row in board["methods"].items():
-        if name == "rl" and zips:
+        zips = _selector_zips(out / SELECTOR_FOLDERS[name]) if name in SELECTOR_FOLDERS else []
+        if zips:
             found = [recorded_budget(path) for path in zips]
             texts = list(dict.fromkeys(b["text"] for b in found))
             row["budget"] = {**found[0], "runs": found,
                              "text": texts[0] + " a run" if len(texts) == 1 else "; ".join(texts)}
         elif name.startswith(SUPERVISED_PREFIXES):
             row["budget"] = {**grips, "text": budget_text(grips)}
+
+
+def _selector_zips(folder: Path) -> list[Path]:
+    """A study selector's runs (``seed_<s>/model.zip``), or its single run's zip."""
+    return sorted(folder.glob("seed_*/model.zip")) or [
+        p for p in [folder / "model.zip"] if p.is_file()]
 
 
 def _bare(table: pd.DataFrame) -> pd.DataFrame:
@@ -250,5 +258,7 @@ def _board(candidates: pd.DataFrame, scores: pd.DataFrame, split: dict[str, Any]
     board = build_leaderboard(metrics, split, reps=reps, seed=seed)
     board["per_object"] = metrics.round(6).to_dict(orient="records")
     if recorded_trial_successes(candidates.columns):  # the retry task, from the shared draws
-        board["retry"] = retry_leaderboard(retry_metrics(candidates, scores), reps, seed)
+        retry = retry_metrics(candidates, scores)
+        board["retry"] = retry_leaderboard(retry, reps, seed)
+        board["retry"]["per_object"] = retry.round(6).to_dict(orient="records")
     return board

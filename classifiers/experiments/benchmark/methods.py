@@ -43,7 +43,8 @@ from grip_env.envs.observation import CandidateSet
 SCORE_COLUMNS = ("method", "seed", "object_id", "candidate", "score")
 BASELINES = ("best_qc", "best_qg", "epsilon", "random", "oracle")
 HIDDEN_COLUMNS = (*OUTCOMES, *ROBUSTNESS)
-SCORE_FILES = ("classifiers/scores.parquet", "images/scores.parquet", "selector/scores.parquet")
+SCORE_FILES = ("classifiers/scores.parquet", "images/scores.parquet", "selector/scores.parquet",
+               "selector_retry/scores.parquet")
 #: Per-trial outcome columns (``trial_success_k``, ``trial_robustness_k``) are hidden as well.
 HIDDEN_PREFIXES = (TRIAL_SUCCESS_PREFIX, TRIAL_ROBUSTNESS_PREFIX)
 

@@ -27,6 +27,8 @@ from classifiers.experiments.selector.data import check_grip_table
 from grip_env.config import Config
 
 METHOD = "rl"
+#: The method name of selectors trained for the retry task (``max_attempts`` > 1).
+RETRY_METHOD = "rl_retry"
 CURVE_TABLE, CURVE_FIGURE = "held_out_curve.csv", "held_out_curve.png"
 _COPIED = ("model.zip", "model.json", "learning_curve.png")
 
@@ -36,29 +38,45 @@ def seed_dir(out: str | Path, seed: int) -> Path:
     return Path(out) / f"seed_{seed}"
 
 
-def policy_scores(model: Any, table: pd.DataFrame, config: Config, seed: int) -> pd.DataFrame:
+def policy_scores(model: Any, table: pd.DataFrame, config: Config, seed: int,
+                  method: str = METHOD) -> pd.DataFrame:  # fmt: skip
     """``model``'s score rows (:data:`classifiers.experiments.candidate_scores.SCORE_COLUMNS`):
-    its probability of picking each held-out candidate."""
+    its probability of picking each held-out candidate; for a retry policy (its observation has
+    ``failed``), ``count - j`` for the j-th slot it picks, each earlier pick shown to it as
+    failed, so that a static order of the scores is what the policy does after each failure."""
     from classifiers.experiments.candidate_scores import score_frame
     from classifiers.experiments.selector.evaluation import (
         action_probabilities,
         held_out_candidate_sets,
+        policy_orders,
     )
 
     sets = held_out_candidate_sets(table, config)
-    probabilities = action_probabilities(model, sets) if sets else np.zeros((0, 0))
-    return pd.concat([score_frame(found.object_id, seed, METHOD, found.rows, p[: found.count])
-                      for found, p in zip(sets, probabilities, strict=True)],
+    if "failed" in getattr(model.observation_space, "spaces", {}):
+        orders = policy_orders(model, sets, config.selector.max_candidates)
+        scores = [_order_scores(order, found.count)
+                  for found, order in zip(sets, orders, strict=True)]
+    else:
+        scores = list(action_probabilities(model, sets)) if sets else []
+    return pd.concat([score_frame(found.object_id, seed, method, found.rows, p[: found.count])
+                      for found, p in zip(sets, scores, strict=True)],
                      ignore_index=True)  # fmt: skip
+
+
+def _order_scores(order: np.ndarray, count: int) -> np.ndarray:
+    """Scores ``count - j`` for the j-th slot of ``order``."""
+    scores = np.zeros(count)
+    scores[order] = count - np.arange(len(order))
+    return scores
 
 
 def run_selectors(
     table: pd.DataFrame, out_dir: str | Path, config: Config, policy: str = "set",
-    progress: bool = True,
+    progress: bool = True, method: str = METHOD,
 ) -> dict[str, Any]:
     """Train and evaluate one selector per seed, the runs shared among ``selector.workers``
     processes; returns the first seed's report (with ``"seeds"``), which is also written to
-    ``out_dir/selector.json``."""
+    ``out_dir/selector.json``. ``method`` names the runs in the score and curve tables."""
     from joblib import Parallel, delayed
 
     from classifiers.experiments.candidate_scores import SCORES_FILE, training_seeds, write_scores
@@ -70,7 +88,7 @@ def run_selectors(
     seeds = training_seeds(settings.seed, settings.seeds)
     workers = min(settings.workers, len(seeds))
     finished = Parallel(n_jobs=workers)(
-        delayed(_seed_run)(table, out, config, seed, policy, progress and workers == 1)
+        delayed(_seed_run)(table, out, config, seed, policy, progress and workers == 1, method)
         for seed in seeds)
     reports, scores = zip(*finished, strict=True)
     runs = [{"seed": seed, "dir": seed_dir(out, seed).name,
@@ -85,18 +103,18 @@ def run_selectors(
     first = {**first, "training": training, "seeds": runs, "scores": SCORES_FILE}
     (out / REPORT_FILE).write_text(json.dumps(first, indent=2))
     write_scores(list(scores), out / SCORES_FILE)
-    write_held_out_curves(reports, seeds, out)
+    write_held_out_curves(reports, seeds, out, method)
     return first
 
 
 def write_held_out_curves(reports: Sequence[dict[str, Any]], seeds: Sequence[int],
-                          out: Path) -> Path:  # fmt: skip
+                          out: Path, method: str = METHOD) -> Path:  # fmt: skip
     """Every seed's held-out curve (scored after each rollout) as ``held_out_curve.csv``
-    (:data:`~classifiers.experiments.selector.curve.CURVE_COLUMNS`, variant ``"rl"``) and its
+    (:data:`~classifiers.experiments.selector.curve.CURVE_COLUMNS`, variant ``method``) and its
     figure ``held_out_curve.png``, with best-Q_C's and the classifiers' first picks as lines."""
     from classifiers.experiments.selector.curve import CURVE_COLUMNS, plot_curves
 
-    rows = [(METHOD, seed, step, value, None, report["training"]["seconds"])
+    rows = [(method, seed, step, value, None, report["training"]["seconds"])
             for seed, report in zip(seeds, reports, strict=True)
             for step, value in report["training"].get("held_out_curve", [])]  # fmt: skip
     frame = pd.DataFrame(rows, columns=list(CURVE_COLUMNS))
@@ -110,7 +128,7 @@ def write_held_out_curves(reports: Sequence[dict[str, Any]], seeds: Sequence[int
 
 
 def _seed_run(table: pd.DataFrame, out: Path, config: Config, seed: int, policy: str,
-              progress: bool) -> tuple[dict[str, Any], pd.DataFrame]:
+              progress: bool, method: str = METHOD) -> tuple[dict[str, Any], pd.DataFrame]:
     """One seed's run into ``out/seed_<seed>``: its report and its held-out scores."""
     from sb3_contrib import MaskablePPO
 
@@ -120,4 +138,4 @@ def _seed_run(table: pd.DataFrame, out: Path, config: Config, seed: int, policy:
     folder = seed_dir(out, seed)
     report = run_selector(table, folder, seeded, policy, progress=progress)
     model = MaskablePPO.load(folder / "model.zip", device="cpu")
-    return report, policy_scores(model, table, seeded, seed)
+    return report, policy_scores(model, table, seeded, seed, method)
