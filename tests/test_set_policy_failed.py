@@ -174,3 +174,20 @@ def test_a_failed_aware_zip_round_trips(tmp_path):
     mask = np.array([1, 1, 1, 1, 0, 0], dtype=np.int8)
     np.testing.assert_allclose(_outputs(loaded, FEATURES, mask, failed)[0],
                                _outputs(model, FEATURES, mask, failed)[0], atol=0)  # fmt: skip
+
+
+def test_read_failed_false_sees_a_failure_only_as_a_masked_slot(tmp_path):
+    """The ablation: with ``read_failed=False`` the retry observation's ``failed`` is ignored
+    (no failure encoder), so which slot failed does not move the remaining scores; it saves
+    and loads as such."""
+    model = MaskablePPO(CandidateSetPolicy, RetryOddsEnv(), n_steps=64, batch_size=32, seed=0,
+                        policy_kwargs={"read_failed": False})  # fmt: skip
+    model.learn(64)
+    assert not any("failure" in name for name, _ in model.policy.named_parameters())
+    remaining = np.array([1, 1, 1, 0, 0, 0], dtype=np.int8)
+    three, value = _outputs(model, FEATURES, remaining, np.eye(K, dtype=np.int8)[3])
+    four, other_value = _outputs(model, FEATURES, remaining, np.eye(K, dtype=np.int8)[4])
+    np.testing.assert_allclose(three, four, atol=1e-7)
+    assert value == pytest.approx(other_value, abs=1e-7)
+    model.save(tmp_path / "ablation.zip")
+    assert MaskablePPO.load(tmp_path / "ablation.zip").policy.read_failed is False

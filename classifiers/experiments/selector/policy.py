@@ -74,12 +74,12 @@ class CandidateSetExtractor(BaseFeaturesExtractor):
     ``(B, K * (F + 1))`` (or ``(B, K * (F + 2))`` with ``failed``).
 
     Each candidate keeps its own row (features, mask bit, then failed bit); nothing is learnt
-    here.
+    here. ``read_failed=False`` leaves ``failed`` out even when the observation has it.
     """
 
-    def __init__(self, observation_space: spaces.Dict) -> None:
+    def __init__(self, observation_space: spaces.Dict, read_failed: bool | None = None) -> None:
         n_candidates, n_features = _candidate_shape(observation_space)
-        self.failed = reads_failed(observation_space)
+        self.failed = reads_failed(observation_space) and read_failed is not False
         bits = 2 if self.failed else 1
         super().__init__(observation_space, features_dim=n_candidates * (n_features + bits))
         self.n_candidates = n_candidates
@@ -242,7 +242,11 @@ class CandidateSetPolicy(MaskableActorCriticPolicy):
     encoder) or a list used for both; default ``[64, 64]``. ``context`` is how the scorer sees
     the other candidates (:data:`CONTEXTS`, see :class:`CandidateSetNetwork`). An observation
     with ``failed`` (the retry setting) is read: the failed candidates' pooled embedding enters
-    every score and the value.
+    every score and the value; ``read_failed=False`` ignores it (the policy then sees a failure
+    only as a masked slot, as the set policy did before it read ``failed``: an ablation, and
+    how a retry zip of that policy loads, with
+    ``MaskablePPO.load(path, custom_objects={"policy_kwargs": {"context": ...,
+    "read_failed": False}})``).
     """
 
     def __init__(
@@ -253,15 +257,20 @@ class CandidateSetPolicy(MaskableActorCriticPolicy):
         net_arch: list[int] | dict[str, list[int]] | None = None,
         activation_fn: type[nn.Module] = nn.Tanh,
         context: Context = "none",
+        read_failed: bool | None = None,
         **kwargs: Any,
     ) -> None:
         if context not in CONTEXTS:
             raise ValueError(f"context must be one of {CONTEXTS}, got {context!r}")
         self.context = context
+        self.read_failed = read_failed
         n_candidates, _ = _candidate_shape(observation_space)
         if not isinstance(action_space, spaces.Discrete) or int(action_space.n) != n_candidates:
             raise ValueError(f"action space must be Discrete({n_candidates}), got {action_space}")
         kwargs.setdefault("features_extractor_class", CandidateSetExtractor)
+        if kwargs["features_extractor_class"] is CandidateSetExtractor:
+            kwargs["features_extractor_kwargs"] = {
+                **(kwargs.get("features_extractor_kwargs") or {}), "read_failed": read_failed}
         super().__init__(
             observation_space,
             action_space,
@@ -290,7 +299,8 @@ class CandidateSetPolicy(MaskableActorCriticPolicy):
         ).to(self.device)
 
     def _get_constructor_parameters(self) -> dict[str, Any]:
-        return {**super()._get_constructor_parameters(), "context": self.context}
+        return {**super()._get_constructor_parameters(), "context": self.context,
+                "read_failed": self.read_failed}
 
     def _build(self, lr_schedule: Schedule) -> None:
         super()._build(lr_schedule)
