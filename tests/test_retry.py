@@ -97,6 +97,43 @@ def test_one_attempt_keeps_the_two_key_observation(table: pd.DataFrame) -> None:
     assert set(env.step(0)[0]) == {"features", "mask"}
 
 
+def test_accept_marks_the_positions_executed_and_failed(table: pd.DataFrame) -> None:
+    """GripAccept-v0's ``failed``: the positions executed and dropped, none skipped; at the
+    same object and trial k it is GripSelect-v0's ``failed`` after picking those slots."""
+    accept, select = _env(table, GripAcceptEnv), _env(table)
+    assert set(accept.observation_space.spaces) == {"features", "progress", "failed"}
+    assert accept.observation_space["failed"] == select.observation_space["failed"]
+    retried = 0
+    for episode in range(40):
+        observation, info = accept.reset(seed=episode)
+        assert not observation["failed"].any() and observation in accept.observation_space
+        pinned = {"object_id": info["object_id"], "trial": info["trial"]}
+        chosen, _ = select.reset(options=pinned)
+        terminated, position, failed = False, 0, set()
+        while not terminated:
+            execute = (episode + position) % 3 != 1  # skip some candidates
+            observation, _, terminated, _, step = accept.step(int(execute))
+            if execute:
+                if not step["success"]:
+                    failed.add(position)
+                chosen, _, _, _, picked = select.step(position)
+                assert picked["grip_id"] == step["grip_id"]
+                assert picked["success"] == step["success"]
+                np.testing.assert_array_equal(chosen["failed"], observation["failed"])
+            assert set(np.flatnonzero(observation["failed"])) == failed
+            assert observation in accept.observation_space
+            position += 1
+        retried += len(failed) > 1
+    assert retried > 0
+
+
+def test_accept_with_one_attempt_keeps_its_two_keys(table: pd.DataFrame) -> None:
+    env = _env(table, GripAcceptEnv, max_attempts=1)
+    assert set(env.observation_space.spaces) == {"features", "progress"}
+    assert set(env.reset(seed=0)[0]) == {"features", "progress"}
+    assert set(env.step(1)[0]) == {"features", "progress"}
+
+
 def test_an_invalid_pick_marks_nothing_failed(table: pd.DataFrame) -> None:
     env = _env(table)
     observation, _ = env.reset(seed=0)
@@ -276,11 +313,10 @@ def test_gymnasiums_checker_passes_with_trials_replayed(table: pd.DataFrame, cls
     env = _env(table, cls)
     assert env.trials == TRIALS
     check_env(env, skip_render_check=True)  # seeded resets (the trial draw included) repeat
-    if cls is GripSelectEnv:  # its retry observation has the failed key
-        from stable_baselines3.common.env_checker import check_env as sb3_check_env
+    from stable_baselines3.common.env_checker import check_env as sb3_check_env
 
-        assert "failed" in env.observation_space.spaces
-        sb3_check_env(env)
+    assert "failed" in env.observation_space.spaces  # the retry observation of both
+    sb3_check_env(env)
 
 
 # ----------------------------------------------------------------------------- the selector's own

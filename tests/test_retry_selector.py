@@ -82,15 +82,18 @@ def test_the_cli_refuses_the_retry_task_without_trials(tmp_path: Path,
     assert not out.exists()
 
 
-@pytest.fixture(scope="module")
-def trained(table: pd.DataFrame, tmp_path_factory: pytest.TempPathFactory):
+@pytest.fixture(scope="module", params=["flat", "set"])
+def trained(request: pytest.FixtureRequest, table: pd.DataFrame,
+            tmp_path_factory: pytest.TempPathFactory):  # fmt: skip
     from classifiers.experiments.selector.training import train_selector
 
     config = _config()
     partial, gone = _partial(table, config, 2)
     out = tmp_path_factory.mktemp("retry")
-    result = train_selector(partial, config, out, "flat", timesteps=256, progress=False,
+    result = train_selector(partial, config, out, request.param, timesteps=256, progress=False,
                             recorded_only=True)  # fmt: skip
+    if request.param == "set":  # the set policy reads what failed, not only the mask
+        assert hasattr(result.model.policy.mlp_extractor, "failure_encoder")
     return result, out, partial, gone
 
 

@@ -203,7 +203,8 @@ def test_run_selector_writes_report_model_and_curve(grips, small_config, tmp_pat
 
 def test_batched_policy_orders_are_the_environments_one_at_a_time_picks(grips, small_config):
     """policy_orders and action_probabilities, one forward pass for every set, give what
-    asking the policy set by set gives, a tried slot masked before the next attempt."""
+    asking the policy set by set gives, a tried slot masked (and, the retry setting of
+    small_config, marked failed) before the next attempt."""
     from classifiers.experiments.selector.evaluation import (
         action_probabilities,
         held_out_candidate_sets,
@@ -212,14 +213,19 @@ def test_batched_policy_orders_are_the_environments_one_at_a_time_picks(grips, s
 
     env = make_selector_env(grips, small_config, "train", 1, 0)
     model = make_selector_model(env, "set", 0, None, timesteps=64, settings=small_config.selector)
+    assert "failed" in model.observation_space.spaces  # max_attempts 2: the policy reads it
+    model.learn(64)  # a fresh score head is nearly flat
     sets = held_out_candidate_sets(grips, small_config)
     assert len(sets) > 1
     probabilities = action_probabilities(model, sets)
     for found, orders, p in zip(sets, policy_orders(model, sets, 3), probabilities, strict=True):
         mask, expected = found.mask.copy(), []
         for _ in range(min(3, found.count)):
-            action, _ = model.predict({"features": found.features, "mask": mask.copy()},
-                                      action_masks=mask.astype(bool), deterministic=True)
+            observation = {"features": found.features, "mask": mask.copy()}
+            if "failed" in model.observation_space.spaces:  # as GripSelect-v0 shows a retry
+                observation["failed"] = found.mask - mask
+            action, _ = model.predict(observation, action_masks=mask.astype(bool),
+                                      deterministic=True)  # fmt: skip
             expected.append(int(action))
             mask[int(action)] = 0
         np.testing.assert_array_equal(orders, expected)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import functools
 import json
 import platform
+import shutil
 import subprocess
 from collections.abc import Callable
 from datetime import UTC, datetime
@@ -42,6 +43,14 @@ from classifiers.report.leaderboard import (
     verdict_sentence,
 )
 from classifiers.report.power import power_section
+from classifiers.report.selector_diagnosis import (
+    DIAGNOSIS_FOLDER,
+    FIGURE,
+    FIGURE_ALT,
+    diagnosis_markdown,
+    source_root,
+    study_diagnosis,
+)
 from grip_env.config import Config
 from grip_env.objects import PlanarObject, procedural_objects
 
@@ -87,6 +96,22 @@ def write_report(out: Path, config: Config, table: pd.DataFrame,
     return md
 
 
+def _selector_diagnosis(report: Report, out: Path, answers: dict[str, Any],
+                        fig_dir: Path) -> None:  # fmt: skip
+    """Why the RL selector falls short of the best supervised method, from the committed
+    curves (a study of the standard dataset whose selector fell short only), the curve beside."""
+    found = study_diagnosis(out, answers)
+    if found is None:
+        return
+    figure = source_root() / DIAGNOSIS_FOLDER / FIGURE
+    sentence, _ = diagnosis_markdown(out, found)
+    report.text(sentence)
+    if figure.is_file():
+        fig_dir.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(figure, fig_dir / "selector_curve.png")
+        report.figure(_rel(fig_dir / "selector_curve.png", out), FIGURE_ALT + ".")
+
+
 # ---------------------------------------------------------------------------------- sections
 def _stage_section(title: str, result_file: str) -> Callable[[Callable[..., None]],
                                                               Callable[..., None]]:
@@ -123,6 +148,7 @@ def _answers_section(report: Report, out: Path, fig_dir: Path) -> None:
         return
     for sentence in answer_sentences(answers):
         report.text(sentence)
+    _selector_diagnosis(report, out, answers, fig_dir)
     report.text(answers_preamble(answers))
     for name, path in draw_answer_figures(out, strong_methods(answers), fig_dir).items():
         report.figure(_rel(path, out), ALT_TEXT[name] + ".")

@@ -116,7 +116,12 @@ def _update_readme(out: Path, readme: Path) -> None:
     folder = readme.parent / RESULTS_FOLDER
     stamp = publish(out, folder, commit, _dataset_sha256(out, table))
     figures = [name for name in stamp["figures"] if name != GALLERY]
-    update_readme(readme, results_block(out, table, commit, package_version(), figures))
+    from classifiers.report.answers import read_answers
+    from classifiers.report.selector_diagnosis import study_diagnosis
+
+    diagnosis = study_diagnosis(out, read_answers(out), root=readme.parent)
+    update_readme(readme, results_block(out, table, commit, package_version(), figures,
+                                        diagnosis=diagnosis))  # fmt: skip
     typer.echo(f"updated the results block of {readme} and its {len(stamp['figures'])} "
                f"figures in {folder}")
     page, board = readme.parent / "docs" / "benchmark.md", leaderboard_block(out)

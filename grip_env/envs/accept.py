@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 from grip_env.envs.core import GripEnvBase, action_index
 from grip_env.envs.observation import CandidateSet
 
-Observation = dict[str, NDArray[np.float32]]
+Observation = dict[str, NDArray[Any]]
 SKIP, EXECUTE = 0, 1
 PROGRESS = ("position", "attempts", "pool")
 
@@ -36,7 +36,14 @@ class GripAcceptEnv(GripEnvBase):
 
     ``Dict(features=Box(F), progress=Box(0, 1, (3,)))``: the current candidate's normalised
     features, and ``progress`` = (candidates already shown / K, executions used /
-    max_attempts, the object's candidate count / K).
+    max_attempts, the object's candidate count / K). With ``max_attempts > 1`` (the retry
+    setting) the Dict also holds ``failed=MultiBinary(K)``, as
+    :class:`~grip_env.envs.select.GripSelectEnv`'s does: 1 at the positions in the episode's
+    showing order (the slots: position i shows the candidate GripSelect-v0 puts in slot i) whose
+    candidate was executed and dropped, 0 elsewhere (all 0 at reset). ``progress`` counts the
+    executions; ``failed`` says which candidates the episode's draw defeated: with
+    ``candidate_order="q_c"``, their rank by ``Q_C``. With ``max_attempts = 1`` the space is the
+    two keys only.
 
     ## Rewards
 
@@ -80,21 +87,25 @@ class GripAcceptEnv(GripEnvBase):
 
     def _make_spaces(self) -> None:
         low, high = self.scaler.bounds()
+        k = self.max_candidates
         self.observation_space = spaces.Dict({
             "features": spaces.Box(low, high, dtype=np.float32),
             "progress": spaces.Box(0.0, 1.0, (len(PROGRESS),), dtype=np.float32),
+            **({"failed": spaces.MultiBinary(k)} if self.retries else {}),
         })
         self.action_space = spaces.Discrete(2)
         self._found: CandidateSet | None = None
         self._slots = np.arange(self.max_candidates)
         self._position = 0
         self._attempts = 0
+        self._failed = np.zeros(self.max_candidates, dtype=np.int8)
         self._shown: int | None = None
         self._outcome: bool | None = None
 
     def _start_episode(self, found: CandidateSet) -> None:
         """Show the episode's first candidate."""
         self._position = 0
+        self._failed = np.zeros(self.max_candidates, dtype=np.int8)
         self._shown = int(self._slots[0])
 
     def step(self, action: Any) -> tuple[Observation, float, bool, bool, dict[str, Any]]:
@@ -109,6 +120,7 @@ class GripAcceptEnv(GripEnvBase):
         if execute:
             success = self._execute(found, row)
             self._attempts += 1
+            self._failed[self._position] = not success
             reward = self.success_reward if success else self.failure_reward
         self._position += 1
         exhausted = self._position >= found.count
@@ -141,7 +153,10 @@ class GripAcceptEnv(GripEnvBase):
             ],
             dtype=np.float32,
         )
-        return {"features": found.features[row].copy(), "progress": progress}
+        observation = {"features": found.features[row].copy(), "progress": progress}
+        if self.retries:
+            observation["failed"] = self._failed.copy()
+        return observation
 
     def _draw(self) -> NDArray[np.uint8]:
         found = self._found

@@ -127,6 +127,12 @@ class GripEnvBase(gym.Env[dict[str, NDArray[Any]], np.int64]):
         self._ended = True  # no episode yet: step() needs a reset() first
         self._make_spaces()
 
+    @property
+    def retries(self) -> bool:
+        """Whether an episode may execute more than one grip (``max_attempts > 1``): then the
+        observation also says which candidates were tried and failed (``"failed"``)."""
+        return self.max_attempts > 1
+
     def _make_spaces(self) -> None:
         """Set ``observation_space``, ``action_space`` and the episode state (subclasses)."""
         raise NotImplementedError

@@ -181,12 +181,6 @@ class GripSelectEnv(GripEnvBase):
         """Valid actions (real candidates not yet failed), for sb3-contrib's MaskablePPO."""
         return self._mask.astype(bool)
 
-    @property
-    def retries(self) -> bool:
-        """Whether an episode may execute more than one grip (``max_attempts > 1``): then the
-        observation also says which slots were tried and failed (``"failed"``)."""
-        return self.max_attempts > 1
-
     def _observation(self) -> Observation:
         observation = {"features": self._features.copy(), "mask": self._mask.copy()}
         if self.retries:
