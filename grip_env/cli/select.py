@@ -40,8 +40,8 @@ def select(
     progress: Annotated[bool, typer.Option(help="show a progress bar")] = True,
     trials: Annotated[
         Path | None,
-        typer.Option(help="re-simulated per-trial outcomes of DATA (a folder of shards, e.g. "
-                          "grip_env/data/standard_trials), for the retry task "
+        typer.Option(help="re-simulated per-trial outcomes of DATA (a folder of shards, "
+                          "python -m grip_env.dataset.trial_outcomes), for the retry task "
                           "(selector.max_attempts > 1) on a dataset made before they were kept"),
     ] = None,
     recorded_only: Annotated[

@@ -152,8 +152,7 @@ def _per_trial_line(grips: pd.DataFrame) -> str:
                 "that share it can be replayed and scored.")
     return ("- Every trial's outcome by trial index is **not** in these files (made before it "
             "was kept): `python -m grip_env.dataset.trial_outcomes DIR --out TRIALS` re-simulates "
-            "it, checked against these summaries bit for bit (the standard dataset's: "
-            "`grip_env/data/standard_trials/`).")
+            "it, checked against these summaries bit for bit, and `--attach` adds it to them.")
 
 
 def _reliability(report: dict[str, Any] | None) -> str:

@@ -243,8 +243,8 @@ def main(argv: list[str] | None = None) -> None:
                                      description=__doc__.splitlines()[0])  # type: ignore[union-attr]
     parser.add_argument("--data", default="standard", help="the dataset (default: standard)")
     parser.add_argument("--trials", type=Path, default=None,
-                        help="re-simulated per-trial shards (default for standard: "
-                             "grip_env/data/standard_trials)")
+                        help="re-simulated per-trial shards, for a dataset made before they "
+                             "were kept (the standard dataset records them)")
     parser.add_argument("--scores", type=Path, default=None,
                         help="a study's classifiers/scores.parquet (rankers, classifiers)")
     parser.add_argument("--agent", action="append", default=[], metavar="NAME=ZIP",
@@ -255,10 +255,6 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--out", type=Path, default=None, help="write retry.json here")
     args = parser.parse_args(argv)
     trials = args.trials
-    if trials is None and args.data == "standard":
-        from grip_env.dataset.trial_outcomes import STANDARD_TRIALS
-
-        trials = STANDARD_TRIALS
     agents = [tuple(spec.split("=", 1)) for spec in args.agent]
     if any(len(agent) != 2 for agent in agents):
         parser.exit(2, f"error: --agent takes NAME=ZIP, got {args.agent!r}\n")
