@@ -215,9 +215,11 @@ def standard_retry_board(data: str = "standard", trials: str | Path | None = Non
     bare = table.copy(deep=False)
     bare.attrs = {}
     sets = [found for found in candidate_sets(bare, config, split) if found.object_id in held]
-    candidates = candidate_table(sets).merge(
+    candidates = candidate_table(sets)
+    candidates = candidates.drop(columns=[c for c in trial_columns(count)
+                                          if c in candidates.columns]).merge(
         recorded[["grip_id", *trial_columns(count)]], on="grip_id", how="left",
-        validate="one_to_one")
+        validate="one_to_one")  # fmt: skip
     frames = [baseline_scores(candidates).query("method != 'epsilon'")]
     if scores is not None:
         learned = drop_duplicates(pd.read_parquet(scores))
