@@ -442,3 +442,12 @@ def test_an_object_missing_its_trials_is_refused_not_read_as_a_hold(many: pd.Dat
     partial.loc[partial["object_id"] == train[0], "trial_success_0"] = np.nan
     with pytest.raises(ValueError, match=rf"object '{train[0]}' lacks some of its trials'"):
         training_baselines(partial, config)
+
+
+def test_the_study_refuses_retry_attempts_beyond_the_candidates(tmp_path: Path) -> None:
+    config = tmp_path / "c.yaml"
+    config.write_text("selector:\n  max_candidates: 8\n  retry_attempts: 9\n")
+    out = tmp_path / "out"
+    code, output = cli("study", "--quick", "--out", out, "--config", config)
+    assert_refused(code, output, "retry_attempts 9 exceeds max_candidates 8")
+    assert not out.exists()
