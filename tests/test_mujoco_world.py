@@ -325,7 +325,7 @@ def test_the_fingers_press_their_torques_on_the_held_box_and_never_more():
     from grip_env.sim.trial import TrialScene, grip_plans
     from grip_env.sim.uncertainty import TrialNoise
     from tests.benchmarks.engines import held_box_grip
-    from tests.benchmarks.mujoco_drives import caps
+    from tests.benchmarks.mujoco_drives import caps, watch_torque_ratio
 
     config = Config().override(sim={"engine": "mujoco"})
     box, grip = held_box_grip(config)
@@ -333,13 +333,7 @@ def test_the_fingers_press_their_torques_on_the_held_box_and_never_more():
 
     def on_phase(name: str, scene: TrialScene) -> None:
         if name == "approach":
-            step = scene.world.step
-
-            def watched(n: int = 1) -> None:
-                step(n)
-                ratio = np.abs(scene.hand.motor_torques()) / caps(scene)
-                over[0] = max(over[0], float(ratio.max()))
-            scene.world.step = watched
+            watch_torque_ratio(scene, over)
         if name == "held":
             held.append((scene.hand.motor_torques(), caps(scene)))
 

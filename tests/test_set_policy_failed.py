@@ -8,7 +8,6 @@ import json
 from functools import cache
 from pathlib import Path
 
-import gymnasium as gym
 import numpy as np
 import pytest
 import torch as th
@@ -16,45 +15,32 @@ from gymnasium import spaces
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from sb3_contrib import MaskablePPO
+from test_selector import F, K, KnownOddsEnv
 
 from classifiers.experiments.selector.policy import CONTEXTS, CandidateSetPolicy
 
-K, F = 6, 3
 DATA = Path(__file__).parent / "data"
 
 
-class RetryOddsEnv(gym.Env):
-    """Up to three picks among 2..K candidates, with GripSelect-v0's ``failed`` key."""
+class RetryOddsEnv(KnownOddsEnv):
+    """Up to three picks among 2..K candidates (each held with its known odds), with
+    GripSelect-v0's ``failed`` key."""
 
     def __init__(self) -> None:
-        self.observation_space = spaces.Dict({
-            "features": spaces.Box(-5.0, 5.0, (K, F), np.float32),
-            "mask": spaces.MultiBinary(K),
-            "failed": spaces.MultiBinary(K),
-        })
-        self.action_space = spaces.Discrete(K)
+        super().__init__()
+        self.observation_space = spaces.Dict({**self.observation_space.spaces,
+                                              "failed": spaces.MultiBinary(K)})
 
     def reset(self, *, seed=None, options=None):
-        super().reset(seed=seed)
-        count = int(self.np_random.integers(2, K + 1))
-        self.features = np.zeros((K, F), np.float32)
-        self.features[:count] = self.np_random.normal(size=(count, F)).clip(-5, 5)
-        self.mask = np.zeros(K, np.int8)
-        self.mask[:count] = 1
         self.failed = np.zeros(K, np.int8)
         self.attempts = 0
-        return self._observation(), {}
+        return super().reset(seed=seed, options=options)
 
     def _observation(self):
-        return {"features": self.features.copy(), "mask": self.mask.copy(),
-                "failed": self.failed.copy()}  # fmt: skip
-
-    def action_masks(self) -> np.ndarray:
-        return self.mask.astype(bool)
+        return {**super()._observation(), "failed": self.failed.copy()}
 
     def step(self, action):
-        x = self.features[int(action)]
-        held = bool(self.np_random.random() < 1.0 / (1.0 + np.exp(-(3.0 * x[0] - 2.0 * x[1]))))
+        held = bool(self.np_random.random() < self.odds(self.features[int(action)]))
         self.attempts += 1
         self.mask[int(action)] = 0
         self.failed[int(action)] = not held

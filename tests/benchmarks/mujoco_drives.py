@@ -40,6 +40,18 @@ def caps(scene: TrialScene) -> np.ndarray:
                      for f in scene.hand.fingers])
 
 
+def watch_torque_ratio(scene: TrialScene, worst: list[float]) -> None:
+    """From now on, after every protocol step keep in ``worst[0]`` the largest ratio of a
+    flexion motor's torque to its cap so far."""
+    step = scene.world.step
+
+    def watched(n: int = 1) -> None:
+        step(n)
+        ratio = np.abs(scene.hand.motor_torques()) / caps(scene)
+        worst[0] = max(worst[0], float(ratio.max()))
+    scene.world.step = watched
+
+
 def squeeze() -> None:
     config = Config().override(sim={"engine": "mujoco"})
     box, grip = held_box_grip(config)
@@ -47,13 +59,7 @@ def squeeze() -> None:
 
     def on_phase(name: str, scene: TrialScene) -> None:
         if name == "approach":
-            step = scene.world.step
-
-            def watched(n: int = 1) -> None:
-                step(n)
-                ratio = np.abs(scene.hand.motor_torques()) / caps(scene)
-                worst[0] = max(worst[0], float(ratio.max()))
-            scene.world.step = watched
+            watch_torque_ratio(scene, worst)
         if name in ("closed", "held"):
             forces = pad_forces(scene)
             print(f"{name}: pads {np.round(forces, 2).tolist()} N, sum {sum(forces):.2f} N; "
