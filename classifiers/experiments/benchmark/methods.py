@@ -437,15 +437,11 @@ def sb3_scores(path: Path, sets: Sequence[CandidateSet], seed: int, name: str) -
 def _adaptive_order_scores(model: Any, sets: Sequence[CandidateSet], seed: int,
                            name: str) -> pd.DataFrame:  # fmt: skip
     """Scores ``count - k`` for the k-th slot a retry policy picks, every failure shown."""
-    from classifiers.experiments.selector.evaluation import policy_orders
+    from classifiers.experiments.selector.evaluation import order_scores, policy_orders
 
     orders = policy_orders(model, sets, max(found.count for found in sets))
-    frames = []
-    for found, order in zip(sets, orders, strict=True):
-        scores = np.empty(found.count)
-        scores[order] = found.count - np.arange(found.count)
-        frames.append(score_frame(name, seed, _slots(found), scores))
-    return pd.concat(frames, ignore_index=True)
+    return pd.concat([score_frame(name, seed, _slots(found), order_scores(order, found.count))
+                      for found, order in zip(sets, orders, strict=True)], ignore_index=True)
 
 
 # ------------------------------------------------------------------ a study's score files

@@ -173,6 +173,14 @@ def policy_orders(model: Any, sets: Sequence[CandidateSet],
     return [order[:n] for order, n in zip(orders, tries, strict=True)]
 
 
+def order_scores(order: NDArray[np.intp], count: int) -> NDArray[np.float64]:
+    """Scores ``count - j`` for the j-th slot of ``order`` (0 for slots it never reaches): a
+    static order of them is ``order``, as a policy's picks after each failure make it."""
+    scores = np.zeros(count)
+    scores[order] = count - np.arange(len(order))
+    return scores
+
+
 def _ascending(column: str) -> Ranker:
     return lambda found: np.argsort(found.rows[column].to_numpy(float), kind="stable")
 

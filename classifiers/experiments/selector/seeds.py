@@ -20,7 +20,6 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pandas as pd
 
 from classifiers.experiments.selector.data import check_grip_table
@@ -48,26 +47,20 @@ def policy_scores(model: Any, table: pd.DataFrame, config: Config, seed: int,
     from classifiers.experiments.selector.evaluation import (
         action_probabilities,
         held_out_candidate_sets,
+        order_scores,
         policy_orders,
     )
 
     sets = held_out_candidate_sets(table, config)
     if "failed" in getattr(model.observation_space, "spaces", {}):
         orders = policy_orders(model, sets, config.selector.max_candidates)
-        scores = [_order_scores(order, found.count)
+        scores = [order_scores(order, found.count)
                   for found, order in zip(sets, orders, strict=True)]
     else:
         scores = list(action_probabilities(model, sets)) if sets else []
     return pd.concat([score_frame(found.object_id, seed, method, found.rows, p[: found.count])
                       for found, p in zip(sets, scores, strict=True)],
                      ignore_index=True)  # fmt: skip
-
-
-def _order_scores(order: np.ndarray, count: int) -> np.ndarray:
-    """Scores ``count - j`` for the j-th slot of ``order``."""
-    scores = np.zeros(count)
-    scores[order] = count - np.arange(len(order))
-    return scores
 
 
 def run_selectors(
