@@ -3,6 +3,8 @@ refused in one line before anything is written."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 from cli_runs import assert_refused
 from cli_runs import cli as run
@@ -229,3 +231,24 @@ def test_generate_validate_and_calibrate_run_in_the_config_s_engine(tmp_path):
     assert calibration["config"]["sim"]["engine"] == "mujoco"
     assert "calibration trials in MuJoCo" in (tmp_path / "calibration" /
                                               "calibration.md").read_text()
+
+
+def test_a_manifest_made_before_engines_were_recorded_names_its_engine_s_version():
+    """The standard dataset predates the ``engine`` record; the engine's version it was made
+    with is the one its ``versions`` recorded, and the card says so."""
+    from grip_env.dataset.card import _engines
+    from grip_env.dataset.manifest import read_manifest, recorded_engine
+    from grip_env.datasets import standard_path
+
+    manifest = read_manifest(standard_path())
+    assert "engine" not in manifest
+    assert recorded_engine(manifest) == {"name": "pybullet",
+                                         "version": manifest["versions"]["pybullet"]}
+    line = f"Labelled in pybullet {manifest['versions']['pybullet']},"
+    assert line in _engines(manifest, standard_path(), None)
+    assert line in (Path(__file__).parents[1] / "docs" / "dataset.md").read_text()
+    assert recorded_engine({"engine": {"name": "mujoco", "version": "4.0.1"},
+                            "versions": {"pybullet": "3.2.7"}}) == {"name": "mujoco",
+                                                                    "version": "4.0.1"}
+    assert recorded_engine({"config": {"sim": {"engine": "mujoco"}}}) == {"name": "mujoco",
+                                                                          "version": None}

@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from grip_env.dataset.loading import load
-from grip_env.dataset.manifest import earlier_runs
+from grip_env.dataset.manifest import earlier_runs, recorded_engine
 from grip_env.label_model import label_model_of
 
 #: What "g" means wherever robustness is defined (the card, the concepts page, the columns).
@@ -251,7 +251,7 @@ def recorded_crosscheck(directory: Path, report: dict[str, Any] | None = None,
 
 
 def _engines(manifest: dict[str, Any], directory: Path, report: dict[str, Any] | None) -> str:
-    engine = manifest.get("engine") or {"name": "pybullet", "version": None}
+    engine = recorded_engine(manifest)
     head = ["## The engine's share of a label", "",
             f"Labelled in {engine['name']} {engine.get('version') or '(version unrecorded)'}, "
             f"label model `{label_model_of(manifest)}`."]

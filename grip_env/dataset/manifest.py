@@ -22,7 +22,7 @@ from grip_env.dataset.catalog import OBJECTS_FILE, DatasetObject
 from grip_env.dataset.files import write_text_atomically
 from grip_env.dataset.sampling import sampling_record
 from grip_env.dataset.shards import GRIPS_DIR, SHARD_FILE, ShardRecord
-from grip_env.label_model import label_model_for
+from grip_env.label_model import engine_of, label_model_for
 from grip_env.objects.family import object_family
 
 FORMAT = "grip-env-dataset"
@@ -279,6 +279,19 @@ def engine_record(name: str) -> dict[str, str | None]:
     except metadata.PackageNotFoundError:
         version = None
     return {"name": name, "version": version}
+
+
+def recorded_engine(manifest: dict[str, Any]) -> dict[str, str | None]:
+    """The engine a manifest says made its labels, with that engine's version: its ``engine``
+    record, else (a dataset made before engines were recorded) the engine it names
+    (``engine_of``) and the version of that package its ``versions`` recorded when it was made."""
+    recorded = manifest.get("engine")
+    if isinstance(recorded, dict) and isinstance(recorded.get("name"), str):
+        return {"name": recorded["name"], "version": recorded.get("version")}
+    name = engine_of(manifest)
+    versions = manifest.get("versions")
+    version = versions.get(name) if isinstance(versions, dict) else None
+    return {"name": name, "version": version if isinstance(version, str) else None}
 
 
 def _versions() -> dict[str, str]:
