@@ -100,6 +100,25 @@ def test_friction_pairs_combine_as_bullet_does():
         assert model.pair_friction[with_pad, 2] == pytest.approx(torsion)
 
 
+@pytest.mark.parametrize("multi", [True, False])
+def test_a_flat_face_rests_on_several_points_with_multi_contact(monkeypatch, multi):
+    """A prism on the table touches it at its face's four corners, each piece (MuJoCo's
+    multiccd, as Bullet's manifold); without multi-contact at one point a piece."""
+    import grip_env.sim.mujoco_world as mujoco_world
+
+    monkeypatch.setattr(mujoco_world, "MULTI_CONTACT", multi)
+    obj = next(o for o in load_object_set("default") if o.name == "rectangle")
+    with MujocoWorld() as mj:
+        mj.add_table(friction=0.5)
+        body = mj.add_object(obj, 30.0, 0.2, 0.5)
+        mj.step(24)  # a tenth of a second: settled on the table
+        _, data = mj._compiled()
+        pieces = mj._link_geoms(body.uid, -1)
+        touching = sum(1 for c in data.contact[: data.ncon]
+                       if c.geom1 in pieces or c.geom2 in pieces)
+        assert touching == (4 * len(pieces) if multi else len(pieces))
+
+
 @pytest.mark.slow
 def test_a_mujoco_trial_runs_and_repeats_bit_for_bit():
     from grip_env.planning.pipeline import candidates
