@@ -386,7 +386,7 @@ class MujocoWorld:
         m, _ = self._compiled()
         index = self._body_id(body, link)
         m.body_inertia[index], m.body_iquat[index] = _with_axis_inertia(
-            tuple(m.body_inertia[index].tolist()), tuple(m.body_iquat[index].tolist()), axis,
+            m.body_inertia[index].tobytes(), m.body_iquat[index].tobytes(), axis,
             float(inertia_kg_m2))
         self._constants_stale = True
 
@@ -976,15 +976,15 @@ def _prism(piece: NDArray[np.float64], thickness_mm: float) -> list[list[float]]
 
 @functools.lru_cache(maxsize=256)  # every trial's world adds the same to the same links
 def _with_axis_inertia(
-    principal: tuple[float, float, float], axes: tuple[float, float, float, float], axis: int,
-    added_kg_m2: float,
+    principal: bytes, axes: bytes, axis: int, added_kg_m2: float,
 ) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """Principal inertia and axes (MuJoCo's quaternion) of the inertia ``principal`` about
-    ``axes`` with ``added_kg_m2`` added about the body frame's ``axis``."""
+    ``axes`` (float64 arrays' bytes: an exact key, telling -0.0 from 0.0) with ``added_kg_m2``
+    added about the body frame's ``axis``."""
     rotation = np.empty(9)
-    mujoco.mju_quat2Mat(rotation, np.array(axes))
+    mujoco.mju_quat2Mat(rotation, np.frombuffer(axes))
     rotation = rotation.reshape(3, 3)  # principal axes in the link frame, as columns
-    tensor = rotation @ np.diag(principal) @ rotation.T
+    tensor = rotation @ np.diag(np.frombuffer(principal)) @ rotation.T
     tensor[axis, axis] += added_kg_m2
     values, vectors = np.linalg.eigh(tensor)
     if np.linalg.det(vectors) < 0:
