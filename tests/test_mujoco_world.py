@@ -63,6 +63,46 @@ def test_link_frames_match_in_a_posture(robots):
         assert turn == pytest.approx(1.0, abs=1e-7)
 
 
+def test_the_per_step_reads_are_plain_floats_equal_to_the_array_reads(robots):
+    """``joint_positions``, ``joint_positions_velocities`` and the pose reads the controller and
+    the ramp call every step give the values of the array reads, as Python floats."""
+    for world, uid in robots:
+        joints = [MOUNT_JOINTS + j for j in (4, 5, 1, 2, 6, 7)]
+        for k, joint in enumerate(joints):
+            world.set_joint(uid, joint, 0.1 + 0.05 * k)
+        q, dq, _ = world.joint_states(uid, joints)
+        positions, velocities = world.joint_positions_velocities(uid, joints)
+        assert world.joint_positions(uid, joints) == positions == q.tolist()
+        assert velocities == dq.tolist()
+        position, orientation = world.link_pose_floats_mm(uid, joints[1])
+        assert all(type(v) is float for v in (*position, *orientation))
+
+
+def test_a_saved_state_survives_renewed_constants_and_replays_bit_for_bit():
+    """The saved state and the constants' scratch share one spare ``MjData``: renewing the
+    constants while a state is saved must not touch it, and a forgotten state's data serves
+    again."""
+    obj = next(o for o in load_object_set("default") if o.name == "rectangle")
+    with MujocoWorld() as mj:
+        mj.add_table()
+        body = mj.add_object(obj, 30.0, 0.2, 0.5)
+        mj.step(3)
+        saved = mj.save()
+        start = mj._compiled()[1].qpos.copy()
+        mj.set_dynamics(body, 0.2, 0.5)  # the constants are renewed at the next step
+        mj.step(5)
+        after = mj._compiled()[1].qpos.copy()
+        mj.restore(saved)
+        assert mj._compiled()[1].qpos.tobytes() == start.tobytes()
+        mj.step(5)
+        assert mj._compiled()[1].qpos.tobytes() == after.tobytes()
+        mj.forget(saved)
+        again = mj.save()
+        mj.step(2)
+        mj.restore(again)
+        assert mj._compiled()[1].qpos.tobytes() == after.tobytes()
+
+
 def test_an_object_has_pybullets_mass_inertia_and_pose():
     obj = next(o for o in load_object_set("default") if o.name == "bean")
     with World() as bullet, MujocoWorld() as mj:

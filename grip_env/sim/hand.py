@@ -295,7 +295,7 @@ class Hand:
     def hold_fingers(self) -> None:
         """``drive_fingers()`` without contacts, returning nothing: the per-step update while
         the fingers hold (lean: no arrays)."""
-        if self._follow(self.world.joint_positions_velocities(self.uid, self._flex)[0]):
+        if self._follow(self.world.joint_positions(self.uid, self._flex)):
             self._command_motors()
 
     def _follow(self, q: list[float]) -> bool:

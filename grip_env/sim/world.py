@@ -362,6 +362,10 @@ class World:
         states = self._get_joint_states(body, joints)
         return [s[0] for s in states], [s[1] for s in states]
 
+    def joint_positions(self, body: int, joints: list[int]) -> list[float]:
+        """Positions of ``joints``, as a list (for the per-step controller)."""
+        return [state[0] for state in self._get_joint_states(body, joints)]
+
     def touching_links(self, body: int, other: int) -> set[int]:
         """The links of ``body`` in contact with ``other``."""
         return {point[3] for point in self.client.getContactPoints(bodyA=body, bodyB=other)}

@@ -3,10 +3,12 @@
     python -m tests.benchmarks.mujoco_cost --grips 12 --trials 2 --out before.json
     python -m tests.benchmarks.mujoco_cost --grips 12 --trials 2 --compare before.json
     python -m tests.benchmarks.mujoco_cost --grips 6 --profile      # cProfile on CPU time
+    python -m tests.benchmarks.mujoco_cost --grips 12 --engine pybullet   # the same in PyBullet
 
 Draws a seeded sample of the standard dataset's recorded grips (as ``tests.benchmarks.engines``
 and ``grip-env validate --resimulate`` draw it), runs trials ``0 .. trials - 1`` of each in
-MuJoCo in this process, and prints the process's CPU time per trial and per protocol step.
+MuJoCo (or ``--engine pybullet``) in this process, and prints the process's CPU time per trial
+and per protocol step.
 ``--out`` writes every trial's outcome fields as exact hex floats; ``--compare`` runs the same
 trials and names every field that differs from such a file (none: the outcomes are bit for bit
 the same). ``--profile`` adds cProfile's top functions by own and cumulative CPU time.
@@ -37,8 +39,9 @@ FIELDS = ("robustness", "success", "held", "friction", "mass_kg", "drift_mm", "r
           "steps")
 
 
-def work(grips: int, seed: int) -> list[tuple]:
-    """(object, planned grips, config) of the seeded sample, as ``tests.benchmarks.engines``."""
+def work(grips: int, seed: int, engine: str = "mujoco") -> list[tuple]:
+    """(object, planned grips, config in ``engine``) of the seeded sample, as
+    ``tests.benchmarks.engines``."""
     from grip_env.dataset.resimulation import _as_planned, _sample, kept_grips
     from grip_env.datasets import standard_path
 
@@ -47,7 +50,7 @@ def work(grips: int, seed: int) -> list[tuple]:
         chosen = check.recorded.iloc[list(check.picked)]
         planned = _as_planned(chosen, kept_grips(check.task), check.task.object_id)
         jobs.append((check.task.obj, planned, check.task.config.override(
-            sim={"engine": "mujoco"})))
+            sim={"engine": engine})))
     return jobs
 
 
@@ -124,12 +127,13 @@ def main() -> None:
     parser.add_argument("--grips", type=int, default=12)
     parser.add_argument("--trials", type=int, default=2)
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--engine", choices=("mujoco", "pybullet"), default="mujoco")
     parser.add_argument("--out", type=Path)
     parser.add_argument("--compare", type=Path)
     parser.add_argument("--profile", action="store_true")
     parser.add_argument("--timers", action="store_true")
     args = parser.parse_args()
-    jobs = work(args.grips, args.seed)
+    jobs = work(args.grips, args.seed, args.engine)
     timers = watch_timers() if args.timers else None
     run(jobs[:1], 1)  # warm: imports, caches of the first object
     if timers:
