@@ -121,6 +121,18 @@ PAD_IMPEDANCE = 0.3
 #: the servos with the contacts, as Bullet solves its motors; their references move at constant
 #: speed through a step, and that speed is their velocity reference.
 SERVO_TIME_CONSTANT_S = 1.0 / 150.0
+#: The time constant (s) of the worm gear's stop and the hand motors' rows; None: two physics
+#: steps (the stiffest MuJoCo's ``refsafe`` allows), so that it follows the substep count.
+STIFF_TIME_CONSTANT_S: float | None = None
+#: Whether the arm's servo references are heavy reference joints moving at the step's constant
+#: speed (one ``mj_step`` call a protocol step), rather than values written every substep.
+SERVO_REFERENCE_JOINTS = False
+#: The inertia of an arm servo's reference joint (kg or kg m^2, as its joint): the servo's force
+#: (at most the arm's 400 N) moves it by under 4e-7 m in a protocol step (its position and speed
+#: are set again every step), and its share of the servo's inverse weight is 3e-4 (the z
+#: carriage's 3.3 kg). Heavier is worse: at 1e8 the ramp's settling was numerically disturbed
+#: (BENCHMARKS.md, "Cheaper MuJoCo physics per label").
+SERVO_REFERENCE_INERTIA = 1e4
 #: Bullet's default position gain of a position motor when none is given.
 DEFAULT_POSITION_GAIN = 0.1
 GRAVITY = (0.0, 0.0, -9.81)
@@ -188,6 +200,9 @@ class MujocoWorld:
         The arm's servos track a reference that moves at constant speed from the last target to
         the new one through the step, with that speed as their velocity reference."""
         m, d = self._ready()
+        if SERVO_REFERENCE_JOINTS:
+            self._step_references(m, d, steps)
+            return
         offsets, servos, peak = self._substep_offsets, self._servo_rows, self.servo_peak_n
         held = self._servo_references  # a view of the servos' rows of ``m.eq_data``
         references = np.empty((len(offsets), len(self._servo_from)))
@@ -203,6 +218,28 @@ class MujocoWorld:
                 mujoco.mj_step(m, d)
                 if self.watch_servos:
                     np.maximum(peak, np.abs(d.efc_force[servos]), out=peak)
+            self._servo_from = self._servo_target.copy()
+            if self._loaded:  # a push or twist lasts one step
+                d.xfrc_applied[:] = 0.0
+                self._loaded = False
+        self._stale = True
+
+    def _step_references(self, m: mujoco.MjModel, d: mujoco.MjData, steps: int) -> None:
+        """``step`` with each servo's reference a joint moving at the step's constant speed from
+        the last target to the new one: the constraint's velocity error is the joint's speed
+        minus the reference's, so it tracks without a lead, and a protocol step is one call."""
+        servos, peak = self._servo_rows, self.servo_peak_n
+        for _ in range(steps):
+            self._set_drive_speeds(m, d)
+            d.qpos[self._servo_reference_qpos] = self._servo_from
+            d.qvel[self._servo_reference_dof] = (
+                self._servo_target - self._servo_from) / self.timestep
+            if self.watch_servos:
+                for _ in range(self.substeps):
+                    mujoco.mj_step(m, d)
+                    np.maximum(peak, np.abs(d.efc_force[servos]), out=peak)
+            else:
+                mujoco.mj_step(m, d, self.substeps)
             self._servo_from = self._servo_target.copy()
             if self._loaded:  # a push or twist lasts one step
                 d.xfrc_applied[:] = 0.0
@@ -355,7 +392,9 @@ class MujocoWorld:
         for name, kind, _ in joints:
             if name in ARM_JOINTS:
                 self._servo_names.append(prefix + name)
-                self._spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=prefix + name)
+                self._spec.add_equality(
+                    type=mujoco.mjtEq.mjEQ_JOINT, name1=prefix + name,
+                    name2=f"servo{len(self._servo_names) - 1}" if SERVO_REFERENCE_JOINTS else "")
             elif kind != "fixed":
                 self._drive_names.append(prefix + name)
         return uid
@@ -462,7 +501,7 @@ class MujocoWorld:
         rows = self._joint_rows[key]
         self._jnt_range[rows, 0] = lowers
         self._jnt_range[rows, 1] = uppers
-        self._jnt_solref[rows] = (2.0 * m.opt.timestep, 1.0)
+        self._jnt_solref[rows] = (self._stiff_time_constant(m), 1.0)
 
     def joint_limits(self, body: int, joint: int) -> tuple[float, float]:
         """A joint's lower and upper limits (rad) as loaded (the URDF's)."""
@@ -628,6 +667,7 @@ class MujocoWorld:
         ``solref``."""
         mujoco.mj_resetData(m, self._scratch)  # as a new MjData: the reference pose
         mujoco.mj_setConst(m, self._scratch)
+        self._discount_servo_references(m)
         self._update_pads(m)
         self._constants_stale = False
 
@@ -676,6 +716,8 @@ class MujocoWorld:
         for k, (a, b) in enumerate(pairs):
             spec.add_pair(name=f"pair{k}", geomname1=a, geomname2=b, condim=4)
         self._add_drives(spec)
+        if SERVO_REFERENCE_JOINTS:
+            self._add_servo_references(spec)
         self._model = m = spec.compile()
         self._data = mujoco.MjData(m)
         # views of arrays read or written every step (the model and data live as long as these)
@@ -706,6 +748,12 @@ class MujocoWorld:
         self._servo_limit = np.full(len(joints), np.inf)
         self._servo_rows = slice(0, len(joints))
         self.servo_peak_n = np.zeros(len(joints))
+        if SERVO_REFERENCE_JOINTS:
+            references = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"servo{k}")
+                          for k in range(len(joints))]
+            self._servo_reference_qpos = m.jnt_qposadr[references].astype(int)
+            self._servo_reference_dof = m.jnt_dofadr[references].astype(int)
+            self._data.qpos[self._servo_reference_qpos] = self._servo_target
         self._set_servo_stiffness(m)
 
     def _set_servo_stiffness(self, m: mujoco.MjModel) -> None:
@@ -719,8 +767,19 @@ class MujocoWorld:
         m.eq_solimp[:, :2] = m.eq_solimp[:, 1:2]
         self._substep_offsets = (np.arange(self.substeps) / self.substeps * self.timestep)[:, None]
         self._servo_references = m.eq_data[self._servo_rows, 0]
-        m.tendon_solref_fri[:] = (2.0 * m.opt.timestep, 1.0)
+        m.tendon_solref_fri[:] = (self._stiff_time_constant(m), 1.0)
         m.tendon_solimp_fri[:, :2] = DRIVE_IMPEDANCE
+
+    @staticmethod
+    def _stiff_time_constant(m: mujoco.MjModel) -> float:
+        """The stop's and the motors' time constant: ``STIFF_TIME_CONSTANT_S``, below two physics
+        steps with MuJoCo's ``refsafe`` off (which would raise it to two steps); else two
+        physics steps."""
+        if STIFF_TIME_CONSTANT_S is None:
+            return 2.0 * m.opt.timestep
+        if STIFF_TIME_CONSTANT_S < 2.0 * m.opt.timestep:
+            m.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_REFSAFE
+        return STIFF_TIME_CONSTANT_S
 
     def _index_bodies(self, m: mujoco.MjModel) -> None:
         self._body_ids: list[list[int]] = []
@@ -759,6 +818,25 @@ class MujocoWorld:
             tendon = spec.add_tendon(name=f"drive{k}", frictionloss=1.0)
             tendon.wrap_joint(name, 1.0)
             tendon.wrap_joint(f"drive{k}", -1.0)
+
+    def _add_servo_references(self, spec: mujoco.MjSpec) -> None:
+        """Each arm servo's reference joint: a hinge of ``SERVO_REFERENCE_INERTIA`` whose angle
+        stands for the arm joint's coordinate (its equality is ``q = q_ref``)."""
+        for k in range(len(self._servo_names)):
+            body = spec.worldbody.add_body(name=f"servo{k}", mass=1.0, inertia=[1.0, 1.0, 1.0])
+            body.explicitinertial = True
+            body.add_joint(name=f"servo{k}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1],
+                           armature=SERVO_REFERENCE_INERTIA)
+
+    def _discount_servo_references(self, m: mujoco.MjModel) -> None:
+        """MuJoCo scales the solver's tolerances by the mean diagonal inertia of the model
+        (``stat.meaninertia``): the servos' reference joints, 1e8 each, are left out of it, so the
+        tolerances are those of the model without them."""
+        if not SERVO_REFERENCE_JOINTS:
+            return
+        count = len(self._servo_names)
+        total = m.stat.meaninertia * m.nv - count * (SERVO_REFERENCE_INERTIA + 1.0)
+        m.stat.meaninertia = total / (m.nv - count)
 
     def _index_drives(self, m: mujoco.MjModel) -> None:
         """The hand's motors: drive ``k`` moves joint ``_drive_names[k]`` (tendon ``k``)."""
