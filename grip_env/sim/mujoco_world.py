@@ -33,12 +33,14 @@ convex hull, with no margin to erode), and the same mounted URDF through MuJoCo'
   grip, chattered at their 400 N limit every substep and shook the object loose. Each arm joint
   is instead held by a joint equality constraint solved with the contacts, as Bullet solves its
   motors: critically damped with ``SERVO_TIME_CONSTANT_S``, its reference moving at constant
-  speed from the last target to the new one through each protocol step, led by twice the time
-  constant times that speed (so a constant speed is tracked without lag). Its force is not
+  speed from the last target to the new one through each protocol step: a heavy reference joint
+  of its own (``SERVO_REFERENCE_INERTIA``), so the servo's velocity error is relative to the
+  reference's speed (a constant speed is tracked without lag) and a protocol step is one
+  ``mj_step`` call. Its force is not
   capped; ``servo_peak_n`` and ``servos_within_limits`` record whether it ever needed more than
   the arm's limit (it does not in a trial, ``tests/test_mujoco_world.py``).
-* **The worm gear's stop** is the joint's lower limit (``joint_floors``) with a reference time of
-  two timesteps, the stiffest MuJoCo recommends. MuJoCo limits have no force cap: the stop holds
+* **The worm gear's stop** is the joint's lower limit (``joint_floors``) with the time constant
+  ``STIFF_TIME_CONSTANT_S``, fixed in seconds. MuJoCo limits have no force cap: the stop holds
   whatever load (Bullet's holds ``holds`` N·m).
 * **Compliant pads.** A link made compliant (``set_contact_compliance``) contacts through a
   spring of the given stiffness and a damper of the given damping, in N/m and N s/m as PyBullet's
@@ -95,10 +97,12 @@ DRIVE_REFERENCE_INERTIA_KG_M2 = 1e4
 #: The largest phase (rad) a pad's spring may turn in one physics step: MuJoCo integrates a
 #: contact's spring semi-implicitly, and the pad against its 80 g object (85 Hz) at the
 #: protocol's 240 Hz turns 2.2 rad a step and diverges (measured: the object flew off at the first
-#: touch). The world steps the physics in substeps short enough to resolve the pad: 5 at 240 Hz.
-#: Outcomes against the substep count (100 grips against 16 substeps; BENCHMARKS.md): 3 drop
-#: grips, 4 to 8 agree in 97-99 % of trials with the mean 2-3.5 g low, 12 on are converged.
-PAD_PHASE_PER_STEP = 0.5
+#: touch). The world steps the physics in substeps short enough to resolve the pad: 4 at 240 Hz
+#: (0.55 rad). Chosen by a convergence criterion written before measuring (150 trials against 16
+#: substeps with NoSlip 20 and Newton 200 at 1e-10, the same stop in seconds; BENCHMARKS.md,
+#: "Cheaper MuJoCo physics per label"): 4 substeps pass (success alike 99.3 %, Spearman 0.985,
+#: mean -1.5 g [-2.7, -0.2] within 5 %); 3 (0.74 rad) diverge or drop grips.
+PAD_PHASE_PER_STEP = 0.6
 #: The mass whose natural frequency against a pad sets the substeps (``PAD_PHASE_PER_STEP``): the
 #: 80 g object the pad's damping was derived for (``sim.pad_damping_n_s_per_m``).
 PAD_REFERENCE_MASS_KG = 0.08
@@ -119,14 +123,19 @@ PAD_IMPEDANCE = 0.3
 #: 2 N s / T (measured on 20 trials of the standard dataset: 1,097 N at 1.7 ms, 564 N at 3.3 ms,
 #: 299 N at 6.7 ms, the last never over the limit; the outcomes alike at all three). MuJoCo solves
 #: the servos with the contacts, as Bullet solves its motors; their references move at constant
-#: speed through a step, and that speed is their velocity reference.
+#: speed through a step (a joint of ``SERVO_REFERENCE_INERTIA`` each), and the servo's velocity
+#: error is the arm joint's speed minus the reference's.
 SERVO_TIME_CONSTANT_S = 1.0 / 150.0
-#: The time constant (s) of the worm gear's stop and the hand motors' rows; None: two physics
-#: steps (the stiffest MuJoCo's ``refsafe`` allows), so that it follows the substep count.
-STIFF_TIME_CONSTANT_S: float | None = None
-#: Whether the arm's servo references are heavy reference joints moving at the step's constant
-#: speed (one ``mj_step`` call a protocol step), rather than values written every substep.
-SERVO_REFERENCE_JOINTS = False
+#: The time constant (s, damping ratio 1) of the worm gear's stop and of the hand motors' rows.
+#: Both stand for rigid parts (a worm gear that cannot be back-driven, a stiff current-limited
+#: velocity loop), so they are as stiff as the physics allows; but a stiffness is a property of
+#: the hand, not of the integration, so it is fixed in seconds: 1/600 s, the two physics steps of
+#: 5 substeps at 240 Hz with which every ``mujoco-2026.12-drives`` label was made. Before, it was
+#: two physics steps of whatever substep count, so each count was another stop. At 4 substeps it
+#: is 1.6 physics steps, below MuJoCo's ``refsafe`` (which is turned off for it): measured stable
+#: and faithful there (the stop's slip 0.46 mrad, as at 5 substeps); at 3 substeps (1.2 steps)
+#: the simulation diverges (BENCHMARKS.md, "Cheaper MuJoCo physics per label").
+STIFF_TIME_CONSTANT_S = 1.0 / 600.0
 #: The inertia of an arm servo's reference joint (kg or kg m^2, as its joint): the servo's force
 #: (at most the arm's 400 N) moves it by under 4e-7 m in a protocol step (its position and speed
 #: are set again every step), and its share of the servo's inverse weight is 3e-4 (the z
@@ -197,37 +206,11 @@ class MujocoWorld:
     def step(self, steps: int = 1) -> None:
         """Advance the simulation ``steps`` fixed steps; pushes and twists last one step.
 
-        The arm's servos track a reference that moves at constant speed from the last target to
-        the new one through the step, with that speed as their velocity reference."""
+        Each arm servo's reference is a joint moving at constant speed from the last target to
+        the new one through the step; the servo's velocity error is the arm joint's speed minus
+        that speed, so it tracks without lag, and a protocol step is one ``mj_step`` call of
+        ``substeps`` physics steps (one call per physics step when ``watch_servos``)."""
         m, d = self._ready()
-        if SERVO_REFERENCE_JOINTS:
-            self._step_references(m, d, steps)
-            return
-        offsets, servos, peak = self._substep_offsets, self._servo_rows, self.servo_peak_n
-        held = self._servo_references  # a view of the servos' rows of ``m.eq_data``
-        references = np.empty((len(offsets), len(self._servo_from)))
-        for _ in range(steps):
-            self._set_drive_speeds(m, d)
-            start, speed = self._servo_from, (self._servo_target - self._servo_from) / self.timestep
-            lead = 2.0 * self._servo_time_constant * speed
-            np.multiply(offsets, speed, out=references)  # in place, the bits of
-            references += start  # start + offsets * speed + lead (its sums in its order)
-            references += lead
-            for reference in references:
-                held[:] = reference
-                mujoco.mj_step(m, d)
-                if self.watch_servos:
-                    np.maximum(peak, np.abs(d.efc_force[servos]), out=peak)
-            self._servo_from = self._servo_target.copy()
-            if self._loaded:  # a push or twist lasts one step
-                d.xfrc_applied[:] = 0.0
-                self._loaded = False
-        self._stale = True
-
-    def _step_references(self, m: mujoco.MjModel, d: mujoco.MjData, steps: int) -> None:
-        """``step`` with each servo's reference a joint moving at the step's constant speed from
-        the last target to the new one: the constraint's velocity error is the joint's speed
-        minus the reference's, so it tracks without a lead, and a protocol step is one call."""
         servos, peak = self._servo_rows, self.servo_peak_n
         for _ in range(steps):
             self._set_drive_speeds(m, d)
@@ -392,9 +375,8 @@ class MujocoWorld:
         for name, kind, _ in joints:
             if name in ARM_JOINTS:
                 self._servo_names.append(prefix + name)
-                self._spec.add_equality(
-                    type=mujoco.mjtEq.mjEQ_JOINT, name1=prefix + name,
-                    name2=f"servo{len(self._servo_names) - 1}" if SERVO_REFERENCE_JOINTS else "")
+                self._spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=prefix + name,
+                                        name2=f"servo{len(self._servo_names) - 1}")
             elif kind != "fixed":
                 self._drive_names.append(prefix + name)
         return uid
@@ -716,8 +698,7 @@ class MujocoWorld:
         for k, (a, b) in enumerate(pairs):
             spec.add_pair(name=f"pair{k}", geomname1=a, geomname2=b, condim=4)
         self._add_drives(spec)
-        if SERVO_REFERENCE_JOINTS:
-            self._add_servo_references(spec)
+        self._add_servo_references(spec)
         self._model = m = spec.compile()
         self._data = mujoco.MjData(m)
         # views of arrays read or written every step (the model and data live as long as these)
@@ -748,35 +729,30 @@ class MujocoWorld:
         self._servo_limit = np.full(len(joints), np.inf)
         self._servo_rows = slice(0, len(joints))
         self.servo_peak_n = np.zeros(len(joints))
-        if SERVO_REFERENCE_JOINTS:
-            references = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"servo{k}")
-                          for k in range(len(joints))]
-            self._servo_reference_qpos = m.jnt_qposadr[references].astype(int)
-            self._servo_reference_dof = m.jnt_dofadr[references].astype(int)
-            self._data.qpos[self._servo_reference_qpos] = self._servo_target
+        references = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"servo{k}")
+                      for k in range(len(joints))]
+        self._servo_reference_qpos = m.jnt_qposadr[references].astype(int)
+        self._servo_reference_dof = m.jnt_dofadr[references].astype(int)
+        self._data.qpos[self._servo_reference_qpos] = self._servo_target
         self._set_servo_stiffness(m)
 
     def _set_servo_stiffness(self, m: mujoco.MjModel) -> None:
-        """Critically damped servos of ``SERVO_TIME_CONSTANT_S``, with a constant impedance
-        (MuJoCo's damping over stiffness is then exactly twice the time constant, which the
-        reference's lead in ``step`` relies on); and the hand motors' rows at the stiffest time
-        constant, two physics steps, with ``DRIVE_IMPEDANCE``."""
-        # MuJoCo stiffens no constraint beyond two physics steps (its refsafe)
-        self._servo_time_constant = max(SERVO_TIME_CONSTANT_S, 2.0 * m.opt.timestep)
-        m.eq_solref[:] = (self._servo_time_constant, 1.0)
+        """Critically damped servos of ``SERVO_TIME_CONSTANT_S``, with a constant impedance; and
+        the hand motors' rows at ``STIFF_TIME_CONSTANT_S`` with ``DRIVE_IMPEDANCE``."""
+        m.eq_solref[:] = (max(SERVO_TIME_CONSTANT_S, 2.0 * m.opt.timestep), 1.0)
         m.eq_solimp[:, :2] = m.eq_solimp[:, 1:2]
-        self._substep_offsets = (np.arange(self.substeps) / self.substeps * self.timestep)[:, None]
-        self._servo_references = m.eq_data[self._servo_rows, 0]
         m.tendon_solref_fri[:] = (self._stiff_time_constant(m), 1.0)
         m.tendon_solimp_fri[:, :2] = DRIVE_IMPEDANCE
 
-    @staticmethod
-    def _stiff_time_constant(m: mujoco.MjModel) -> float:
-        """The stop's and the motors' time constant: ``STIFF_TIME_CONSTANT_S``, below two physics
-        steps with MuJoCo's ``refsafe`` off (which would raise it to two steps); else two
-        physics steps."""
-        if STIFF_TIME_CONSTANT_S is None:
-            return 2.0 * m.opt.timestep
+    def _stiff_time_constant(self, m: mujoco.MjModel) -> float:
+        """The stop's and the motors' time constant: ``STIFF_TIME_CONSTANT_S`` in a world stepped
+        in the pads' substeps (a physics step of at most ``PAD_PHASE_PER_STEP`` over the pad's
+        angular frequency, 1.13 ms: at least 1.48 physics steps), with MuJoCo's ``refsafe`` off,
+        which would raise it to two steps (every other constraint's time constant is longer, or
+        direct, so unaffected). A world without pads steps at the protocol's step, which cannot
+        resolve it: there, two physics steps, MuJoCo's floor."""
+        if self.substeps == 1:
+            return max(STIFF_TIME_CONSTANT_S, 2.0 * m.opt.timestep)
         if STIFF_TIME_CONSTANT_S < 2.0 * m.opt.timestep:
             m.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_REFSAFE
         return STIFF_TIME_CONSTANT_S
@@ -832,8 +808,6 @@ class MujocoWorld:
         """MuJoCo scales the solver's tolerances by the mean diagonal inertia of the model
         (``stat.meaninertia``): the servos' reference joints, 1e8 each, are left out of it, so the
         tolerances are those of the model without them."""
-        if not SERVO_REFERENCE_JOINTS:
-            return
         count = len(self._servo_names)
         total = m.stat.meaninertia * m.nv - count * (SERVO_REFERENCE_INERTIA + 1.0)
         m.stat.meaninertia = total / (m.nv - count)

@@ -33,26 +33,23 @@ from grip_env.config import Config
 
 #: The converged integration: 16 substeps, NoSlip 20, Newton 200 iterations at 1e-10.
 FINE = {"substeps": 16, "noslip": 20, "iterations": 200, "tolerance": 1e-10}
-#: Each variant: its physical model (``stiff``: the stop's and motors' time constant in s, None
-#: for two physics steps; ``joints``: servo references as moving joints) and its integration.
+#: Each variant of the current model (``mujoco-2026.12-lean``: 4 substeps, the stop's and
+#: motors' time constant ``STIFF_TIME_CONSTANT_S``): its physical model (``stiff``, the stop's
+#: and motors' time constant in s) and its integration. The ``-drives`` rows of BENCHMARKS.md
+#: (the stop following the substep, the servos' references written every substep) were measured
+#: with switches for both at commit 09ab565.
 VARIANTS: dict[str, dict] = {
-    "drives": {"substeps": 5},
-    "stop5": {"substeps": 5, "stiff": 1 / 600},
-    "stop5-s4": {"substeps": 4, "stiff": 1 / 600},
-    "stop5-s3": {"substeps": 3, "stiff": 1 / 600},
-    "stop3": {"substeps": 5, "stiff": 1 / 360},
+    "lean": {"substeps": 4},
+    "lean-s5": {"substeps": 5},
+    "lean-s3": {"substeps": 3},
     "stop3-s4": {"substeps": 4, "stiff": 1 / 360},
     "stop3-s3": {"substeps": 3, "stiff": 1 / 360},
-    "noslip3": {"substeps": 5, "noslip": 3},
-    "noslip2": {"substeps": 5, "noslip": 2},
-    "tol6": {"substeps": 5, "tolerance": 1e-6, "noslip_tolerance": 1e-4},
-    "iter10": {"substeps": 5, "iterations": 10},
-    "joints": {"substeps": 5, "joints": True},
-    "joints-stop5-s4": {"substeps": 4, "stiff": 1 / 600, "joints": True},
-    "joints-stop5-s4-lean": {"substeps": 4, "stiff": 1 / 600, "joints": True,
-                             "tolerance": 1e-6, "noslip_tolerance": 1e-4},
+    "noslip3": {"substeps": 4, "noslip": 3},
+    "noslip2": {"substeps": 4, "noslip": 2},
+    "tol6": {"substeps": 4, "tolerance": 1e-6, "noslip_tolerance": 1e-4},
+    "iter10": {"substeps": 4, "iterations": 10},
 }
-PHYSICAL = ("stiff", "joints")
+PHYSICAL = ("stiff",)
 
 
 def reference_of(name: str) -> str:
@@ -73,8 +70,7 @@ def apply(spec: dict) -> None:
     phase = math.sqrt(sim.pad_stiffness_n_per_m / mujoco_world.PAD_REFERENCE_MASS_KG) * (
         sim.timestep)
     mujoco_world.PAD_PHASE_PER_STEP = phase / spec["substeps"] * (1 + 1e-9)
-    mujoco_world.STIFF_TIME_CONSTANT_S = spec.get("stiff")
-    mujoco_world.SERVO_REFERENCE_JOINTS = spec.get("joints", False)
+    mujoco_world.STIFF_TIME_CONSTANT_S = spec.get("stiff", STIFF)
     mujoco_world.NOSLIP_ITERATIONS = spec.get("noslip", 5)
     compile_ = ORIGINAL_COMPILE
 
@@ -92,6 +88,7 @@ def apply(spec: dict) -> None:
 
 
 ORIGINAL_COMPILE = mujoco_world.MujocoWorld._compile
+STIFF = mujoco_world.STIFF_TIME_CONSTANT_S
 
 
 def run(names: list[str], grips: int, seed: int, out: Path) -> None:
