@@ -64,10 +64,8 @@ MuJoCo's (``sim.engine: mujoco``):
   chosen by a convergence criterion written before measuring (150 trials against 16 substeps with
   generous solver and NoSlip iterations). The worm gear's stop and the motors' rows keep the time
   constant every ``-drives`` label had, 1/600 s, now fixed in seconds (``STIFF_TIME_CONSTANT_S``;
-  before, two physics steps of whatever count). The arm's servo references are heavy reference
-  joints moving at the step's speed, so a protocol step is one ``mj_step`` call. Against
-  ``-drives`` on the same 150 trials: success alike 98 %, Spearman 0.99. BENCHMARKS.md, "Cheaper
-  MuJoCo physics per label".
+  before, two physics steps of whatever count). Against ``-drives`` on the same 150 trials:
+  success alike 98 %, Spearman 0.99. BENCHMARKS.md, "Cheaper MuJoCo physics per label".
 """
 
 from __future__ import annotations

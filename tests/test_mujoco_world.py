@@ -211,8 +211,8 @@ def _servo_world_in_a_trial(obj_name: str = "rectangle") -> MujocoWorld:
 
 def test_the_arms_servos_follow_their_targets_at_the_steps_speed():
     """A servo driven 6 mm in 10 protocol steps is there at the end of the last (a critically
-    damped servo whose velocity error ignored its reference's speed would trail by twice its time
-    constant times the speed, 2.4 mm here), settles there, and holds the hand's weight at rest."""
+    damped servo without the reference's lead would trail by twice its time constant times the
+    speed, 2.4 mm here), settles there, and holds the hand's weight at rest."""
     with MujocoWorld() as mj:
         uid = mj.load_robot(HAND_URDF)
         z = 2  # the gantry's vertical axis

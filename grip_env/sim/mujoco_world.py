@@ -33,10 +33,8 @@ convex hull, with no margin to erode), and the same mounted URDF through MuJoCo'
   grip, chattered at their 400 N limit every substep and shook the object loose. Each arm joint
   is instead held by a joint equality constraint solved with the contacts, as Bullet solves its
   motors: critically damped with ``SERVO_TIME_CONSTANT_S``, its reference moving at constant
-  speed from the last target to the new one through each protocol step: a heavy reference joint
-  of its own (``SERVO_REFERENCE_INERTIA``), so the servo's velocity error is relative to the
-  reference's speed (a constant speed is tracked without lag) and a protocol step is one
-  ``mj_step`` call. Its force is not
+  speed from the last target to the new one through each protocol step, led by twice the time
+  constant times that speed (so a constant speed is tracked without lag). Its force is not
   capped; ``servo_peak_n`` and ``servos_within_limits`` record whether it ever needed more than
   the arm's limit (it does not in a trial, ``tests/test_mujoco_world.py``).
 * **The worm gear's stop** is the joint's lower limit (``joint_floors``) with the time constant
@@ -84,8 +82,8 @@ IMPRATIO = 10.0
 #: the held box with the rubber's pads, 2 let it creep out at 41 % of mu times its normal forces;
 #: 5 and 10 hold it to within 0.01 % (BENCHMARKS.md, "label model mujoco-2026.12-pads").
 NOSLIP_ITERATIONS = 5
-#: A hand motor's constraint impedance (constant), with the stiffest time constant MuJoCo allows
-#: (two physics steps): the share of a speed error its friction-loss row removes in a step; the
+#: A hand motor's constraint impedance (constant), with the time constant
+#: ``STIFF_TIME_CONSTANT_S`` (about the stiffest the physics step allows): the share of a speed error its friction-loss row removes in a step; the
 #: arm's servos' 0.95. Not a tuning knob: 0.9, 0.95 and 0.99 give the same squeeze on the held
 #: box (79.9 N) and the same outcomes on 150 cross-check trials within one trial (BENCHMARKS.md,
 #: "label model mujoco-2026.12-drives").
@@ -100,8 +98,8 @@ DRIVE_REFERENCE_INERTIA_KG_M2 = 1e4
 #: touch). The world steps the physics in substeps short enough to resolve the pad: 4 at 240 Hz
 #: (0.55 rad). Chosen by a convergence criterion written before measuring (150 trials against 16
 #: substeps with NoSlip 20 and Newton 200 at 1e-10, the same stop in seconds; BENCHMARKS.md,
-#: "Cheaper MuJoCo physics per label"): 4 substeps pass (success alike 99.3 %, Spearman 0.985,
-#: mean -1.5 g [-2.7, -0.2] within 5 %); 3 (0.74 rad) diverge or drop grips.
+#: "Cheaper MuJoCo physics per label"): 4 substeps pass (success alike 98 %, Spearman 0.983,
+#: mean -1.7 g [-2.9, -0.4] within 5 %); 3 (0.74 rad) diverge or drop grips.
 PAD_PHASE_PER_STEP = 0.6
 #: The mass whose natural frequency against a pad sets the substeps (``PAD_PHASE_PER_STEP``): the
 #: 80 g object the pad's damping was derived for (``sim.pad_damping_n_s_per_m``).
@@ -123,8 +121,7 @@ PAD_IMPEDANCE = 0.3
 #: 2 N s / T (measured on 20 trials of the standard dataset: 1,097 N at 1.7 ms, 564 N at 3.3 ms,
 #: 299 N at 6.7 ms, the last never over the limit; the outcomes alike at all three). MuJoCo solves
 #: the servos with the contacts, as Bullet solves its motors; their references move at constant
-#: speed through a step (a joint of ``SERVO_REFERENCE_INERTIA`` each), and the servo's velocity
-#: error is the arm joint's speed minus the reference's.
+#: speed through a step, and that speed is their velocity reference.
 SERVO_TIME_CONSTANT_S = 1.0 / 150.0
 #: The time constant (s, damping ratio 1) of the worm gear's stop and of the hand motors' rows.
 #: Both stand for rigid parts (a worm gear that cannot be back-driven, a stiff current-limited
@@ -136,12 +133,6 @@ SERVO_TIME_CONSTANT_S = 1.0 / 150.0
 #: and faithful there (the stop's slip 0.46 mrad, as at 5 substeps); at 3 substeps (1.2 steps)
 #: the simulation diverges (BENCHMARKS.md, "Cheaper MuJoCo physics per label").
 STIFF_TIME_CONSTANT_S = 1.0 / 600.0
-#: The inertia of an arm servo's reference joint (kg or kg m^2, as its joint): the servo's force
-#: (at most the arm's 400 N) moves it by under 4e-7 m in a protocol step (its position and speed
-#: are set again every step), and its share of the servo's inverse weight is 3e-4 (the z
-#: carriage's 3.3 kg). Heavier is worse: at 1e8 the ramp's settling was numerically disturbed
-#: (BENCHMARKS.md, "Cheaper MuJoCo physics per label").
-SERVO_REFERENCE_INERTIA = 1e4
 #: Bullet's default position gain of a position motor when none is given.
 DEFAULT_POSITION_GAIN = 0.1
 GRAVITY = (0.0, 0.0, -9.81)
@@ -206,23 +197,24 @@ class MujocoWorld:
     def step(self, steps: int = 1) -> None:
         """Advance the simulation ``steps`` fixed steps; pushes and twists last one step.
 
-        Each arm servo's reference is a joint moving at constant speed from the last target to
-        the new one through the step; the servo's velocity error is the arm joint's speed minus
-        that speed, so it tracks without lag, and a protocol step is one ``mj_step`` call of
-        ``substeps`` physics steps (one call per physics step when ``watch_servos``)."""
+        The arm's servos track a reference that moves at constant speed from the last target to
+        the new one through the step, with that speed as their velocity reference."""
         m, d = self._ready()
-        servos, peak = self._servo_rows, self.servo_peak_n
+        offsets, servos, peak = self._substep_offsets, self._servo_rows, self.servo_peak_n
+        held = self._servo_references  # a view of the servos' rows of ``m.eq_data``
+        references = np.empty((len(offsets), len(self._servo_from)))
         for _ in range(steps):
             self._set_drive_speeds(m, d)
-            d.qpos[self._servo_reference_qpos] = self._servo_from
-            d.qvel[self._servo_reference_dof] = (
-                self._servo_target - self._servo_from) / self.timestep
-            if self.watch_servos:
-                for _ in range(self.substeps):
-                    mujoco.mj_step(m, d)
+            start, speed = self._servo_from, (self._servo_target - self._servo_from) / self.timestep
+            lead = 2.0 * self._servo_time_constant * speed
+            np.multiply(offsets, speed, out=references)  # in place, the bits of
+            references += start  # start + offsets * speed + lead (its sums in its order)
+            references += lead
+            for reference in references:
+                held[:] = reference
+                mujoco.mj_step(m, d)
+                if self.watch_servos:
                     np.maximum(peak, np.abs(d.efc_force[servos]), out=peak)
-            else:
-                mujoco.mj_step(m, d, self.substeps)
             self._servo_from = self._servo_target.copy()
             if self._loaded:  # a push or twist lasts one step
                 d.xfrc_applied[:] = 0.0
@@ -375,8 +367,7 @@ class MujocoWorld:
         for name, kind, _ in joints:
             if name in ARM_JOINTS:
                 self._servo_names.append(prefix + name)
-                self._spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=prefix + name,
-                                        name2=f"servo{len(self._servo_names) - 1}")
+                self._spec.add_equality(type=mujoco.mjtEq.mjEQ_JOINT, name1=prefix + name)
             elif kind != "fixed":
                 self._drive_names.append(prefix + name)
         return uid
@@ -649,7 +640,6 @@ class MujocoWorld:
         ``solref``."""
         mujoco.mj_resetData(m, self._scratch)  # as a new MjData: the reference pose
         mujoco.mj_setConst(m, self._scratch)
-        self._discount_servo_references(m)
         self._update_pads(m)
         self._constants_stale = False
 
@@ -698,7 +688,6 @@ class MujocoWorld:
         for k, (a, b) in enumerate(pairs):
             spec.add_pair(name=f"pair{k}", geomname1=a, geomname2=b, condim=4)
         self._add_drives(spec)
-        self._add_servo_references(spec)
         self._model = m = spec.compile()
         self._data = mujoco.MjData(m)
         # views of arrays read or written every step (the model and data live as long as these)
@@ -729,18 +718,19 @@ class MujocoWorld:
         self._servo_limit = np.full(len(joints), np.inf)
         self._servo_rows = slice(0, len(joints))
         self.servo_peak_n = np.zeros(len(joints))
-        references = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, f"servo{k}")
-                      for k in range(len(joints))]
-        self._servo_reference_qpos = m.jnt_qposadr[references].astype(int)
-        self._servo_reference_dof = m.jnt_dofadr[references].astype(int)
-        self._data.qpos[self._servo_reference_qpos] = self._servo_target
         self._set_servo_stiffness(m)
 
     def _set_servo_stiffness(self, m: mujoco.MjModel) -> None:
-        """Critically damped servos of ``SERVO_TIME_CONSTANT_S``, with a constant impedance; and
-        the hand motors' rows at ``STIFF_TIME_CONSTANT_S`` with ``DRIVE_IMPEDANCE``."""
-        m.eq_solref[:] = (max(SERVO_TIME_CONSTANT_S, 2.0 * m.opt.timestep), 1.0)
+        """Critically damped servos of ``SERVO_TIME_CONSTANT_S``, with a constant impedance
+        (MuJoCo's damping over stiffness is then exactly twice the time constant, which the
+        reference's lead in ``step`` relies on); and the hand motors' rows at
+        ``STIFF_TIME_CONSTANT_S`` with ``DRIVE_IMPEDANCE``."""
+        # MuJoCo stiffens no constraint beyond two physics steps (its refsafe)
+        self._servo_time_constant = max(SERVO_TIME_CONSTANT_S, 2.0 * m.opt.timestep)
+        m.eq_solref[:] = (self._servo_time_constant, 1.0)
         m.eq_solimp[:, :2] = m.eq_solimp[:, 1:2]
+        self._substep_offsets = (np.arange(self.substeps) / self.substeps * self.timestep)[:, None]
+        self._servo_references = m.eq_data[self._servo_rows, 0]
         m.tendon_solref_fri[:] = (self._stiff_time_constant(m), 1.0)
         m.tendon_solimp_fri[:, :2] = DRIVE_IMPEDANCE
 
@@ -794,23 +784,6 @@ class MujocoWorld:
             tendon = spec.add_tendon(name=f"drive{k}", frictionloss=1.0)
             tendon.wrap_joint(name, 1.0)
             tendon.wrap_joint(f"drive{k}", -1.0)
-
-    def _add_servo_references(self, spec: mujoco.MjSpec) -> None:
-        """Each arm servo's reference joint: a hinge of ``SERVO_REFERENCE_INERTIA`` whose angle
-        stands for the arm joint's coordinate (its equality is ``q = q_ref``)."""
-        for k in range(len(self._servo_names)):
-            body = spec.worldbody.add_body(name=f"servo{k}", mass=1.0, inertia=[1.0, 1.0, 1.0])
-            body.explicitinertial = True
-            body.add_joint(name=f"servo{k}", type=mujoco.mjtJoint.mjJNT_HINGE, axis=[0, 0, 1],
-                           armature=SERVO_REFERENCE_INERTIA)
-
-    def _discount_servo_references(self, m: mujoco.MjModel) -> None:
-        """MuJoCo scales the solver's tolerances by the mean diagonal inertia of the model
-        (``stat.meaninertia``): the servos' reference joints, 1e8 each, are left out of it, so the
-        tolerances are those of the model without them."""
-        count = len(self._servo_names)
-        total = m.stat.meaninertia * m.nv - count * (SERVO_REFERENCE_INERTIA + 1.0)
-        m.stat.meaninertia = total / (m.nv - count)
 
     def _index_drives(self, m: mujoco.MjModel) -> None:
         """The hand's motors: drive ``k`` moves joint ``_drive_names[k]`` (tendon ``k``)."""
@@ -1021,4 +994,4 @@ def _urdf_root_link(path: Path) -> str:
 
 
 __all__ = ["DRIVE_IMPEDANCE", "IMPRATIO", "NOSLIP_ITERATIONS", "PAD_IMPEDANCE",
-           "SERVO_TIME_CONSTANT_S", "MujocoWorld", "pad_solref"]
+           "SERVO_TIME_CONSTANT_S", "STIFF_TIME_CONSTANT_S", "MujocoWorld", "pad_solref"]

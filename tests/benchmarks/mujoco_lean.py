@@ -36,7 +36,7 @@ FINE = {"substeps": 16, "noslip": 20, "iterations": 200, "tolerance": 1e-10}
 #: Each variant of the current model (``mujoco-2026.12-lean``: 4 substeps, the stop's and
 #: motors' time constant ``STIFF_TIME_CONSTANT_S``): its physical model (``stiff``, the stop's
 #: and motors' time constant in s) and its integration. The ``-drives`` rows of BENCHMARKS.md
-#: (the stop following the substep, the servos' references written every substep) were measured
+#: (the stop following the substep) and the servos' references as moving joints were measured
 #: with switches for both at commit 09ab565.
 VARIANTS: dict[str, dict] = {
     "lean": {"substeps": 4},
