@@ -83,10 +83,10 @@ IMPRATIO = 10.0
 #: 5 and 10 hold it to within 0.01 % (BENCHMARKS.md, "label model mujoco-2026.12-pads").
 NOSLIP_ITERATIONS = 5
 #: A hand motor's constraint impedance (constant), with the time constant
-#: ``STIFF_TIME_CONSTANT_S`` (about the stiffest the physics step allows): the share of a speed error its friction-loss row removes in a step; the
-#: arm's servos' 0.95. Not a tuning knob: 0.9, 0.95 and 0.99 give the same squeeze on the held
-#: box (79.9 N) and the same outcomes on 150 cross-check trials within one trial (BENCHMARKS.md,
-#: "label model mujoco-2026.12-drives").
+#: ``STIFF_TIME_CONSTANT_S`` (about the stiffest the physics step allows): the share of a speed
+#: error its friction-loss row removes in a step; the arm's servos' 0.95. Not a tuning knob: 0.9,
+#: 0.95 and 0.99 give the same squeeze on the held box (79.9 N) and the same outcomes on 150
+#: cross-check trials within one trial (BENCHMARKS.md, "label model mujoco-2026.12-drives").
 DRIVE_IMPEDANCE = 0.95
 #: The inertia (kg m^2) of a motor's reference joint: so heavy that the motor's torque (at most
 #: a few N·m) changes its speed by under 1e-6 rad/s in a protocol step, and so light against the
@@ -743,7 +743,7 @@ class MujocoWorld:
         resolve it: there, two physics steps, MuJoCo's floor."""
         if self.substeps == 1:
             return max(STIFF_TIME_CONSTANT_S, 2.0 * m.opt.timestep)
-        if STIFF_TIME_CONSTANT_S < 2.0 * m.opt.timestep:
+        if 2.0 * m.opt.timestep > STIFF_TIME_CONSTANT_S:
             m.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_REFSAFE
         return STIFF_TIME_CONSTANT_S
 

@@ -48,6 +48,7 @@ VARIANTS: dict[str, dict] = {
     "noslip2": {"substeps": 4, "noslip": 2},
     "tol6": {"substeps": 4, "tolerance": 1e-6, "noslip_tolerance": 1e-4},
     "iter10": {"substeps": 4, "iterations": 10},
+    "fine24": {**FINE, "substeps": 24},  # is the reference itself converged?
 }
 PHYSICAL = ("stiff",)
 
@@ -92,8 +93,8 @@ STIFF = mujoco_world.STIFF_TIME_CONSTANT_S
 
 
 def run(names: list[str], grips: int, seed: int, out: Path) -> None:
-    from tests.benchmarks.mujoco_cost import work
     from grip_env.sim import run_trial_outcomes
+    from tests.benchmarks.mujoco_cost import work
 
     jobs = work(grips, seed)
     out.mkdir(parents=True, exist_ok=True)
