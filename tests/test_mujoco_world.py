@@ -355,7 +355,7 @@ def test_a_hand_motor_holds_its_speed_and_presses_exactly_its_torque_when_stalle
     joint2, joint3 = FLEX_JOINTS[0]
     with MujocoWorld() as mj:
         uid = mj.load_robot(HAND_URDF)
-        mj.set_contact_compliance(uid, joint3, 22_600.0, 8.5)  # a trial's 5 substeps
+        mj.set_contact_compliance(uid, joint3, 22_600.0, 8.5)  # a trial's 4 substeps
         mj.velocity_motors(uid, [joint2], [0.5], [1.2])
         mj.position_motors(uid, [joint3], [0.2], [1.0], 0.5)
         mj.step()
@@ -374,6 +374,31 @@ def test_a_hand_motor_holds_its_speed_and_presses_exactly_its_torque_when_stalle
         assert max(np.abs(torques)) <= 1.2
         assert torques[-1] == pytest.approx(1.2, rel=1e-9)  # stalled: exactly its torque
         assert mj.joint_states(uid, [joint2])[1][0] == pytest.approx(0.0, abs=1e-3)
+
+
+def test_the_stop_and_the_motors_keep_their_time_constant_in_seconds_whatever_the_substeps():
+    """With the pads' substeps (4 at 240 Hz) the worm gear's stop and the motors' rows have the
+    time constant 1/600 s, below MuJoCo's two-step floor (``refsafe`` off for it); without pads
+    (one 4.17 ms step, which cannot resolve it) they fall back to two physics steps."""
+    import mujoco
+
+    from grip_env.sim.hand import FLEX_JOINTS
+    from grip_env.sim.mujoco_world import STIFF_TIME_CONSTANT_S
+
+    joint2, joint3 = FLEX_JOINTS[0]
+    for pads, substeps, expected in ((True, 4, STIFF_TIME_CONSTANT_S), (False, 1, 2.0 / 240.0)):
+        with MujocoWorld() as mj:
+            uid = mj.load_robot(HAND_URDF)
+            if pads:
+                mj.set_contact_compliance(uid, joint3, 22_600.0, 8.5)
+            mj.joint_floors(uid, [joint2], [0.0], [1.0], [6.0])
+            m, _ = mj._compiled()
+            assert mj.substeps == substeps
+            stop = m.jnt_solref[mj._joint_id(uid, joint2)]
+            assert stop[0] == pytest.approx(expected, rel=1e-12) and stop[1] == 1.0
+            assert m.tendon_solref_fri[:, 0] == pytest.approx(expected, rel=1e-12)
+            refsafe_off = bool(m.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_REFSAFE)
+            assert refsafe_off == pads  # 1/600 s is 1.6 physics steps of 4 substeps
 
 
 @pytest.mark.slow

@@ -37,8 +37,8 @@ convex hull, with no margin to erode), and the same mounted URDF through MuJoCo'
   constant times that speed (so a constant speed is tracked without lag). Its force is not
   capped; ``servo_peak_n`` and ``servos_within_limits`` record whether it ever needed more than
   the arm's limit (it does not in a trial, ``tests/test_mujoco_world.py``).
-* **The worm gear's stop** is the joint's lower limit (``joint_floors``) with a reference time of
-  two timesteps, the stiffest MuJoCo recommends. MuJoCo limits have no force cap: the stop holds
+* **The worm gear's stop** is the joint's lower limit (``joint_floors``) with the time constant
+  ``STIFF_TIME_CONSTANT_S``, fixed in seconds. MuJoCo limits have no force cap: the stop holds
   whatever load (Bullet's holds ``holds`` N·m).
 * **Compliant pads.** A link made compliant (``set_contact_compliance``) contacts through a
   spring of the given stiffness and a damper of the given damping, in N/m and N s/m as PyBullet's
@@ -82,11 +82,11 @@ IMPRATIO = 10.0
 #: the held box with the rubber's pads, 2 let it creep out at 41 % of mu times its normal forces;
 #: 5 and 10 hold it to within 0.01 % (BENCHMARKS.md, "label model mujoco-2026.12-pads").
 NOSLIP_ITERATIONS = 5
-#: A hand motor's constraint impedance (constant), with the stiffest time constant MuJoCo allows
-#: (two physics steps): the share of a speed error its friction-loss row removes in a step; the
-#: arm's servos' 0.95. Not a tuning knob: 0.9, 0.95 and 0.99 give the same squeeze on the held
-#: box (79.9 N) and the same outcomes on 150 cross-check trials within one trial (BENCHMARKS.md,
-#: "label model mujoco-2026.12-drives").
+#: A hand motor's constraint impedance (constant), with the time constant
+#: ``STIFF_TIME_CONSTANT_S`` (about the stiffest the physics step allows): the share of a speed
+#: error its friction-loss row removes in a step; the arm's servos' 0.95. Not a tuning knob: 0.9,
+#: 0.95 and 0.99 give the same squeeze on the held box (79.9 N) and the same outcomes on 150
+#: cross-check trials within one trial (BENCHMARKS.md, "label model mujoco-2026.12-drives").
 DRIVE_IMPEDANCE = 0.95
 #: The inertia (kg m^2) of a motor's reference joint: so heavy that the motor's torque (at most
 #: a few N·m) changes its speed by under 1e-6 rad/s in a protocol step, and so light against the
@@ -95,10 +95,12 @@ DRIVE_REFERENCE_INERTIA_KG_M2 = 1e4
 #: The largest phase (rad) a pad's spring may turn in one physics step: MuJoCo integrates a
 #: contact's spring semi-implicitly, and the pad against its 80 g object (85 Hz) at the
 #: protocol's 240 Hz turns 2.2 rad a step and diverges (measured: the object flew off at the first
-#: touch). The world steps the physics in substeps short enough to resolve the pad: 5 at 240 Hz.
-#: Outcomes against the substep count (100 grips against 16 substeps; BENCHMARKS.md): 3 drop
-#: grips, 4 to 8 agree in 97-99 % of trials with the mean 2-3.5 g low, 12 on are converged.
-PAD_PHASE_PER_STEP = 0.5
+#: touch). The world steps the physics in substeps short enough to resolve the pad: 4 at 240 Hz
+#: (0.55 rad). Chosen by a convergence criterion written before measuring (150 trials against 16
+#: substeps with NoSlip 20 and Newton 200 at 1e-10, the same stop in seconds; BENCHMARKS.md,
+#: "Cheaper MuJoCo physics per label"): 4 substeps pass (success alike 98 %, Spearman 0.983,
+#: mean -1.7 g [-2.9, -0.4] within 5 %); 3 (0.74 rad) diverge or drop grips.
+PAD_PHASE_PER_STEP = 0.6
 #: The mass whose natural frequency against a pad sets the substeps (``PAD_PHASE_PER_STEP``): the
 #: 80 g object the pad's damping was derived for (``sim.pad_damping_n_s_per_m``).
 PAD_REFERENCE_MASS_KG = 0.08
@@ -121,6 +123,16 @@ PAD_IMPEDANCE = 0.3
 #: the servos with the contacts, as Bullet solves its motors; their references move at constant
 #: speed through a step, and that speed is their velocity reference.
 SERVO_TIME_CONSTANT_S = 1.0 / 150.0
+#: The time constant (s, damping ratio 1) of the worm gear's stop and of the hand motors' rows.
+#: Both stand for rigid parts (a worm gear that cannot be back-driven, a stiff current-limited
+#: velocity loop), so they are as stiff as the physics allows; but a stiffness is a property of
+#: the hand, not of the integration, so it is fixed in seconds: 1/600 s, the two physics steps of
+#: 5 substeps at 240 Hz with which every ``mujoco-2026.12-drives`` label was made. Before, it was
+#: two physics steps of whatever substep count, so each count was another stop. At 4 substeps it
+#: is 1.6 physics steps, below MuJoCo's ``refsafe`` (which is turned off for it): measured stable
+#: and faithful there (the stop's slip 0.46 mrad, as at 5 substeps); at 3 substeps (1.2 steps)
+#: the simulation diverges (BENCHMARKS.md, "Cheaper MuJoCo physics per label").
+STIFF_TIME_CONSTANT_S = 1.0 / 600.0
 #: Multi-point contact between two convex geoms (MuJoCo's ``multiccd``; on by default since
 #: MuJoCo 3.3, where the flag became ``mjDSBL_MULTICCD``): a face pressed flat on a face gets up to
 #: four contact points around their overlap, as Bullet's manifold does, instead of one. Kept on,
@@ -173,7 +185,7 @@ class MujocoWorld:
         # joint_floors' calls whose stops carry the current timestep's solref (rewritten after
         # the timestep changes)
         self._floor_solref_set: set[tuple[int, tuple[int, ...]]] = set()
-        self._floor_solref_timestep = 0.0
+        self._floor_solref_value = 0.0  # the stops' time constant last written
         self._quat = np.empty(4)  # scratch for per-step orientation reads
         self._stale = False
         self._loaded = False  # a push or twist is applied (``xfrc_applied``)
@@ -471,11 +483,12 @@ class MujocoWorld:
         rows = self._joint_rows[key]
         self._jnt_range[rows, 0] = lowers
         self._jnt_range[rows, 1] = uppers
-        if m.opt.timestep != self._floor_solref_timestep:
+        stiff = self._stiff_time_constant(m)
+        if stiff != self._floor_solref_value:
             self._floor_solref_set.clear()
-            self._floor_solref_timestep = m.opt.timestep
-        if key not in self._floor_solref_set:  # the same value at every call of a timestep
-            self._jnt_solref[rows] = (2.0 * m.opt.timestep, 1.0)
+            self._floor_solref_value = stiff
+        if key not in self._floor_solref_set:  # the same value at every call while it holds
+            self._jnt_solref[rows] = (stiff, 1.0)
             self._floor_solref_set.add(key)
 
     def joint_limits(self, body: int, joint: int) -> tuple[float, float]:
@@ -746,16 +759,29 @@ class MujocoWorld:
     def _set_servo_stiffness(self, m: mujoco.MjModel) -> None:
         """Critically damped servos of ``SERVO_TIME_CONSTANT_S``, with a constant impedance
         (MuJoCo's damping over stiffness is then exactly twice the time constant, which the
-        reference's lead in ``step`` relies on); and the hand motors' rows at the stiffest time
-        constant, two physics steps, with ``DRIVE_IMPEDANCE``."""
+        reference's lead in ``step`` relies on); and the hand motors' rows at
+        ``STIFF_TIME_CONSTANT_S`` with ``DRIVE_IMPEDANCE``."""
         # MuJoCo stiffens no constraint beyond two physics steps (its refsafe)
         self._servo_time_constant = max(SERVO_TIME_CONSTANT_S, 2.0 * m.opt.timestep)
         m.eq_solref[:] = (self._servo_time_constant, 1.0)
         m.eq_solimp[:, :2] = m.eq_solimp[:, 1:2]
         self._substep_offsets = (np.arange(self.substeps) / self.substeps * self.timestep)[:, None]
         self._servo_references = m.eq_data[self._servo_rows, 0]
-        m.tendon_solref_fri[:] = (2.0 * m.opt.timestep, 1.0)
+        m.tendon_solref_fri[:] = (self._stiff_time_constant(m), 1.0)
         m.tendon_solimp_fri[:, :2] = DRIVE_IMPEDANCE
+
+    def _stiff_time_constant(self, m: mujoco.MjModel) -> float:
+        """The stop's and the motors' time constant: ``STIFF_TIME_CONSTANT_S`` in a world stepped
+        in the pads' substeps (a physics step of at most ``PAD_PHASE_PER_STEP`` over the pad's
+        angular frequency, 1.13 ms: at least 1.48 physics steps), with MuJoCo's ``refsafe`` off,
+        which would raise it to two steps (every other constraint's time constant is longer, or
+        direct, so unaffected). A world without pads steps at the protocol's step, which cannot
+        resolve it: there, two physics steps, MuJoCo's floor."""
+        if self.substeps == 1:
+            return max(STIFF_TIME_CONSTANT_S, 2.0 * m.opt.timestep)
+        if 2.0 * m.opt.timestep > STIFF_TIME_CONSTANT_S:
+            m.opt.disableflags |= mujoco.mjtDisableBit.mjDSBL_REFSAFE
+        return STIFF_TIME_CONSTANT_S
 
     def _index_bodies(self, m: mujoco.MjModel) -> None:
         self._body_ids: list[list[int]] = []
@@ -1024,4 +1050,5 @@ def _urdf_root_link(path: Path) -> str:
 
 
 __all__ = ["DRIVE_IMPEDANCE", "IMPRATIO", "MULTI_CONTACT", "NOSLIP_ITERATIONS",
-           "PAD_IMPEDANCE", "SERVO_TIME_CONSTANT_S", "MujocoWorld", "pad_solref"]
+           "PAD_IMPEDANCE", "SERVO_TIME_CONSTANT_S", "STIFF_TIME_CONSTANT_S", "MujocoWorld",
+           "pad_solref"]
