@@ -42,6 +42,8 @@ def test_every_grip_runs_in_both_engines_and_pybullet_reproduces_its_labels(chec
     assert found.reproduced == overall.grips  # the own engine's run is the recorded labels
     assert set(found.families) == {"named"}
     assert found.families["named"].grips == 8
+    assert set(found.by_grips) == {"4 grips"}  # both objects keep TINY's 4 grips
+    assert found.by_grips["4 grips"].agreement == overall.agreement  # the same objects
     for name in ("agreement", "kappa", "within", "pooled", "top1_own", "top1_other",
                  "retest_own", "retest_other"):
         value, (low, high) = getattr(overall, name), getattr(overall, f"{name}_interval")
@@ -148,6 +150,7 @@ def test_the_card_and_the_study_report_show_a_recorded_crosscheck(tiny, checked,
     overall = found.overall
     assert f"| all | 2 | {overall.agreement:.1%} [" in card
     assert f"| named | 2 | {found.families['named'].agreement:.1%} [" in card
+    assert f"| 4 grips | 2 | {found.by_grips['4 grips'].agreement:.1%} [" in card
     assert "| mujoco | 48 |" in card and "core-s a trustworthy label" in card
     study = tmp_path / "study"
     study.mkdir()

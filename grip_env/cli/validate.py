@@ -128,8 +128,8 @@ def _crosscheck(directory: Path, objects: int, seed: int, workers: int,
         parts = None if report is None else crosscheck_parts(report)
         found = crosscheck(directory, objects, seed=seed, workers=workers, parts=parts)
     typer.echo(found.summary())
-    for family, figures in found.families.items():
-        typer.echo(f"  {family} ({figures.objects} objects): success agree "
+    for group, figures in [*found.families.items(), *found.by_grips.items()]:
+        typer.echo(f"  {group} ({figures.objects} objects): success agree "
                    f"{figures.agreement:.1%}, kappa {figures.kappa:.2f}, within "
                    f"{figures.within:.2f} (retests {figures.retest_own:.2f}, "
                    f"{figures.retest_other:.2f}), pooled {figures.pooled:.2f}, top-1 "

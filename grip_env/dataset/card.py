@@ -273,8 +273,8 @@ def _figure(group: dict[str, Any], name: str, percent: bool = False) -> str:
 
 def crosscheck_tables(found: dict[str, Any]) -> tuple[str, pd.DataFrame, pd.DataFrame]:
     """A ``validate --crosscheck`` result (its report's ``crosscheck``) as what it is, the
-    agreement overall and by family with each engine's retest beside it, and the engines'
-    costs (tables of formatted text)."""
+    agreement overall, by family and by grips an object, with each engine's retest beside it,
+    and the engines' costs (tables of formatted text)."""
     a, b = found["engine"], found["other"]
     intro = (f"`grip-env validate DIR --crosscheck {found.get('objects', '')} --seed "
              f"{found['seed']}`: every recorded grip of the sampled objects simulated again in "
@@ -282,7 +282,8 @@ def crosscheck_tables(found: dict[str, Any]) -> tuple[str, pd.DataFrame, pd.Data
              f"{found['overall']['grips']} grips reproduced their recorded labels in {a}). "
              "Intervals: 95 % bootstrap over objects. Each engine's within-object retest (its "
              "own labels under new draws) is the ceiling of the agreement between them.")
-    groups = [("all", found["overall"]), *sorted(found.get("families", {}).items())]
+    groups = [("all", found["overall"]), *sorted(found.get("families", {}).items()),
+              *found.get("by_grips", {}).items()]
     agreement = pd.DataFrame([{
         "objects": name, "n": str(g["objects"]), "success alike": _figure(g, "agreement", True),
         "kappa": _figure(g, "kappa"), "within-object Spearman": _figure(g, "within"),

@@ -102,6 +102,11 @@ class CrossCheck:
     overall: Agreement
     families: dict[str, Agreement] = field(default_factory=dict)
     cost: list[EngineCost] = field(default_factory=list)
+    #: The objects that kept every grip the dataset allows (``dataset.max_grips_per_object``)
+    #: against those that had fewer candidates: a within-object Spearman over a few grips that
+    #: differ by a shift or a turn ranks near-equal grips in both engines (BENCHMARKS.md, "Mesh
+    #: objects in the cross-check").
+    by_grips: dict[str, Agreement] = field(default_factory=dict)
 
     def summary(self) -> str:
         o = self.overall
@@ -399,8 +404,20 @@ def _figures(checks: list[_ObjectCheck], runs: list[_Runs], engine: str,
     families = {name: _agreement([rows[i] for i in members], sum(grips[i] for i in members),
                                  _group_stream(seed, f"family {name}"))
                 for name, members in sorted(groups.items())}  # fmt: skip
+    by_grips = {name: _agreement([rows[i] for i in members], sum(grips[i] for i in members),
+                                 _group_stream(seed, name))
+                for name, members in _by_grip_count(checks, grips).items() if members}
     reproduced = sum(_reproduced(r.draws[engine], c) for r, c in zip(runs, checks, strict=True))
     trials = checks[0].task.config.dataset.trials if checks else 0
     cost = _costs(runs, (engine, other), {engine: overall.retest_own,
                                           other: overall.retest_other}, trials)
-    return CrossCheck(engine, other, seed, reproduced, overall, families, cost)
+    return CrossCheck(engine, other, seed, reproduced, overall, families, cost, by_grips)
+
+
+def _by_grip_count(checks: list[_ObjectCheck], grips: list[int]) -> dict[str, list[int]]:
+    """The objects (indices) that kept the dataset's most grips an object, and the rest."""
+    if not checks:
+        return {}
+    cap = checks[0].task.config.dataset.max_grips_per_object
+    return {f"{cap} grips": [i for i, n in enumerate(grips) if n >= cap],
+            f"under {cap} grips": [i for i, n in enumerate(grips) if n < cap]}
