@@ -164,3 +164,16 @@ def test_the_card_and_the_study_report_show_a_recorded_crosscheck(tiny, checked,
     assert report.blocks[0].content == "Agreement between engines"
     assert any("reproduced their recorded labels" in str(b.content) for b in report.blocks)
     assert [b.kind for b in report.blocks] == ["heading", "text", "table", "table"]
+
+
+def test_the_shipped_crosscheck_compares_this_code_s_label_models():
+    """A change of either engine's label model leaves the shipped cross-check stale: re-run
+    ``grip-env validate standard --crosscheck 40 --report ...`` and ship its report."""
+    from grip_env.dataset.card import recorded_crosscheck
+    from grip_env.datasets import standard_path
+    from grip_env.label_model import label_model_for
+
+    found = recorded_crosscheck(standard_path())
+    assert found is not None
+    assert found["label_models"] == {e: label_model_for(e) for e in ("pybullet", "mujoco")}
+    assert found["objects"] == 40 and found["reproduced"] == found["overall"]["grips"]

@@ -279,9 +279,12 @@ def crosscheck_tables(found: dict[str, Any]) -> tuple[str, pd.DataFrame, pd.Data
     intro = (f"`grip-env validate DIR --crosscheck {found.get('objects', '')} --seed "
              f"{found['seed']}`: every recorded grip of the sampled objects simulated again in "
              f"{a} and in {b} (same grips, draws and protocol; {found['reproduced']} of "
-             f"{found['overall']['grips']} grips reproduced their recorded labels in {a}). "
+             f"{found['overall']['grips']} grips reproduced their recorded labels in {a}"
+             f"{_models(found)}). "
              "Intervals: 95 % bootstrap over objects. Each engine's within-object retest (its "
-             "own labels under new draws) is the ceiling of the agreement between them.")
+             "own labels under new draws) is the ceiling of the agreement between them. Costs: "
+             "the CPU of the run that simulated each engine's trials (a run that resumes "
+             "another reads them back), so two engines' rows may come from different loads.")
     groups = [("all", found["overall"]), *sorted(found.get("families", {}).items()),
               *found.get("by_grips", {}).items()]
     agreement = pd.DataFrame([{
@@ -297,6 +300,11 @@ def crosscheck_tables(found: dict[str, Any]) -> tuple[str, pd.DataFrame, pd.Data
         "core-s a trustworthy label": f"{c['core_seconds_per_label']:.2f}"}
         for c in found.get("cost", [])])
     return intro, agreement, cost
+
+
+def _models(found: dict[str, Any]) -> str:
+    models = found.get("label_models") or {}
+    return ("; label models " + " and ".join(f"`{models[e]}`" for e in models)) if models else ""
 
 
 def crosscheck_markdown(found: dict[str, Any]) -> str:

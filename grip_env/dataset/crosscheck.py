@@ -107,6 +107,9 @@ class CrossCheck:
     #: differ by a shift or a turn ranks near-equal grips in both engines (BENCHMARKS.md, "Mesh
     #: objects in the cross-check").
     by_grips: dict[str, Agreement] = field(default_factory=dict)
+    #: Each engine's label model, as this code made them (a recorded cross-check of other
+    #: models is stale: ``tests/test_crosscheck.py`` checks the shipped one).
+    label_models: dict[str, str] = field(default_factory=dict)
 
     def summary(self) -> str:
         o = self.overall
@@ -411,7 +414,8 @@ def _figures(checks: list[_ObjectCheck], runs: list[_Runs], engine: str,
     trials = checks[0].task.config.dataset.trials if checks else 0
     cost = _costs(runs, (engine, other), {engine: overall.retest_own,
                                           other: overall.retest_other}, trials)
-    return CrossCheck(engine, other, seed, reproduced, overall, families, cost, by_grips)
+    return CrossCheck(engine, other, seed, reproduced, overall, families, cost, by_grips,
+                      {e: label_model_for(e) for e in (engine, other)})
 
 
 def _by_grip_count(checks: list[_ObjectCheck], grips: list[int]) -> dict[str, list[int]]:
