@@ -97,13 +97,7 @@ def loads(rows: list[tuple]) -> np.ndarray:
 
 def run_to_hold(check, grip: int, trial: int, engine: str) -> dict[str, float]:
     """Run one trial to the end of its hold in ``engine``, recording loads after each step."""
-    config = check.task.config.override(sim={"engine": engine})
-    grips = check.recorded.assign(object_id=check.task.object_id).reset_index(drop=True)
-    rows = grips.iloc[[grip]]
-    (plan,) = grip_plans(rows)
-    ((noise,),) = trial_noises(config, config.dataset.seed, object_key(check.task.obj, rows),
-                               grip_keys(rows), range(trial, trial + 1))
-    read = mujoco_contacts if engine == "mujoco" else pybullet_contacts
+    config, plan, noise, read = trial_setup(check, grip, trial, engine)
     steps: list[np.ndarray] = []
     turns: list[float] = []
     found: dict[str, float] = {}
@@ -177,14 +171,31 @@ def onset(steps: list[np.ndarray], at: float = 0.98) -> dict[str, float]:
             "onset_twist": np.nan, "onset_box": np.nan}
 
 
+def kept_runs(parts: Path, objects: int, seed: int):
+    """(check, runs) of every object of the seeded cross-check sample whose outcomes ``parts``
+    keeps (a ``validate --crosscheck`` run's parts folder)."""
+    for check in _retest_sample(standard_path(), objects, seed):
+        file = parts / f"{check.task.index:05d}.json"
+        if file.is_file():
+            yield check, _from_json(json.loads(file.read_text(encoding="utf-8")))
+
+
+def trial_setup(check, grip: int, trial: int, engine: str):
+    """(config, plan, noise, contact reader) of trial ``trial`` of grip ``grip`` in ``engine``:
+    the recorded grip and its recorded draw."""
+    config = check.task.config.override(sim={"engine": engine})
+    grips = check.recorded.assign(object_id=check.task.object_id).reset_index(drop=True)
+    rows = grips.iloc[[grip]]
+    (plan,) = grip_plans(rows)
+    ((noise,),) = trial_noises(config, config.dataset.seed, object_key(check.task.obj, rows),
+                               grip_keys(rows), range(trial, trial + 1))
+    return config, plan, noise, (mujoco_contacts if engine == "mujoco" else pybullet_contacts)
+
+
 def sample(parts: Path, objects: int, seed: int, drops: int, controls: int):
     """Seeded draws of (check, grip, trial, kind) from the kept outcomes."""
     found = {"drop": [], "control": []}
-    for check in _retest_sample(standard_path(), objects, seed):
-        file = parts / f"{check.task.index:05d}.json"
-        if not file.is_file():
-            continue
-        runs = _from_json(json.loads(file.read_text(encoding="utf-8")))
+    for check, runs in kept_runs(parts, objects, seed):
         a, b = (runs.draws[e] for e in ENGINES)
         ra, rb = a["robustness"].to_numpy(float), b["robustness"].to_numpy(float)
         for kind, mask in (("drop", (ra > 0) & (rb == 0)), ("control", (ra > 0) & (rb > 0))):

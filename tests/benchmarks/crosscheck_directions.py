@@ -17,7 +17,6 @@ from __future__ import annotations
 import grip_env  # noqa: F401  # isort: skip
 
 import argparse
-import json
 from collections import Counter
 from pathlib import Path
 
@@ -25,10 +24,8 @@ import numpy as np
 
 import grip_env.sim.disturbance as disturbance
 import grip_env.sim.trial as trial_module
-from grip_env.dataset.crosscheck import _from_json
-from grip_env.dataset.resimulation import _retest_sample
-from grip_env.datasets import standard_path
 from grip_env.sim import run_trial_outcomes
+from tests.benchmarks.crosscheck_contact_loads import kept_runs
 
 ENGINES = ("pybullet", "mujoco")
 
@@ -58,11 +55,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     parted = []
-    for check in _retest_sample(standard_path(), args.objects, args.seed):
-        file = args.parts / f"{check.task.index:05d}.json"
-        if not file.is_file():
-            continue
-        runs = _from_json(json.loads(file.read_text(encoding="utf-8")))
+    for check, runs in kept_runs(args.parts, args.objects, args.seed):
         a, b = (runs.draws[e] for e in ENGINES)
         apart = a["success"].to_numpy() != b["success"].to_numpy()
         parted += [(check, int(g), int(t)) for g, t in zip(a["grip"][apart], a["trial"][apart],

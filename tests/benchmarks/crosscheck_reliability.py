@@ -19,15 +19,13 @@ from __future__ import annotations
 import grip_env  # noqa: F401  # isort: skip
 
 import argparse
-import json
 from pathlib import Path
 
 import numpy as np
 
-from grip_env.dataset.crosscheck import _from_json, _means, _spearman
-from grip_env.dataset.resimulation import _retest_sample
-from grip_env.datasets import standard_path
+from grip_env.dataset.crosscheck import _means, _spearman
 from grip_env.objects.family import object_family
+from tests.benchmarks.crosscheck_contact_loads import kept_runs
 
 ENGINES = ("pybullet", "mujoco")
 
@@ -55,11 +53,7 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
     rows = []
-    for check in _retest_sample(standard_path(), args.objects, args.seed):
-        file = args.parts / f"{check.task.index:05d}.json"
-        if not file.is_file():
-            continue
-        runs = _from_json(json.loads(file.read_text(encoding="utf-8")))
+    for check, runs in kept_runs(args.parts, args.objects, args.seed):
         row = {"object": check.task.object_id, "family": object_family(check.task.obj),
                "within": _spearman(*(_means(runs.draws[e]) for e in ENGINES))}
         for engine in ENGINES:

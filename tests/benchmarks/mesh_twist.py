@@ -28,11 +28,9 @@ from grip_env.dataset.resimulation import _retest_sample
 from grip_env.datasets import standard_path
 from grip_env.sim import pose
 from grip_env.sim.disturbance import GRAVITY
-from grip_env.sim.execution import grip_keys, object_key
 from grip_env.sim.hand import SPREAD_JOINTS
-from grip_env.sim.trial import TrialScene, grip_plans
-from grip_env.sim.uncertainty import trial_noises
-from tests.benchmarks.crosscheck_contact_loads import mujoco_contacts, pybullet_contacts
+from grip_env.sim.trial import TrialScene
+from tests.benchmarks.crosscheck_contact_loads import trial_setup
 
 ENGINES = ("pybullet", "mujoco")
 
@@ -80,13 +78,7 @@ def turn_axis(reference, current) -> str:
 def twisted(check, grip: int, trial: int, engine: str, levels: list[float],
             steps: int | None = None) -> list[str]:
     """Lines of the table for one engine: per level and sign, the motion and contact loads."""
-    config = check.task.config.override(sim={"engine": engine})
-    grips = check.recorded.assign(object_id=check.task.object_id).reset_index(drop=True)
-    rows = grips.iloc[[grip]]
-    (plan,) = grip_plans(rows)
-    ((noise,),) = trial_noises(config, config.dataset.seed, object_key(check.task.obj, rows),
-                               grip_keys(rows), range(trial, trial + 1))
-    read = mujoco_contacts if engine == "mujoco" else pybullet_contacts
+    config, plan, noise, read = trial_setup(check, grip, trial, engine)
     lines: list[str] = []
     scenes: list[TrialScene] = []
 
