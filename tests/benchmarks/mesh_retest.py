@@ -4,6 +4,8 @@
     python -m tests.benchmarks.mesh_retest \
         --parts /work/runs/crosscheck/standard40-drives.crosscheck --family mesh \
         --set MULTI_CONTACT=0
+    python -m tests.benchmarks.mesh_retest --parts ... --family procedural \
+        --sim ramp_ratio=1.4142135623730951
 
 Sets each ``--set NAME=VALUE`` constant of ``grip_env.sim.mujoco_world`` (a float; 0/1 for a
 flag), runs every recorded grip of the family's objects of the cross-check's sample in MuJoCo,
@@ -11,7 +13,8 @@ trials 0..T-1 and T..2T-1 as the cross-check does (``crosscheck._simulate``), an
 object and on average: MuJoCo's own within-object retest, the within-object Spearman against
 PyBullet's kept outcomes (trials 0..T-1), per-trial success agreement, whether MuJoCo's outcomes
 are the kept ones (same model: bit for bit), and the CPU seconds a trial. Without ``--set`` it
-re-runs the committed model (a check that the kept outcomes are reproduced).
+re-runs the committed model (a check that the kept outcomes are reproduced). ``--sim
+NAME=VALUE`` overrides a ``sim`` setting of the dataset's config instead (a float).
 """
 
 from __future__ import annotations
@@ -41,7 +44,9 @@ def main() -> None:
     parser.add_argument("--family", default="mesh")
     parser.add_argument("--only", nargs="*", default=None, help="object ids (default: all)")
     parser.add_argument("--set", nargs="*", default=[], metavar="NAME=VALUE")
+    parser.add_argument("--sim", nargs="*", default=[], metavar="NAME=VALUE")
     args = parser.parse_args()
+    sim = {name: float(value) for name, value in (item.split("=") for item in args.sim)}
     for item in args.set:
         name, value = item.split("=")
         if not hasattr(mujoco_world, name):
@@ -49,7 +54,7 @@ def main() -> None:
         old = getattr(mujoco_world, name)
         setattr(mujoco_world, name, type(old)(float(value)) if not isinstance(old, bool)
                 else bool(float(value)))
-    print(f"settings: {args.set or 'committed'}")
+    print(f"settings: {args.set + args.sim or 'committed'}")
     print("| object | grips | retest MuJoCo | kept retest | within vs PyBullet | kept within "
           "| success agree | kept agree | same as kept | ms a trial |")
     print("| --- " * 10 + "|")
@@ -60,7 +65,7 @@ def main() -> None:
             continue
         kept = _from_json(json.loads((args.parts / f"{check.task.index:05d}.json").read_text(
             encoding="utf-8")))
-        config = check.task.config.override(sim={"engine": "mujoco"})
+        config = check.task.config.override(sim={"engine": "mujoco", **sim})
         grips = check.recorded.assign(object_id=check.task.object_id).reset_index(drop=True)
         trials, seed = config.dataset.trials, config.dataset.seed
         started = time.process_time()
