@@ -1,0 +1,110 @@
+"""A candidate label model for both engines on the cross-check's objects (run by hand; issue 45).
+
+    python -m tests.benchmarks.candidate_model run --engine pybullet --objects 20 \
+        --sim ramp_ratio=1.4142135623730951 pad_torsion_mm=2.0 --out DIR
+    python -m tests.benchmarks.candidate_model run --engine mujoco ...   # the same, beside it
+    python -m tests.benchmarks.candidate_model summary --out DIR --parts KEPT.crosscheck
+
+``run`` simulates every recorded grip of the first ``--objects`` objects of the cross-check's
+sample (those ``KEPT`` holds, in the sample's order) in one engine with ``sim`` settings
+overridden, trials 0..T-1 and T..2T-1 as the cross-check does, and writes each object's outcomes
+and CPU seconds to ``DIR``. ``summary`` prints, for the candidate and for the committed models'
+kept outcomes on the same objects: each engine's within-object retest, the within-object
+Spearman and per-trial success agreement between the engines, and each engine's CPU ms a trial.
+"""
+
+from __future__ import annotations
+
+# grip_env before numpy: numpy held at portable kernels, as the dataset was made
+import grip_env  # noqa: F401  # isort: skip
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from grip_env.dataset.crosscheck import _means, _spearman
+from grip_env.sim import run_trial_outcomes
+from tests.benchmarks.crosscheck_contact_loads import kept_runs
+
+ENGINES = ("pybullet", "mujoco")
+
+
+def run(parts: Path, objects: int, engine: str, sim: dict[str, float], out: Path) -> None:
+    """Simulate the first ``objects`` kept objects in ``engine`` under ``sim``, into ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    for count, (check, _) in enumerate(kept_runs(parts, 40, 0)):
+        if count >= objects:
+            break
+        config = check.task.config.override(sim={"engine": engine, **sim})
+        grips = check.recorded.assign(object_id=check.task.object_id).reset_index(drop=True)
+        trials, seed = config.dataset.trials, config.dataset.seed
+        started = time.process_time()
+        both = pd.concat([run_trial_outcomes(check.task.obj, grips, config, trials, seed,
+                                             trial_offset=offset) for offset in (0, trials)])
+        seconds = time.process_time() - started
+        both.to_parquet(out / f"{check.task.object_id}.{engine}.parquet")
+        (out / f"{check.task.object_id}.{engine}.json").write_text(json.dumps(
+            {"seconds": seconds, "trials": len(both), "sim": sim}))
+        print(f"{check.task.object_id} {engine}: {1e3 * seconds / len(both):.0f} ms a trial",
+              flush=True)
+
+
+def _figures(draws: dict[str, pd.DataFrame], retest: dict[str, pd.DataFrame]) -> dict[str, float]:
+    a, b = (draws[e] for e in ENGINES)
+    return {"retest pybullet": _spearman(_means(draws["pybullet"]), _means(retest["pybullet"])),
+            "retest mujoco": _spearman(_means(draws["mujoco"]), _means(retest["mujoco"])),
+            "within-object between engines": _spearman(_means(a), _means(b)),
+            "success alike": float(np.mean(a["success"].to_numpy() == b["success"].to_numpy()))}
+
+
+def summary(parts: Path, out: Path) -> None:
+    """The candidate's figures beside the committed models' on the objects ``out`` holds."""
+    rows: dict[str, list[dict[str, float]]] = {"committed": [], "candidate": []}
+    cost = {e: [0.0, 0] for e in ENGINES}
+    for check, kept in kept_runs(parts, 40, 0):
+        files = {e: out / f"{check.task.object_id}.{e}.parquet" for e in ENGINES}
+        if not all(f.is_file() for f in files.values()):
+            continue
+        rows["committed"].append(_figures(kept.draws, kept.retest))
+        tables = {e: pd.read_parquet(f) for e, f in files.items()}
+        trials = check.task.config.dataset.trials
+        rows["candidate"].append(_figures({e: t[t["trial"] < trials] for e, t in tables.items()},
+                                          {e: t[t["trial"] >= trials] for e, t in tables.items()}))
+        for e in ENGINES:
+            record = json.loads(files[e].with_suffix(".json").read_text())
+            cost[e][0] += record["seconds"]
+            cost[e][1] += record["trials"]
+    names = list(rows["candidate"][0])
+    print(f"{len(rows['candidate'])} objects (mean over objects)\n")
+    print("| model | " + " | ".join(names) + " |")
+    print("| --- " * (len(names) + 1) + "|")
+    for model, found in rows.items():
+        print(f"| {model} | " + " | ".join(
+            f"{np.nanmean([r[n] for r in found]):.3f}" for n in names) + " |")
+    print("\ncandidate CPU ms a trial: " + ", ".join(
+        f"{e} {1e3 * s / n:.0f}" for e, (s, n) in cost.items()))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("mode", choices=("run", "summary"))
+    parser.add_argument("--parts", type=Path, default=Path(
+        "/work/runs/crosscheck/standard40-lean.crosscheck"))
+    parser.add_argument("--objects", type=int, default=20)
+    parser.add_argument("--engine", choices=ENGINES, default="mujoco")
+    parser.add_argument("--sim", nargs="*", default=[], metavar="NAME=VALUE")
+    parser.add_argument("--out", type=Path, required=True)
+    args = parser.parse_args()
+    if args.mode == "run":
+        sim = {name: float(value) for name, value in (item.split("=") for item in args.sim)}
+        run(args.parts, args.objects, args.engine, sim, args.out)
+    else:
+        summary(args.parts, args.out)
+
+
+if __name__ == "__main__":
+    main()
