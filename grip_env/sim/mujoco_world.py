@@ -182,8 +182,8 @@ class MujocoWorld:
         self._saved_drives: dict[int, NDArray[np.float64]] = {}
         self._addresses: dict[tuple[int, tuple[int, ...]], tuple[NDArray, NDArray]] = {}
         self._joint_rows: dict[tuple[int, tuple[int, ...]], NDArray[np.int64]] = {}
-        # joint_floors' calls whose stops carry the current timestep's solref (rewritten after
-        # the timestep changes)
+        # joint_floors' calls whose stops carry the stops' current time constant (rewritten
+        # when it changes: pads added after the first call raise the substeps)
         self._floor_solref_set: set[tuple[int, tuple[int, ...]]] = set()
         self._floor_solref_value = 0.0  # the stops' time constant last written
         self._quat = np.empty(4)  # scratch for per-step orientation reads
