@@ -195,6 +195,10 @@ class SimConfig(_Section):
     ramp_ratio: float = Field(
         2.0**0.25, gt=1.0, le=4.0, description="ratio between ramp levels"
     )
+    ramp_fine_from_g: float = Field(
+        2.0, gt=0.0,
+        description="levels double from the first up to this one, then rise by ramp_ratio",
+    )
     ramp_steps_per_level: int = Field(
         3, ge=1, le=1000,
         description="steps each level is held at least, and the window in which it must settle",
@@ -229,6 +233,10 @@ class SimConfig(_Section):
         _ordered("ramp_levels_g", self.ramp_levels_g)
         if self.ramp_levels_g[0] <= 0:
             raise ValueError(f"ramp_levels_g must be positive, got {self.ramp_levels_g}")
+        first, last = self.ramp_levels_g
+        if not first <= self.ramp_fine_from_g <= last:
+            raise ValueError(f"ramp_fine_from_g must lie within ramp_levels_g {self.ramp_levels_g},"
+                             f" got {self.ramp_fine_from_g}")
         return self
 
 

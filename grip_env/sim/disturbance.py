@@ -57,10 +57,14 @@ def disturbances(config: SimConfig) -> tuple[tuple[str, int, float], ...]:
 
 
 def ramp_levels(config: SimConfig) -> NDArray[np.float64]:
-    """The disturbance levels (g), from the first to the last, ``ramp_ratio`` apart."""
+    """The disturbance levels (g): doubling from the first below ``ramp_fine_from_g``, then from
+    it to the last ``ramp_ratio`` apart."""
     first, last = config.ramp_levels_g
-    count = int(np.floor(np.log(last / first) / np.log(config.ramp_ratio) + 1e-9)) + 1
-    return first * config.ramp_ratio ** np.arange(count)
+    fine = config.ramp_fine_from_g
+    doublings = int(np.ceil(np.log2(fine / first) - 1e-9))
+    count = int(np.floor(np.log(last / fine) / np.log(config.ramp_ratio) + 1e-9)) + 1
+    return np.concatenate([first * 2.0 ** np.arange(doublings),
+                           fine * config.ramp_ratio ** np.arange(count)])
 
 
 @dataclass(frozen=True)
