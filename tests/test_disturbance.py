@@ -85,10 +85,10 @@ def test_a_quasi_static_ramp_reports_the_last_level_the_block_holds(capacity, st
 
 def test_a_creep_slower_than_the_settling_window_is_read_as_rest():
     """The limit the property above leaves out, pinned: 2 steps a level cannot see a block
-    2.8 % over its capacity move (the default's 3 steps can)."""
-    short = SimConfig(ramp_steps_per_level=2, ramp_max_steps_per_level=120)
+    2.8 % over its capacity move (the default's 3 steps can), on levels 2^(1/4) apart from 2 g."""
+    short = SimConfig(ramp_steps_per_level=2, ramp_max_steps_per_level=120, ramp_fine_from_g=2.0)
     assert creeps_unseen(2.75, short) and measured(2.75, short) == pytest.approx(2.828, abs=1e-3)
-    default = SimConfig(ramp_max_steps_per_level=120)
+    default = SimConfig(ramp_max_steps_per_level=120, ramp_fine_from_g=2.0)
     assert not creeps_unseen(2.75, default)
     assert measured(2.75, default) == last_level_within(2.75, default)
 

@@ -43,18 +43,12 @@ def test_a_load_with_no_threshold_is_refused():
 
 
 @pytest.mark.slow
-@pytest.mark.skipif(__import__("importlib").util.find_spec("mujoco") is None,
-                    reason="mujoco not installed")
-def test_mujoco_s_held_box_slips_at_coulombs_load_on_its_own_normal_forces():
-    result = _held_box("mujoco")
-    assert abs(result.error) < 0.02, result
-
-
-@pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="PyBullet's held box resists only about 68 % of mu times "
-                   "its reported normal forces (BENCHMARKS.md, 'PyBullet beside MuJoCo')")
-def test_pybullets_held_box_slips_at_coulombs_load_on_its_own_normal_forces():
-    result = _held_box("pybullet")
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_held_box_slips_at_coulombs_load_on_its_own_normal_forces(engine):
+    """Both engines since the 2 mm arm: at 3 mm PyBullet's pads pressed 106 N at the largest
+    pull held against 72 N at the hold and the box resisted 68 % of mu times that (BENCHMARKS.md,
+    "The next label model of both engines")."""
+    result = _held_box(engine)
     assert abs(result.error) < 0.02, result
 
 

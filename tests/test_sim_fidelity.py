@@ -275,19 +275,27 @@ def test_a_centred_grip_resists_more_than_a_heavier_copy_of_it():
     assert b.robustness_g < a.robustness_g
 
 
-def test_ramp_levels_are_geometric_within_the_configured_range():
+def test_ramp_levels_double_then_rise_geometrically_within_the_configured_range():
     sim = Config().sim
     levels = ramp_levels(sim)
-    assert levels[0] == pytest.approx(sim.ramp_levels_g[0])
-    assert levels[-1] <= sim.ramp_levels_g[1] * (1 + 1e-9)
-    np.testing.assert_allclose(levels[1:] / levels[:-1], sim.ramp_ratio)
+    fine = int(np.flatnonzero(np.isclose(levels, sim.ramp_fine_from_g))[0])
+    np.testing.assert_allclose(levels[:fine + 1], 2.0 * 2.0 ** np.arange(fine + 1))
+    np.testing.assert_allclose(levels[fine + 1:] / levels[fine:-1], sim.ramp_ratio)
+    assert levels[0] == sim.ramp_levels_g[0] and levels[-1] == pytest.approx(sim.ramp_levels_g[1])
+    assert len(levels) == 16  # 2, 4, 8, then 16 * 2^(k/4) for k = 0..12
+
+
+def test_a_ramp_fine_from_its_first_level_is_geometric_throughout():
+    levels = ramp_levels(Config().sim.model_copy(update={"ramp_fine_from_g": 2.0}))
+    assert len(levels) == 25
+    np.testing.assert_allclose(levels[1:] / levels[:-1], 2.0**0.25)
 
 
 def test_a_reference_on_a_ramp_level_is_reached_by_that_level():
     levels = ramp_levels(Config().sim)
-    assert levels[20] != 64.0  # 2 * ratio**20 in floating point
-    assert reaches(levels[20], 64.0) and reaches(levels[18], 45.0)
-    assert not reaches(levels[19], 64.0)
+    assert levels[11] != 64.0  # 16 * ratio**8 in floating point
+    assert reaches(levels[11], 64.0) and reaches(levels[9], 45.0)
+    assert not reaches(levels[10], 64.0)
 
 
 def test_each_motor_delivers_its_command_on_a_pinned_box():

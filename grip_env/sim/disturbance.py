@@ -4,7 +4,8 @@ After the lift and hold, the world is saved. For each disturbance (by default th
 grip's plane: along the palm frame's +-x and +-y, and a twist either way about the palm normal;
 ``sim.ramp_directions: spatial`` adds pulling the object out of the hand along gravity and
 pushing it in) the saved moment is restored and the disturbance is raised level by level,
-geometrically from ``sim.ramp_levels_g[0]`` by ``sim.ramp_ratio``. Each level is held until the
+doubling from ``sim.ramp_levels_g[0]`` up to ``sim.ramp_fine_from_g`` (where grips' limits begin:
+nine in ten standard trials hold 16 g), then by ``sim.ramp_ratio``. Each level is held until the
 object is at rest under it (quasi-static loading): at least ``sim.ramp_steps_per_level`` steps,
 and on until it moved less than ``SETTLED_SHARE`` of the hold tolerances over the last that many
 steps, or ``sim.ramp_max_steps_per_level`` steps have passed (it then counts as held: it is still
@@ -58,9 +59,9 @@ def disturbances(config: SimConfig) -> tuple[tuple[str, int, float], ...]:
 
 def ramp_levels(config: SimConfig) -> NDArray[np.float64]:
     """The disturbance levels (g): doubling from the first below ``ramp_fine_from_g``, then from
-    it to the last ``ramp_ratio`` apart."""
+    it (held within ``ramp_levels_g``) to the last ``ramp_ratio`` apart."""
     first, last = config.ramp_levels_g
-    fine = config.ramp_fine_from_g
+    fine = min(max(config.ramp_fine_from_g, first), last)
     doublings = int(np.ceil(np.log2(fine / first) - 1e-9))
     count = int(np.floor(np.log(last / fine) / np.log(config.ramp_ratio) + 1e-9)) + 1
     return np.concatenate([first * 2.0 ** np.arange(doublings),
