@@ -89,7 +89,7 @@ class RampProbe:
 
 def reaches(level_g: float, reference_g: float) -> bool:
     """Whether a held level reaches the reference. A reference on a ramp level (64 g is
-    2 x 2^(20/4)) counts as reached although 2 * ratio**20 computes to 63.99999999999996."""
+    16 x 2^(8/4)) counts as reached although 16 * ratio**8 computes to 63.999999999999986."""
     return bool(reached(np.float64(level_g), reference_g))
 
 
