@@ -11,11 +11,12 @@ Work that must not be cut in two (a shard written and entered in the manifest) r
 :func:`deferred_signals`: a signal that arrives there takes effect when the block ends.
 
 The handler raises :class:`Interrupted` wherever the main thread is, and library code that runs
-Python from C can lose it there: numpy turns it into a ``ValueError`` when it parses a buffer's
-format (scikit-learn's gradient boosting hits that on every tree) and clears it in other places;
-scikit-learn's MLP catches it to end training early. The work would then run on until the
-watchdog kills it. So a loop of jobs calls :func:`raise_if_signalled` between jobs, and a signal
-the work never saw still ends the command with its exit code.
+Python from C can lose it there: numpy clears it when it lands in ``npy_ctypes_check``, which
+comparing a dtype with pandas' string dtype calls (every ``groupby`` on a string column), and
+turns it into a ``ValueError`` when it parses a buffer's format (scikit-learn's gradient boosting,
+every tree); scikit-learn's MLP catches it to end training early. The work would then run on
+until the watchdog kills it. So a loop of jobs calls :func:`raise_if_signalled` between jobs,
+and a signal the work never saw still ends the command with its exit code.
 
 >>> with stop_on_signals("rerun the same command to finish"):   # doctest: +SKIP
 ...     long_work()
