@@ -10,6 +10,14 @@ whole shutdown take at most :data:`SHUTDOWN_SECONDS`, whatever the work was doin
 Work that must not be cut in two (a shard written and entered in the manifest) runs inside
 :func:`deferred_signals`: a signal that arrives there takes effect when the block ends.
 
+The handler raises :class:`Interrupted` wherever the main thread is, and library code that runs
+Python from C can lose it there: numpy clears it when it lands in ``npy_ctypes_check``, which
+comparing a dtype with pandas' string dtype calls (every ``groupby`` on a string column), and
+turns it into a ``ValueError`` when it parses a buffer's format (scikit-learn's gradient boosting,
+every tree); scikit-learn's MLP catches it to end training early. The work would then run on
+until the watchdog kills it. So a loop of jobs calls :func:`raise_if_signalled` between jobs,
+and a signal the work never saw still ends the command with its exit code.
+
 >>> with stop_on_signals("rerun the same command to finish"):   # doctest: +SKIP
 ...     long_work()
 """
@@ -84,6 +92,7 @@ def stop_on_signals(advice: str = "") -> Iterator[None]:
         signal.signal(signum, _on_signal)
     try:
         yield
+        raise_if_signalled()  # a signal the work lost still ends the command
     except BaseException as exc:
         signum = exc.signum if isinstance(exc, Interrupted) else _STATE.pending
         if signum is None or isinstance(exc, SystemExit):
@@ -111,6 +120,17 @@ def deferred_signals() -> Iterator[None]:
     finally:
         _STATE.deferring -= 1
     if _STATE.deferring == 0 and _STATE.pending is not None and not _STATE.stopping:
+        _STATE.stopping = True
+        raise Interrupted(_STATE.pending)
+
+
+def raise_if_signalled() -> None:
+    """Raise :class:`Interrupted` if a stop signal has come (outside :func:`deferred_signals`).
+
+    A checkpoint for loops of jobs: a signal that library code lost (see the module docstring)
+    stops the work at the next job instead of at the watchdog. A no-op without a signal.
+    """
+    if _STATE.pending is not None and _STATE.deferring == 0:
         _STATE.stopping = True
         raise Interrupted(_STATE.pending)
 

@@ -111,6 +111,59 @@ def test_children_still_running_are_ended_and_work_without_signal_is_untouched()
     assert not Path(f"/proc/{child}").exists() or "Z" in Path(f"/proc/{child}/stat").read_text()
 
 
+# A job that loses the interrupt, as library code can (numpy turns it into a ValueError while
+# parsing a buffer format for scikit-learn's gradient boosting; scikit-learn's MLP catches it).
+_LOSING_JOB = (
+    "import os, signal, time\n"
+    "def job(k):\n"
+    "    try:\n"
+    "        if k == 0:\n"
+    "            os.kill(os.getpid(), signal.SIGTERM)\n"
+    "        time.sleep(1)\n"
+    "    except KeyboardInterrupt:\n"
+    "        pass\n"
+    "    print(k, flush=True)\n"
+)
+
+
+def test_an_interrupt_a_job_lost_stops_the_jobs_at_its_end() -> None:
+    # before the checkpoint the jobs ran on until the watchdog killed them at 4 s
+    done = _python(_LOSING_JOB + (
+        "from classifiers.learners.parallel import run_all\n"
+        "from grip_env.shutdown import stop_on_signals\n"
+        "with stop_on_signals('rerun it'):\n"
+        "    run_all(job, [(k,) for k in range(20)], grips=0, workers=1)\n"
+    ))
+    assert done.returncode == 143 and done.stdout == "0\n"
+    assert done.stderr == "interrupted by SIGTERM: stopped cleanly; rerun it\n"
+
+
+def test_a_signal_the_work_lost_still_ends_the_command_with_its_code() -> None:
+    done = _python(_LOSING_JOB + (
+        "from grip_env.shutdown import stop_on_signals\n"
+        "with stop_on_signals():\n"
+        "    job(0)\n"
+    ))
+    assert done.returncode == 143 and done.stdout == "0\n"
+    assert done.stderr == "interrupted by SIGTERM: stopped cleanly\n"
+
+
+def test_an_error_the_interrupt_was_turned_into_is_not_reported() -> None:
+    done = _python(
+        "import os, signal, time\n"
+        "from grip_env.cli.errors import user_errors\n"
+        "from grip_env.shutdown import stop_on_signals\n"
+        "with stop_on_signals('rerun it'), user_errors():\n"
+        "    try:\n"
+        "        os.kill(os.getpid(), signal.SIGTERM)\n"
+        "        time.sleep(1)\n"
+        "    except KeyboardInterrupt as exc:\n"
+        "        raise TypeError('not a valid PEP 3118 buffer format string') from exc\n"
+    )
+    assert done.returncode == 143
+    assert done.stderr == "interrupted by SIGTERM: stopped cleanly; rerun it\n"
+
+
 def test_interrupted_is_a_keyboard_interrupt() -> None:
     assert issubclass(Interrupted, KeyboardInterrupt)
     assert Interrupted(signal.SIGTERM).exit_code == 143

@@ -40,6 +40,7 @@ from grip_env.columns import FEATURES
 from grip_env.config import LearningConfig
 from grip_env.dataset.split import held_out_objects, split_table
 from grip_env.progress import progress_bar
+from grip_env.shutdown import raise_if_signalled
 
 METRICS = ("accuracy", "balanced_accuracy", "roc_auc", "f1", "brier", "top1_success", "top1_rate")
 GROUP_COLUMN = "object_id"
@@ -314,6 +315,7 @@ def grouped_cv(
                      predict if repeat == 0 else None)
             for repeat, fold, train, test in jobs)
         for (rows, predictions), (_, _, _, test) in zip(found, jobs, strict=True):
+            raise_if_signalled()  # a stop signal the fold's library code lost stops here
             records += rows
             for name, values in predictions.items():
                 pooled.setdefault(name, np.full(len(table), np.nan))[test] = values

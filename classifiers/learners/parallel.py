@@ -21,6 +21,7 @@ from joblib import Parallel, delayed
 from sklearn.base import BaseEstimator
 
 from classifiers.learners.threads import single_threaded
+from grip_env.shutdown import raise_if_signalled
 
 #: The fewest training grips whose fits are spread over ``learning.workers`` processes.
 PARALLEL_MIN_GRIPS = 2000
@@ -38,13 +39,22 @@ def worker_count(grips: int, workers: int, jobs: int) -> int:
 def run_all(task: Callable[..., Result], jobs: Sequence[tuple[Any, ...]], grips: int,
             workers: int) -> list[Result]:
     """``[task(*job) for job in jobs]``, in order, each call on one thread, in up to
-    ``workers`` processes when ``grips`` is at least :data:`PARALLEL_MIN_GRIPS`."""
+    ``workers`` processes when ``grips`` is at least :data:`PARALLEL_MIN_GRIPS`. A stop signal
+    that a job's library code lost stops the work at the job's end
+    (:func:`grip_env.shutdown.raise_if_signalled`)."""
     if not jobs:
         return []
     count = worker_count(grips, workers, len(jobs))
     if count == 1:
-        return [_one_thread(task, *job) for job in jobs]
-    return list(Parallel(n_jobs=count)(delayed(_one_thread)(task, *job) for job in jobs))
+        done: Iterable[Result] = (_one_thread(task, *job) for job in jobs)
+    else:
+        done = Parallel(n_jobs=count, return_as="generator")(
+            delayed(_one_thread)(task, *job) for job in jobs)
+    found = []
+    for result in done:
+        raise_if_signalled()
+        found.append(result)
+    return found
 
 
 def fit_all(fits: Iterable[Fit], workers: int) -> list[BaseEstimator]:

@@ -10,6 +10,10 @@ Anything else is a bug, not the user's input: a ``ValueError`` raised inside num
 PyBullet, MuJoCo, scikit-learn, Stable-Baselines3 or Gymnasium, or raised by an expression of ours
 rather than a ``raise`` (numpy's "operands could not be broadcast"), and every other exception.
 It prints its traceback, then ``internal error: ...`` with a hint to report it, and exits with 1.
+
+After a stop signal (:mod:`grip_env.shutdown`) an exception is neither: library code turned the
+interrupt into it (numpy's "not a valid PEP 3118 buffer format string"), so the command stops
+as interrupted, with no error line.
 """
 
 from __future__ import annotations
@@ -25,6 +29,8 @@ from typing import TypeVar
 
 import typer
 from typer.exceptions import TyperException
+
+from grip_env.shutdown import raise_if_signalled
 
 T = TypeVar("T")
 
@@ -47,6 +53,7 @@ def user_errors() -> Iterator[None]:
     except (typer.Exit, typer.Abort, TyperException):  # Typer's own exits and usage errors
         raise
     except Exception as exc:
+        raise_if_signalled()  # after a stop signal, the error is the signal's, turned into one
         if is_input_error(exc):
             typer.echo(f"error: {exc}", err=True)
             raise typer.Exit(code=INPUT_ERROR_CODE) from None
