@@ -33,7 +33,10 @@ def test_a_learning_command_stops_cleanly_on_a_signal(
          "--data", str(generated_dataset_dir), "--out", str(out), *options],
         start_new_session=True, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )
-    time.sleep(4.0)  # imports done, the work under way (each command runs for much longer)
+    started = time.monotonic()  # OUT is made inside the signal handlers: then the work begins
+    while not out.exists() and run.poll() is None and time.monotonic() - started < 120:
+        time.sleep(0.05)
+    time.sleep(1.0)  # the work under way (each command runs for much longer)
     assert run.poll() is None, run.communicate()
     code, took, stderr, left = stop(run, signum)
     assert code == exit_code(signum) == 128 + signum, stderr
