@@ -234,18 +234,20 @@ def test_generate_validate_and_calibrate_run_in_the_config_s_engine(tmp_path):
 
 
 def test_a_manifest_made_before_engines_were_recorded_names_its_engine_s_version():
-    """The standard dataset predates the ``engine`` record; the engine's version it was made
-    with is the one its ``versions`` recorded, and the card says so."""
+    """A manifest that predates the ``engine`` record (the standard dataset's did until label
+    model 2026.12-hertz): the engine's version it was made with is the one its ``versions``
+    recorded, and the card says so; the shipped one records its engine."""
     from grip_env.dataset.card import _engines
     from grip_env.dataset.manifest import read_manifest, recorded_engine
     from grip_env.datasets import standard_path
 
     manifest = read_manifest(standard_path())
-    assert "engine" not in manifest
-    assert recorded_engine(manifest) == {"name": "pybullet",
-                                         "version": manifest["versions"]["pybullet"]}
+    pybullet = {"name": "pybullet", "version": manifest["versions"]["pybullet"]}
+    assert manifest["engine"] == pybullet == recorded_engine(manifest)
+    older = {key: value for key, value in manifest.items() if key != "engine"}
+    assert recorded_engine(older) == pybullet
     line = f"Labelled in pybullet {manifest['versions']['pybullet']},"
-    assert line in _engines(manifest, standard_path(), None)
+    assert line in _engines(older, standard_path(), None)
     assert line in (Path(__file__).parents[1] / "docs" / "dataset.md").read_text()
     assert recorded_engine({"engine": {"name": "mujoco", "version": "4.0.1"},
                             "versions": {"pybullet": "3.2.7"}}) == {"name": "mujoco",
