@@ -360,3 +360,12 @@ def test_the_close_settles_before_the_cap_on_the_best_grips():
     config = Config()
     settled = [r.close_steps < config.sim.max_close_steps for r in best_grip_trials(config)]
     assert len(settled) >= 40 and np.mean(settled) >= 0.95
+
+
+def test_a_fine_start_outside_the_levels_is_held_within_them():
+    """Above the last level the ramp doubles throughout; below the first it is fine throughout."""
+    sim = Config().sim
+    doubling = ramp_levels(sim.model_copy(update={"ramp_fine_from_g": 500.0}))
+    np.testing.assert_allclose(doubling, [2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0])
+    fine = ramp_levels(sim.model_copy(update={"ramp_fine_from_g": 0.5}))
+    assert len(fine) == 25 and fine[0] == 2.0
