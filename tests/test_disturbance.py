@@ -14,7 +14,14 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from grip_env.config import SimConfig
-from grip_env.sim.disturbance import SETTLED_SHARE, RampProbe, ramp_levels, robustness
+from grip_env.sim.disturbance import (
+    PLANAR_DISTURBANCES,
+    SETTLED_SHARE,
+    RampProbe,
+    direction_limits,
+    ramp_levels,
+    robustness,
+)
 
 STEP_S = 1.0 / 240.0
 
@@ -127,3 +134,46 @@ def test_a_level_still_moving_within_tolerance_counts_as_held_after_the_longest_
                          probe.palm_axes)
     assert robustness(creeping, 1.0 / 9.81, 0.05, config) == pytest.approx(2.0)
     assert block.steps == 6 * 60
+
+
+class DirectionalBlock(SlidingBlock):
+    """The sliding block with a capacity (g) for each planar disturbance: the one it is pushed
+    along is read from the push (its kind, its largest axis and that axis's sign)."""
+
+    def __init__(self, capacities_g: dict[tuple[str, int, float], float]) -> None:
+        super().__init__(capacity_g=0.0)
+        self.capacities_g = capacities_g
+
+    def probe(self, config: SimConfig) -> RampProbe:
+        plain = super().probe(config)
+
+        def push(kind: str, vector: np.ndarray) -> None:
+            axis = int(np.argmax(np.abs(vector)))
+            self.capacity_g = self.capacities_g[(kind, axis, float(np.sign(vector[axis])))]
+            plain.push(kind, vector)
+
+        return RampProbe(plain.restore, push, plain.step, plain.moved, plain.where, np.eye(3))
+
+
+def between_levels(config: SimConfig, index: int, share: float) -> float:
+    """A capacity (g) a share of the way (in log) from level ``index`` to the next, clear of
+    both; below the first level for -1 and above the last for the last index."""
+    levels = ramp_levels(config)
+    if index < 0:
+        return levels[0] / 2
+    if index >= len(levels) - 1:
+        return levels[-1] * 2
+    return float(levels[index] * (levels[index + 1] / levels[index]) ** share)
+
+
+@given(places=st.lists(st.tuples(st.integers(-1, 16), st.floats(0.2, 0.8)), min_size=6,
+                       max_size=6))
+def test_every_direction_climbs_to_its_own_limit_and_the_weakest_is_the_robustness(places):
+    config = SimConfig(ramp_max_steps_per_level=120)
+    capacities = [between_levels(config, index, share) for index, share in places]
+    block = DirectionalBlock(dict(zip(PLANAR_DISTURBANCES, capacities, strict=True)))
+    limits = direction_limits(block.probe(config), 1.0 / 9.81, 1.0, config)
+    assert limits.tolist() == [last_level_within(c, config) for c in capacities]
+    again = DirectionalBlock(block.capacities_g)
+    assert robustness(again.probe(config), 1.0 / 9.81, 1.0, config) == limits.min()
+    assert again.steps <= block.steps  # robustness stops each direction at the weakest so far

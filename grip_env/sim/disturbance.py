@@ -102,15 +102,36 @@ def robustness(probe: RampProbe, mass_kg: float, gyration_m: float, config: SimC
     """The highest level (g) held in every direction (gravity acts throughout)."""
     levels = ramp_levels(config)
     weakest = len(levels)  # index of the first level that failed in some direction
-    for kind, axis, sign in disturbances(config):
-        probe.restore()
-        unit = sign * probe.palm_axes[axis]
-        scale = mass_kg * GRAVITY * (gyration_m if kind == "torque" else 1.0)
-        failed = _first_failure(probe, kind, unit * scale, levels[:weakest], config)
+    for disturbance in disturbances(config):
+        failed = _climb(probe, disturbance, mass_kg, gyration_m, levels[:weakest], config)
         weakest = min(weakest, failed)
         if weakest == 0:
             return 0.0
     return float(levels[weakest - 1]) if weakest > 0 else 0.0
+
+
+def direction_limits(probe: RampProbe, mass_kg: float, gyration_m: float,
+                     config: SimConfig) -> NDArray[np.float64]:
+    """Each disturbance's own limit (g, in the order of ``disturbances(config)``; 0 when its
+    first level fails): every direction climbs to its own first failure, where
+    :func:`robustness` stops each at the weakest level found so far. A diagnostic: it costs
+    more, and where the engine restores the saved moment exactly, :func:`robustness` is the
+    minimum of these limits."""
+    levels = ramp_levels(config)
+    failed = [_climb(probe, d, mass_kg, gyration_m, levels, config)
+              for d in disturbances(config)]
+    return np.array([levels[k - 1] if k > 0 else 0.0 for k in failed], dtype=float)
+
+
+def _climb(probe: RampProbe, disturbance: tuple[str, int, float], mass_kg: float,
+           gyration_m: float, levels: NDArray[np.float64], config: SimConfig) -> int:
+    """From the saved moment, ramp one disturbance through ``levels``: the index of the first
+    level at which the object moved (``len(levels)`` if none did)."""
+    kind, axis, sign = disturbance
+    probe.restore()
+    unit = sign * probe.palm_axes[axis]
+    scale = mass_kg * GRAVITY * (gyration_m if kind == "torque" else 1.0)
+    return _first_failure(probe, kind, unit * scale, levels, config)
 
 
 def _first_failure(

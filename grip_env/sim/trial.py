@@ -23,7 +23,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import NDArray
 
-from grip_env.config import Config
+from grip_env.config import Config, SimConfig
 from grip_env.objects import PlanarObject
 from grip_env.objects.meshes import (
     executes_on_mesh,
@@ -48,6 +48,9 @@ APPROACH_MM = 10.0  # the pre-shaped hand is lowered this far onto its grip heig
 APPROACH_STEPS = 8
 SETTLE_STEPS = 8
 STALL_SPEED = 0.05  # rad/s: a finger whose joints move slower than this has stopped
+#: The graded outcome's search, given the scene's probe, the object's mass (kg) and radius of
+#: gyration (m): :func:`grip_env.sim.disturbance.robustness` unless a diagnostic swaps in another.
+Ramp = Callable[[RampProbe, float, float, SimConfig], float]
 #: The phases ``TrialScene.run`` reports to ``on_phase``, in order (the ramp only when held).
 TRIAL_PHASES = ("approach", "closed", "held", "ramp")
 
@@ -124,11 +127,17 @@ def grip_plans(grips: pd.DataFrame) -> list[GripPlan]:
 
 
 class TrialScene:
-    """Table, object and hand in one headless world, reused across trials of one object."""
+    """Table, object and hand in one headless world, reused across trials of one object.
 
-    def __init__(self, obj: PlanarObject, config: Config | None = None) -> None:
+    ``ramp`` is the graded outcome's search (None: :func:`grip_env.sim.disturbance.robustness`,
+    the labels'); a diagnostic may pass another, e.g. one that records every direction's limit.
+    """
+
+    def __init__(self, obj: PlanarObject, config: Config | None = None,
+                 ramp: Ramp | None = None) -> None:
         self.obj = obj
         self.config = config if config is not None else Config()
+        self.ramp = ramp
         self.thickness_mm = execution_height_mm(obj, self.config.objects)
         self.mass_kg = object_mass_kg(obj, self.config)
         self._postures: dict[GripPlan, ContactPosture] = {}
@@ -305,7 +314,8 @@ class TrialScene:
         axes = np.stack([palm_to_world(yaw, np.eye(3)[k]) for k in range(3)])
         probe = RampProbe(restore_seen, push, counter.step, moved, lambda: seen[0], axes)
         try:
-            return robustness(probe, self.mass_kg * noise.mass_scale, self.gyration_m, sim)
+            search = self.ramp or robustness
+            return search(probe, self.mass_kg * noise.mass_scale, self.gyration_m, sim)
         finally:
             world.forget(saved)
 
