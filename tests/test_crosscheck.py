@@ -51,6 +51,9 @@ def test_every_grip_runs_in_both_engines_and_pybullet_reproduces_its_labels(chec
             assert low <= value <= high, name
     assert 0.0 <= overall.agreement <= 1.0 and overall.top1_own in (0.0, 0.5, 1.0)
     assert not (overall.retest_own > 1.0 or overall.retest_other > 1.0)  # NaN: tied labels
+    shares = [overall.share_grip, overall.share_engine, overall.share_draws]
+    assert sum(shares) == pytest.approx(1.0) and min(shares) >= 0.0  # grip, engine, draws
+    assert "a label's differences between grips: the grip" in found.summary()
 
 
 @pytest.mark.slow
@@ -152,6 +155,7 @@ def test_the_card_and_the_study_report_show_a_recorded_crosscheck(tiny, checked,
     assert f"| named | 2 | {found.families['named'].agreement:.1%} [" in card
     assert f"| 4 grips | 2 | {found.by_grips['4 grips'].agreement:.1%} [" in card
     assert "| mujoco | 48 |" in card and "core-s a trustworthy label" in card
+    assert f"{overall.share_engine:.1%} [" in card and "label: the grip's share" in card
     study = tmp_path / "study"
     study.mkdir()
     (study / "data.json").write_text(json.dumps({"dataset": str(tmp_path / "data")}))
@@ -168,7 +172,8 @@ def test_the_card_and_the_study_report_show_a_recorded_crosscheck(tiny, checked,
 
 def test_the_shipped_crosscheck_compares_this_code_s_label_models():
     """A change of either engine's label model leaves the shipped cross-check stale: re-run
-    ``grip-env validate standard --crosscheck 40 --report ...`` and ship its report."""
+    ``grip-env validate standard --crosscheck 80 --report ...`` and ship its report (the issue
+    asks for at least 40 objects)."""
     from grip_env.dataset.card import recorded_crosscheck
     from grip_env.datasets import standard_path
     from grip_env.label_model import label_model_for
@@ -176,4 +181,4 @@ def test_the_shipped_crosscheck_compares_this_code_s_label_models():
     found = recorded_crosscheck(standard_path())
     assert found is not None
     assert found["label_models"] == {e: label_model_for(e) for e in ("pybullet", "mujoco")}
-    assert found["objects"] == 40 and found["reproduced"] == found["overall"]["grips"]
+    assert found["objects"] >= 40 and found["reproduced"] == found["overall"]["grips"]

@@ -1,7 +1,7 @@
 """A dataset card (``docs/dataset.md`` for the standard dataset), written from the dataset itself.
 
     grip-env validate DIR --resimulate 100 --retest 40 --report R.json
-    grip-env validate DIR --crosscheck 40 --report DIR/crosscheck/crosscheck.json
+    grip-env validate DIR --crosscheck 80 --report DIR/crosscheck/crosscheck.json
     python -m grip_env.dataset.card DIR --out docs/dataset.md --report R.json
 
 Every figure comes from the dataset's manifest and grips (and, when given, the report of a
@@ -258,11 +258,13 @@ def _engines(manifest: dict[str, Any], directory: Path, report: dict[str, Any] |
     found = recorded_crosscheck(directory, report)
     if found is None:
         return "\n".join([*head, "", "Not cross-checked in the other engine yet: `grip-env "
-                          f"validate DIR --crosscheck 40 --report DIR/{CROSSCHECK_FILE}`."])
+                          f"validate DIR --crosscheck 80 --report DIR/{CROSSCHECK_FILE}`."])
     return "\n".join([*head, "", crosscheck_markdown(found)])
 
 
 def _figure(group: dict[str, Any], name: str, percent: bool = False) -> str:
+    if name not in group:  # a cross-check recorded before the figure existed
+        return "–"
     value, (low, high) = group[name], group[f"{name}_interval"]
     if value is None or not np.isfinite(value):
         return "–"
@@ -282,7 +284,10 @@ def crosscheck_tables(found: dict[str, Any]) -> tuple[str, pd.DataFrame, pd.Data
              f"{found['overall']['grips']} grips reproduced their recorded labels in {a}"
              f"{_models(found)}). "
              "Intervals: 95 % bootstrap over objects. Each engine's within-object retest (its "
-             "own labels under new draws) is the ceiling of the agreement between them. Costs: "
+             "own labels under new draws) is the ceiling of the agreement between them. The "
+             "label's shares split the variance of a label between the grips of an object into "
+             "the grip (alike in both engines), the engine's own view of it, and the draws its "
+             "trials average (`grip_env.dataset.label_shares`). Costs: "
              "the CPU of the run that simulated each engine's trials (a run that resumes "
              "another reads them back), so two engines' rows may come from different loads.")
     groups = [("all", found["overall"]), *sorted(found.get("families", {}).items()),
@@ -292,7 +297,10 @@ def crosscheck_tables(found: dict[str, Any]) -> tuple[str, pd.DataFrame, pd.Data
         "kappa": _figure(g, "kappa"), "within-object Spearman": _figure(g, "within"),
         f"retest {a}": _figure(g, "retest_own"), f"retest {b}": _figure(g, "retest_other"),
         "pooled Spearman": _figure(g, "pooled"), f"top-1 {a} in {b}": _figure(g, "top1_own", True),
-        f"top-1 {b} in {a}": _figure(g, "top1_other", True)} for name, g in groups])
+        f"top-1 {b} in {a}": _figure(g, "top1_other", True),
+        "label: the grip's share": _figure(g, "share_grip", True),
+        "the engine's": _figure(g, "share_engine", True),
+        "the draws'": _figure(g, "share_draws", True)} for name, g in groups])
     cost = pd.DataFrame([{
         "engine": c["engine"], "trials": f"{c['trials']:,}",
         "CPU s a trial": f"{c['ms_per_trial'] / 1e3:.3f}", "µs a step": f"{c['us_per_step']:.0f}",

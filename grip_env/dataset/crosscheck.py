@@ -13,6 +13,9 @@ objects and by family (mesh, procedural, named...), with 95 % bootstrap interval
   engine's own within-object retest;
 * top-1, both ways: how often the grip one engine ranks first (by mean robustness) succeeds in
   most of its trials in the other;
+* with ``ceilings``, how much of a label's differences between the grips of an object is the
+  grip, the engine and the draws (:mod:`grip_env.dataset.label_shares`, from both engines'
+  2T trials a grip);
 * each engine's cost: CPU seconds a trial and a protocol step (of the worker processes), and a
   trustworthy label's: the trials that bring its within-object retest to ``TRUSTWORTHY``
   (Spearman-Brown from the measured retest) times a trial's cost.
@@ -38,6 +41,7 @@ import pandas as pd
 
 from grip_env.config import ENGINES
 from grip_env.dataset.files import write_text_atomically
+from grip_env.dataset.label_shares import SHARES, grip_components, label_shares
 from grip_env.dataset.manifest import read_manifest
 from grip_env.dataset.resimulation import BOOTSTRAP, _map, _ObjectCheck, _retest_sample
 from grip_env.label_model import engine_of, label_model_for, label_model_of
@@ -75,6 +79,13 @@ class Agreement:
     retest_own_interval: tuple[float, float]
     retest_other: float  # ... of the other engine's
     retest_other_interval: tuple[float, float]
+    # shares of a label's variance between an object's grips (``label_shares``; with ceilings)
+    share_grip: float  # the grip, alike in both engines
+    share_grip_interval: tuple[float, float]
+    share_engine: float  # the engine's own view of the grip
+    share_engine_interval: tuple[float, float]
+    share_draws: float  # the trials' draws the label averages
+    share_draws_interval: tuple[float, float]
 
 
 @dataclass
@@ -120,7 +131,14 @@ class CrossCheck:
                 f"within-object Spearman {o.within:.2f} [{w[0]:.2f}, {w[1]:.2f}] (retest "
                 f"{self.engine} {o.retest_own:.2f}, {self.other} {o.retest_other:.2f}), pooled "
                 f"{o.pooled:.2f}, top-1 {self.engine} in {self.other} {o.top1_own:.1%}, "
-                f"{self.other} in {self.engine} {o.top1_other:.1%}")
+                f"{self.other} in {self.engine} {o.top1_other:.1%}{self._shares()}")
+
+    def _shares(self) -> str:
+        o = self.overall
+        if not math.isfinite(o.share_grip):
+            return ""
+        return (f"; a label's differences between grips: the grip {o.share_grip:.0%}, the "
+                f"engine {o.share_engine:.0%}, the draws {o.share_draws:.0%}")
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-able, with the summary."""
@@ -287,10 +305,31 @@ def _object_figures(runs: _Runs, engine: str, other: str) -> dict[str, Any]:
                                                             _means(again))
 
     return {"trials": len(a), "alike": int((a == b).sum()), "a": int(a.sum()),
+            "components": _components(runs, (engine, other)), "label_trials": _trials(own),
             "b": int(b.sum()), "means": (mean_a, mean_b), "spearman": _spearman(mean_a, mean_b),
             "top_own": float(rate_b[int(np.argmax(mean_a))] > 0.5),
             "top_other": float(rate_a[int(np.argmax(mean_b))] > 0.5),
             "retest_own": retest(engine), "retest_other": retest(other)}
+
+
+def _trials(frame: pd.DataFrame) -> int:
+    """Trials a grip in one run (a label's)."""
+    return int(frame.groupby("grip").size().max()) if len(frame) else 0
+
+
+def _components(runs: _Runs, engines: tuple[str, str]) -> np.ndarray | None:
+    """The object's per-trial variance components (``grip_components``) over both engines'
+    every trial, or None without the retests or with fewer than two grips."""
+    tables = []
+    for engine in engines:
+        again = runs.retest.get(engine)
+        if again is None:
+            return None
+        both = pd.concat([runs.draws[engine], again])
+        tables.append(both.pivot(index="grip", columns="trial", values="robustness")
+                      .sort_index().sort_index(axis=1).to_numpy(float))
+    outcomes = np.stack(tables, axis=1)
+    return grip_components(outcomes) if outcomes.shape[0] >= 2 else None
 
 
 def _reproduced(own: pd.DataFrame, check: _ObjectCheck) -> int:
@@ -328,6 +367,10 @@ def _group_values(rows: list[dict[str, Any]]) -> dict[str, float]:
     for score in _SCORES:
         values = np.array([r[score] for r in rows], float)
         found[score] = float(np.nanmean(values)) if np.isfinite(values).any() else float("nan")
+    split = [r for r in rows if r.get("components") is not None]
+    shares = (label_shares(np.sum([r["components"] for r in split], axis=0),
+                           split[0]["label_trials"]) if split else np.full(3, np.nan))
+    found.update({f"share_{name}": float(v) for name, v in zip(SHARES, shares, strict=True)})
     return found
 
 
