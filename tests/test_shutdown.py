@@ -126,24 +126,25 @@ _LOSING_JOB = (
 )
 
 
-def test_an_interrupt_a_job_lost_stops_the_jobs_at_its_end() -> None:
-    # before the checkpoint the jobs ran on until the watchdog killed them at 4 s
-    done = _python(_LOSING_JOB + (
+def _losing(work: str, advice: str = "") -> subprocess.CompletedProcess[str]:
+    """``work`` (one line) run under ``stop_on_signals(advice)`` beside the losing ``job``."""
+    return _python(_LOSING_JOB + (
         "from classifiers.learners.parallel import run_all\n"
         "from grip_env.shutdown import stop_on_signals\n"
-        "with stop_on_signals('rerun it'):\n"
-        "    run_all(job, [(k,) for k in range(20)], grips=0, workers=1)\n"
+        f"with stop_on_signals({advice!r}):\n"
+        f"    {work}\n"
     ))
+
+
+def test_an_interrupt_a_job_lost_stops_the_jobs_at_its_end() -> None:
+    # before the checkpoint the jobs ran on until the watchdog killed them at 4 s
+    done = _losing("run_all(job, [(k,) for k in range(20)], grips=0, workers=1)", "rerun it")
     assert done.returncode == 143 and done.stdout == "0\n"
     assert done.stderr == "interrupted by SIGTERM: stopped cleanly; rerun it\n"
 
 
 def test_a_signal_the_work_lost_still_ends_the_command_with_its_code() -> None:
-    done = _python(_LOSING_JOB + (
-        "from grip_env.shutdown import stop_on_signals\n"
-        "with stop_on_signals():\n"
-        "    job(0)\n"
-    ))
+    done = _losing("job(0)")
     assert done.returncode == 143 and done.stdout == "0\n"
     assert done.stderr == "interrupted by SIGTERM: stopped cleanly\n"
 

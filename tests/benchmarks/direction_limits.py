@@ -32,6 +32,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from grip_env.dataset.crosscheck import _spearman
+from tests.benchmarks.crosscheck_contact_loads import kept_runs
+
 ENGINES = ("pybullet", "mujoco")
 FORCES, TWISTS = slice(0, 4), slice(4, 6)  # PLANAR_DISTURBANCES: four pushes, two twists
 BOOTSTRAP = 2000
@@ -89,14 +92,6 @@ def frame(rows: list[dict]) -> pd.DataFrame:
     return table
 
 
-def spearman(a: np.ndarray, b: np.ndarray) -> float:
-    from scipy import stats
-
-    if len(a) < 2 or np.ptp(a) == 0 or np.ptp(b) == 0:
-        return float("nan")
-    return float(stats.spearmanr(a, b).statistic)
-
-
 def with_interval(values: np.ndarray, rng: np.random.Generator) -> str:
     values = values[np.isfinite(values)]
     picks = rng.integers(0, len(values), (BOOTSTRAP, len(values)))
@@ -104,7 +99,7 @@ def with_interval(values: np.ndarray, rng: np.random.Generator) -> str:
     return f"{values.mean():.2f} [{low:.2f}, {high:.2f}] ({len(values)} objects)"
 
 
-def summary(done: dict, parts: Path | None) -> None:
+def summary(done: dict, parts: Path | None, objects: int, seed: int) -> None:
     columns = ["robustness", "push", "twist"] + [f"d{k}" for k in range(6)]
     names = {"robustness": "the label (weakest)", "push": "weakest push", "twist": "weakest twist",
              "d0": "push +x", "d1": "push -x", "d2": "push +y", "d3": "push -y",
@@ -117,7 +112,7 @@ def summary(done: dict, parts: Path | None) -> None:
         t = {e: frame(runs[e]["rows"]) for e in ENGINES}
         for c in columns:
             means = [t[e].groupby("grip")[c].mean().to_numpy() for e in ENGINES]
-            scores[c].append(spearman(*means))
+            scores[c].append(_spearman(*means))
         for e in ENGINES:
             tables[e].append(t[e])
     rng = np.random.default_rng(0)
@@ -131,21 +126,18 @@ def summary(done: dict, parts: Path | None) -> None:
               f" twist limit {all_trials['twist'].mean():.1f} g; a twist limits "
               f"{(held['twist'] < held['push']).mean():.1%} of {len(held)} held trials")
     if parts is not None:
-        compare_with_parts(done, parts)
+        compare_with_parts(done, parts, objects, seed)
 
 
-def compare_with_parts(done: dict, parts: Path) -> None:
+def compare_with_parts(done: dict, parts: Path, objects: int, seed: int) -> None:
     """Labels equal to the cross-check's kept outcomes, bit for bit, per engine."""
-    kept = {}
-    for path in parts.glob("*.json"):
-        stored = json.loads(path.read_text())
-        kept[stored["key"]["object_id"]] = stored["draws"]
+    kept = {check.task.object_id: runs.draws for check, runs in kept_runs(parts, objects, seed)}
     for e in ENGINES:
         same = total = 0
         for object_id, runs in done.items():
             if e in runs and object_id in kept:
                 ours = np.array([r["robustness"] for r in runs[e]["rows"]])
-                theirs = np.array(kept[object_id][e]["robustness"])
+                theirs = kept[object_id][e]["robustness"].to_numpy()
                 same, total = same + int((ours == theirs).sum()), total + len(ours)
         print(f"{e}: the weakest limit is the cross-check's label in {same} of {total} trials")
 
@@ -165,7 +157,7 @@ def main() -> None:
             done.setdefault(object_id, {})[engine] = runs
             args.out.write_text(json.dumps(done))
             print(f"{object_id} {engine}: {len(runs['rows'])} trials", flush=True)
-    summary(done, args.parts)
+    summary(done, args.parts, args.objects, args.seed)
 
 
 if __name__ == "__main__":
