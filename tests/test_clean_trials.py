@@ -91,3 +91,20 @@ def test_a_scene_builds_a_new_world_for_every_trial_it_runs():
         assert first is not built and built.client is None
         scene.run(plan, zero_noise())
         assert scene.world is not first and first.client is None
+
+
+def test_a_scene_grades_a_held_grip_with_the_ramp_it_is_given():
+    """``TrialScene(ramp=...)`` replaces the graded outcome's search (a diagnostic's door): it is
+    called once a held trial, with the scene's probe, the object's mass and the sim config."""
+    box = next(o for o in load_object_set("default") if o.name == "rectangle")
+    plan = grip_plans(candidates(box).iloc[:1])[0]
+    calls = []
+
+    def ramp(probe, mass_kg, gyration_m, sim):
+        calls.append((mass_kg, gyration_m, sim))
+        return 42.0
+
+    with TrialScene(box, Config(), ramp=ramp) as scene:
+        result = scene.run(plan, zero_noise())
+        assert result.held and result.robustness_g == 42.0 and not result.success
+        assert calls == [(scene.mass_kg, scene.gyration_m, scene.config.sim)]
