@@ -100,9 +100,9 @@ IDLE_TORQUE = 1e-3
 
 
 @contextlib.contextmanager
-def _pinned_box(config: Config, floors: bool = True,
-                alone: int | None = None) -> Iterator[TrialScene]:
-    """The symmetric grip closed for 120 steps on the 90 x 55 mm box pinned to the world;
+def _pinned_box(config: Config, floors: bool = True, alone: int | None = None,
+                steps: int = 120) -> Iterator[TrialScene]:
+    """The symmetric grip closed for ``steps`` steps on the 90 x 55 mm box pinned to the world;
     ``floors=False`` leaves the worm gear's floors at the URDF's limits (motors only); with
     ``alone`` only that finger closes.
 
@@ -131,7 +131,7 @@ def _pinned_box(config: Config, floors: bool = True,
         c.createConstraint(scene.object.uid, -1, -1, -1, c.JOINT_FIXED, [0, 0, 0],
                            [0, 0, 0], [0, 0, 0.015])
         scene._approach(palm, yaw, z)
-        for _ in range(120):
+        for _ in range(steps):
             scene.hand.drive_fingers(scene.hand.touching(scene.object.uid))
             scene.world.step()
         yield scene
@@ -257,6 +257,21 @@ def cost(iterations: tuple[int, ...] = (100, 150, 200), repeats: int = 3) -> lis
     return [{"iterations": n, "us_per_step": round(1e6 * took / steps, 1),
              "ms_per_trial": round(1e3 * took / len(plans), 1),
              "steps_per_trial": round(steps / len(plans))} for n, (took, steps) in best.items()]
+
+
+def closing_energy_j(scene: TrialScene, finger: int) -> float:
+    """The kinetic energy of ``finger`` closing freely at the config's speed: joint 2 at
+    ``close_speed_rad_s``, joint 3 geared to a third of it, through the hand's joint-space mass
+    matrix at its pose (the links and the motor's rotor, reflected through the worm gear)."""
+    c, uid = scene.world.client, scene.hand.uid
+    movable = [j for j in range(c.getNumJoints(uid))
+               if c.getJointInfo(uid, j)[2] != c.JOINT_FIXED]
+    mass = np.array(c.calculateMassMatrix(uid, [c.getJointState(uid, j)[0] for j in movable]))
+    rate = np.zeros(len(movable))
+    joint2, joint3 = scene.hand._flex[2 * finger:2 * finger + 2]
+    speed = scene.hand.config.close_speed_rad_s
+    rate[movable.index(joint2)], rate[movable.index(joint3)] = speed, speed / 3
+    return float(0.5 * rate @ mass @ rate)
 
 
 def _finger_normal_forces(scene: TrialScene) -> np.ndarray:
