@@ -11,7 +11,7 @@ from cli_runs import assert_refused, cli
 
 from grip_env.config import Config
 from grip_env.dataset import generate
-from grip_env.dataset.crosscheck import CrossCheck, _kappa, crosscheck, trials_for
+from grip_env.dataset.crosscheck import CrossCheck, _kappa, _run_key, crosscheck, trials_for
 from grip_env.dataset.manifest import read_manifest, write_manifest
 from grip_env.objects import load_object_set
 
@@ -92,13 +92,26 @@ def test_a_rerun_takes_each_object_from_its_part_and_remakes_a_stale_one(tiny, c
     assert part["draws"]["pybullet"] == stored["draws"]["pybullet"]  # kept, not re-simulated
     assert part["seconds"]["pybullet"] == stored["seconds"]["pybullet"]
     assert part["draws"]["mujoco"] != stored["draws"]["mujoco"] or alike == 24
-    stored = part | {"key": {**part["key"], "fingerprint": "another dataset"}}
+    stored = part | {"key": {**part["key"], "grips": "another dataset's grips"}}
     stored["seconds"] = {engine: -1.0 for engine in stored["seconds"]}
     files[0].write_text(json.dumps(stored))
     crosscheck(tiny, 2, seed=0, parts=parts)  # not this dataset's part: both simulated again
     part = json.loads(files[0].read_text())
-    assert part["key"]["fingerprint"] != "another dataset"
+    assert part["key"]["grips"] != "another dataset's grips"
     assert min(part["seconds"].values()) > 0
+
+
+def test_a_part_is_keyed_by_the_dataset_s_grips_not_its_label_model(tiny):
+    """Regenerated at a new PyBullet label model, a dataset keeps its grips, and the parts keep
+    MuJoCo's runs (each engine's own label model decides whether its runs are kept); any other
+    change to the run identity is other grips."""
+    manifest = read_manifest(tiny)
+    key = _run_key(manifest, True)
+    relabelled = {**manifest, "identity": {**manifest["identity"], "label_model": "next"}}
+    assert _run_key(relabelled, True) == key
+    seeded = {**manifest, "identity": {**manifest["identity"], "config": {"another": "config"}}}
+    assert _run_key(seeded, True)["grips"] != key["grips"]
+    assert _run_key(manifest, False) != key
 
 
 def test_trials_for_a_trustworthy_label_follow_spearman_brown():

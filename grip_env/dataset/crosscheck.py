@@ -42,7 +42,7 @@ import pandas as pd
 from grip_env.config import ENGINES
 from grip_env.dataset.files import write_text_atomically
 from grip_env.dataset.label_shares import SHARES, grip_components, label_shares
-from grip_env.dataset.manifest import read_manifest
+from grip_env.dataset.manifest import fingerprint, read_manifest
 from grip_env.dataset.resimulation import BOOTSTRAP, _map, _ObjectCheck, _retest_sample
 from grip_env.label_model import engine_of, label_model_for, label_model_of
 from grip_env.objects.family import object_family
@@ -206,9 +206,14 @@ class _Runs:
 
 
 def _run_key(manifest: dict[str, Any], ceilings: bool) -> dict[str, Any]:
-    """What an object's outcomes depend on: a part made under another key is made again."""
-    return {"fingerprint": manifest.get("fingerprint"), "ceilings": ceilings,
-            "label_models": {e: label_model_for(e) for e in ENGINES}}
+    """What an object's outcomes depend on: a part made under another key is made again.
+
+    The dataset enters by its grips (``grips``: the fingerprint of its run identity without the
+    label model), each engine by its own label model: a change to one engine's labels (the
+    dataset regenerated at a new PyBullet label model) keeps the other engine's runs."""
+    identity = {k: v for k, v in (manifest.get("identity") or {}).items() if k != "label_model"}
+    return {"grips": fingerprint(identity) if identity else manifest.get("fingerprint"),
+            "ceilings": ceilings, "label_models": {e: label_model_for(e) for e in ENGINES}}
 
 
 def _object_runs(item: tuple[_ObjectCheck, Path | None, dict[str, Any]]) -> _Runs:
@@ -230,8 +235,8 @@ def _object_runs(item: tuple[_ObjectCheck, Path | None, dict[str, Any]]) -> _Run
 
 def _same_runs(stored: dict[str, Any], key: dict[str, Any], engine: str) -> bool:
     """Whether a part made under ``stored`` holds ``engine``'s runs of ``key``: the same
-    dataset, object and retest setting, and that engine's label model."""
-    same = all(stored.get(k) == key[k] for k in ("fingerprint", "ceilings", "object_id"))
+    grips, object and retest setting, and that engine's label model."""
+    same = all(stored.get(k) == key[k] for k in ("grips", "ceilings", "object_id"))
     models = stored.get("label_models") or {}
     return same and models.get(engine) == key["label_models"][engine]
 
