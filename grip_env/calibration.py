@@ -379,13 +379,18 @@ def friction_ceiling_g(obj: PlanarObject, config: Config, normal_n: float | None
     return float(np.sqrt(max(ratio**2 - 1.0, 0.0)))
 
 
-def gear_ceiling_g(obj: PlanarObject, config: Config) -> float:
+def gear_ceiling_g(obj: PlanarObject, config: Config, hold_factor: float | None = None) -> float:
     """:func:`friction_ceiling_g` with every pad at the most its finger resists before it is
-    pushed back: the motor's force plus the worm gear's stop, ``(1 + HOLD_FACTOR)`` times it
-    (an estimate: the stop is a joint torque, taken as the same multiple of the pad force)."""
+    pushed back: the motor's force plus the worm gear's stop, ``(1 + hold_factor)`` times it
+    (an estimate: the stop is a joint torque, taken as the same multiple of the pad force).
+    ``hold_factor`` defaults to the hand's ``HOLD_FACTOR``; a stop that holds any load
+    (infinite) has no ceiling: ``inf``."""
     from grip_env.sim.hand import HOLD_FACTOR
 
-    return friction_ceiling_g(obj, config, 3 * (1 + HOLD_FACTOR) * config.sim.finger_force_n)
+    factor = HOLD_FACTOR if hold_factor is None else hold_factor
+    if np.isinf(factor):
+        return float("inf")
+    return friction_ceiling_g(obj, config, 3 * (1 + factor) * config.sim.finger_force_n)
 
 
 def friction_for_level(obj: PlanarObject, config: Config, level_g: float) -> float:
@@ -420,7 +425,7 @@ def design_check(trials: pd.DataFrame, reference_g: float,
     needed = {name: friction_for_level(box, config, reference_g) for name, box in boxes.items()}
     for column, values, digits in (("friction_ceiling_g", squeeze, 2), ("gear_ceiling_g", gear, 1),
                                    ("mu_for_reference", needed, 3)):  # fmt: skip
-        per_box[column] = [round(values.get(n, np.nan), digits) for n in per_box.index]
+        per_box[column] = [_finite(round(values.get(n, np.nan), digits)) for n in per_box.index]
     passed = bool(len(per_box) == len(BOXES_MM) and (per_box["held"] == 1.0).all())
     well_posed = bool(max(gear.values()) >= reference_g)
     mu, force = config.grasp.mu, config.sim.finger_force_n
@@ -438,6 +443,12 @@ def design_check(trials: pd.DataFrame, reference_g: float,
                                 f"friction (mu x sum N against the weight and the ramp's push); "
                                 f"{reference_g:g} g at that squeeze needs mu >= "
                                 f"{min(needed.values()):.2f}–{max(needed.values()):.2f}"))
+
+
+def _finite(value: float) -> float | None:
+    """``value``, or None for an infinite one (a ceiling the gear does not have; the JSON stays
+    strict)."""
+    return None if np.isinf(value) else value
 
 
 def cone_check(trials: pd.DataFrame) -> dict[str, Any]:

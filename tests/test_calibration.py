@@ -286,19 +286,40 @@ def _design_trials(levels: dict[str, float], reference: float = 45.0) -> pd.Data
 
 def test_gear_ceiling_adds_the_worm_gears_stop_to_the_squeeze():
     from grip_env.calibration import friction_ceiling_g, gear_ceiling_g
-    from grip_env.sim.hand import HOLD_FACTOR
 
     box = box_objects()[0]
     config = Config()
-    ratio = 0.4 * 3 * 15.0 * (1 + HOLD_FACTOR) / (0.090 * 0.055 * 0.030 * 500.0 * 9.81)
-    assert gear_ceiling_g(box, config) == pytest.approx(np.sqrt(ratio**2 - 1))
-    assert gear_ceiling_g(box, config) > 45.0 > friction_ceiling_g(box, config)
+    ratio = 0.4 * 3 * 15.0 * (1 + 5.0) / (0.090 * 0.055 * 0.030 * 500.0 * 9.81)
+    assert gear_ceiling_g(box, config, 5.0) == pytest.approx(np.sqrt(ratio**2 - 1))
+    assert gear_ceiling_g(box, config, 5.0) > 45.0 > friction_ceiling_g(box, config)
 
 
-def test_design_check_says_what_its_verdict_means_physically():
+def test_a_stop_that_holds_any_load_has_no_gear_ceiling(monkeypatch):
+    """An unbounded stop: the ceiling is infinite, the design check records none (strict JSON)
+    and its verdict says the stop holds any load."""
+    import json
+
+    import grip_env.sim.hand as hand
+    from classifiers.report.calibration import design_verdict_text
+    from grip_env.calibration import design_check, gear_ceiling_g
+
+    assert gear_ceiling_g(box_objects()[0], Config(), float("inf")) == float("inf")
+    monkeypatch.setattr(hand, "HOLD_FACTOR", float("inf"))
+    check = design_check(_design_trials({box.name: 38.0 for box in box_objects()}), 64.0)
+    assert [row["gear_ceiling_g"] for row in check["per_object"]] == [None, None, None]
+    json.dumps(check, allow_nan=False)
+    assert check["well_posed"] is True
+    assert "its stop holds any load" in design_verdict_text(check, 64.0)
+
+
+def test_design_check_says_what_its_verdict_means_physically(monkeypatch):
+    """With a stop of 5 times the motor (a bounded gear, whose ceiling can be below a
+    reference)."""
+    import grip_env.sim.hand as hand
     from classifiers.report.calibration import design_verdict_text, summary_table
     from grip_env.calibration import design_check
 
+    monkeypatch.setattr(hand, "HOLD_FACTOR", 5.0)
     names = [b.name for b in box_objects()]
     # 45 g: above the squeeze's ceiling (about 25 g at mu = 0.4), below the gear's: well-posed
     check = design_check(_design_trials(dict.fromkeys(names, 45.25)), 45.0, Config())

@@ -151,12 +151,17 @@ def _design(report: Report, check: dict[str, Any], reference: float, fig_dir: Pa
     if rows.empty:
         report.text("No box had a feasible grip.")
         return
-    report.table(rows.set_index("object_id"), caption="No pose error, friction = mu, nominal "
+    shown = rows.set_index("object_id")
+    if "gear_ceiling_g" in shown:
+        shown["gear_ceiling_g"] = shown["gear_ceiling_g"].astype(object).where(
+            shown["gear_ceiling_g"].notna(), "none")
+    report.table(shown, caption="No pose error, friction = mu, nominal "
                  "mass; robustness is the highest level held (g), held the share of trials "
                  "holding the reference level; friction_ceiling_g = sqrt((mu x 3 x finger force "
                  "/ (m g))² - 1), the most three pads at the commanded squeeze hold by friction "
                  "against the weight and an in-plane push along their faces; gear_ceiling_g, "
-                 "the same with each pad at the motor plus the worm gear's stop; "
+                 "the same with each pad at the motor plus the worm gear's stop (none: the "
+                 "stop holds any load); "
                  "mu_for_reference, the friction at which the squeeze's ceiling reaches the "
                  "reference.")
     report.text(design_verdict_text(check, reference))
@@ -201,14 +206,21 @@ def design_verdict_text(check: dict[str, Any], reference: float) -> str:
                        "it, so its failure measures the reference level, not the labels; the "
                        "physics is not tuned to pass.")
     if check.get("beyond_squeeze"):
-        gear = rows["gear_ceiling_g"] if "gear_ceiling_g" in rows else pd.Series(dtype=float)
-        bound = f" (at most {gear.min():.0f}–{gear.max():.0f} g)" if len(gear) else ""
         text += (" The reference is above that: a grip holds it only with normal forces above "
                  "the commanded squeeze, which the non-backdrivable worm gear allows (it keeps "
-                 "the squeeze the fingers reached and resists being pushed back, up to its stop"
-                 f"{bound}). The check is well-posed for this hand, and it tests the gear's hold "
-                 "as well as the squeeze.")
+                 "the squeeze the fingers reached and resists being pushed back, "
+                 f"{_gear_bound(rows)}). The check is well-posed for this hand, and it tests the "
+                 "gear's hold as well as the squeeze.")
     return text
+
+
+def _gear_bound(rows: pd.DataFrame) -> str:
+    """How far the worm gear's stop resists, in words: up to the boxes' gear ceilings, or any
+    load (no ceiling recorded: the stop is unbounded)."""
+    gear = rows["gear_ceiling_g"].dropna() if "gear_ceiling_g" in rows else pd.Series(dtype=float)
+    if not len(gear):
+        return "its stop holds any load"
+    return f"up to its stop (at most {gear.min():.0f}–{gear.max():.0f} g)"
 
 
 def _cone(report: Report, check: dict[str, Any], fig_dir: Path, root: Path, level: int) -> None:
