@@ -49,17 +49,24 @@ def cases() -> None:
               f"| {r.error:+.2%} | {r.detail} |")
 
 
-def cost(grips: int, seed: int, servo_peaks: bool = False) -> None:
+def sampled_work(grips: int, seed: int) -> list[tuple[PlanarObject, pd.DataFrame, Config]]:
+    """A seeded sample of the standard dataset's recorded grips (as ``grip-env validate
+    --resimulate`` draws it): each object with its picked grips, re-planned, and its config."""
     from grip_env.dataset.resimulation import _as_planned, _sample, kept_grips
     from grip_env.datasets import standard_path
-    from grip_env.sim import run_trial_outcomes
 
-    checks = _sample(standard_path(), grips, seed)
     work = []
-    for check in checks:
+    for check in _sample(standard_path(), grips, seed):
         chosen = check.recorded.iloc[list(check.picked)]
         planned = _as_planned(chosen, kept_grips(check.task), check.task.object_id)
         work.append((check.task.obj, planned, check.task.config))
+    return work
+
+
+def cost(grips: int, seed: int, servo_peaks: bool = False) -> None:
+    from grip_env.sim import run_trial_outcomes
+
+    work = sampled_work(grips, seed)
     outcomes = {}
     servo_peaks = _record_servo_peaks() if servo_peaks and "mujoco" in ENGINES else []
     print("| engine | trials | steps | CPU s | ms / trial | µs / step | held | success |")

@@ -18,6 +18,7 @@
     python -m tests.benchmarks.sim_fidelity paired --variant restored-scene
     python -m tests.benchmarks.sim_fidelity paired --variant weak-stop      # HOLD_FACTOR 2.5
     python -m tests.benchmarks.sim_fidelity paired --variant strong-stop    # HOLD_FACTOR 10
+    python -m tests.benchmarks.sim_fidelity paired --variant capped-stop    # HOLD_FACTOR 5
 
 * ``convergence``: a symmetric grip closes on a pinned 90 x 55 mm box; for each solver
   iteration count, each finger's joint-2 motor torque against its command and its fingertip
@@ -296,10 +297,12 @@ def sample_grips(per_object: int, config: Config) -> list[tuple[object, pd.DataF
 
 #: Fixes that can be undone one at a time, to measure what each changes (config B runs them).
 VARIANTS = ("none", "first-piece-friction", "proximal-clutch", "floor-erp", "rigid-pads",
-            "restored-scene", "weak-stop", "strong-stop")
+            "restored-scene", "weak-stop", "strong-stop", "capped-stop")
 #: The worm gear stop's holding torque (``hand.HOLD_FACTOR`` times the motor's) of the stop
-#: variants: the plausible range around the default 5 (BENCHMARKS, "HOLD_FACTOR").
-STOP_FACTORS = {"weak-stop": 2.5, "strong-stop": 10.0}
+#: variants: the range measured around the label model 2026.12-hertz's 5 (BENCHMARKS,
+#: "HOLD_FACTOR"), and that 5 itself (``capped-stop``, against a self-locking gear's unbounded
+#: stop since 2026.12-worm).
+STOP_FACTORS = {"weak-stop": 2.5, "strong-stop": 10.0, "capped-stop": 5.0}
 
 
 #: Bullet's non-contact erp before the arm (measured then: a fifth of a joint's gap per step).
