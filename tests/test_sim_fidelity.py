@@ -82,9 +82,11 @@ def test_worm_gear_holds_a_finger_pushed_back_harder_than_its_motor():
     assert np.min(back) >= -1e-3
 
 
-def test_a_stop_never_pushes_a_joint_forward_to_its_floor():
-    """No position correction on the worm gear's stops (the world's erp is 0): a joint left
-    below its floor, with its motor off, stays where it is; it is only kept from going back."""
+@pytest.mark.parametrize("hold", [10.0, float("inf")], ids=["10Nm", "unbounded"])
+def test_a_stop_never_pushes_a_joint_forward_to_its_floor(hold):
+    """No position correction on the worm gear's stops (the world's erp is 0), bounded or not: a
+    joint left below its floor, with its motor off, stays where it is; it is only kept from
+    going back."""
     with TrialScene(BOX, Config()) as scene:
         hand, world = scene.hand, scene.world
         world.client.setGravity(0, 0, 0)
@@ -92,7 +94,7 @@ def test_a_stop_never_pushes_a_joint_forward_to_its_floor():
         hand.preshape(0.0, np.array([0.8, 0.8, 0.8]))
         joint = FINGER_LINKS[2][-2]  # the thumb's joint 2 (a link's index is its joint's)
         world.velocity_motors(hand.uid, [joint], [0.0], [0.0])
-        world.joint_floors(hand.uid, [joint], [0.81], [2.44], [10.0])  # 10 mrad above it
+        world.joint_floors(hand.uid, [joint], [0.81], [2.44], [hold])  # 10 mrad above it
         start = world.joint_states(hand.uid, [joint])[0][0]
         for _ in range(60):
             world.step()
