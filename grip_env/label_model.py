@@ -32,6 +32,11 @@ History of PyBullet's (the figures behind each are in BENCHMARKS.md):
   The arm was decided on the contact's physics; the grid passed a convergence criterion
   written before it ran (success alike 99.3 %, Spearman 0.99). Shared with MuJoCo's
   ``mujoco-2026.12-hertz``. BENCHMARKS.md, "The next label model of both engines".
+- ``2026.12-worm``: the worm gear's stop holds any load (``hand.HOLD_FACTOR`` infinite; it held
+  5 times the motor's torque, a figure with no source). Barrett's single-start worms are
+  self-locking, and MuJoCo's stop already had no bound: both engines now model the same gear.
+  A stop of 50 times the motor gives the same outcomes as the unbounded one on 150 standard
+  grips, bit for bit. BENCHMARKS.md, "The worm gear's stop, alike in both engines".
 
 MuJoCo's (``sim.engine: mujoco``):
 
@@ -79,7 +84,7 @@ MuJoCo's (``sim.engine: mujoco``):
 
 from __future__ import annotations
 
-LABEL_MODEL = "2026.12-hertz"
+LABEL_MODEL = "2026.12-worm"
 #: MuJoCo's label model (``sim.engine: mujoco``), pinned by its own golden recording
 #: (``python -m tests.golden --engine mujoco --record`` renews it; BENCHMARKS.md, "PyBullet
 #: beside MuJoCo").

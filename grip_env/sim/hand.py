@@ -11,10 +11,10 @@ finite-torque motor behind a worm gear:
   ``q3_0 + (q2 - q2_0) / 3`` through the gear train (the Barrett clutch before breakaway);
 * the worm gear is not backdrivable: every joint's lower limit is raised, at every control
   update, to the furthest the joint has closed (its running peak). The limit is a one-sided
-  stop of ``HOLD_FACTOR`` times the joint's motor torque that the solver solves together with
-  the contacts, while the motor keeps pushing forward with its own torque: a stalled finger
-  keeps its squeeze and cannot be pushed back (measured: 0.02 mrad under 40 N, about 3x the
-  motor), with no switching between modes. The floor sits exactly at the peak, with no
+  stop of unbounded force (``HOLD_FACTOR``: the worm is self-locking) that the solver solves
+  together with the contacts, while the motor keeps pushing forward with its own torque: a
+  stalled finger keeps its squeeze and cannot be pushed back (measured: 0.02 mrad under 40 N,
+  about 3x the motor; the thumb holds 400 N), with no switching between modes. The floor sits exactly at the peak, with no
   backlash: PyBullet's joint limit is active only for a joint at or past it when a step starts,
   so a floor even 0.2 mrad below the joint let a 40 N push carry the thumb 47 mrad back in one
   step. The stop does not correct position (the world's ``erp`` is 0): a joint the solver let
@@ -45,6 +45,7 @@ with the palm facing down the hand frame is mirrored, so planar finger 1 is URDF
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from importlib.resources import files
@@ -74,7 +75,11 @@ GEAR_GAIN = 0.5  # position gain of the gear train (stiff, still stable at 240 H
 ARM_GAIN = 1.0  # the arm's joints reach their targets in one step (within their force)
 ARM_LEVER_M = 0.1  # the wrist's torque limit is the arm's force at this lever
 GEAR_UPDATE_RAD = 1e-3  # joint 3's geared target follows joint 2 in steps this small
-HOLD_FACTOR = 5.0  # worm-gear holding torque relative to the motor torque
+#: The worm gear's holding torque relative to the motor's: unbounded. Barrett's worms (single
+#: start, 125:1 and 93.75:1) are self-locking: no load on the finger turns them back short of
+#: breaking a tooth, and no source gives a finite figure (BENCHMARKS.md, "The worm gear's stop,
+#: alike in both engines"). MuJoCo's stop, a joint limit, has no force bound either.
+HOLD_FACTOR = math.inf
 BREAKAWAY_SPEED = 0.1  # joint 2 slower than this share of the closing speed has stopped
 #: The finger motor's rotor inertia (kg m^2; Barrett's BHand motor, as listed by the University of
 #: Waterloo's WAM specification) and the motor-to-joint motion ratios (Barrett: 125:1 to joint 2,
@@ -313,7 +318,7 @@ class Hand:
 
     def _raise_floors(self, which: Iterable[int]) -> None:
         """Set the lower limit of the flexion joints ``which`` (indices into ``_flex``) to their
-        peaks, holding ``HOLD_FACTOR`` times their motor torques."""
+        peaks, holding ``HOLD_FACTOR`` times their motor torques (any load: it is infinite)."""
         joints, lowers, uppers, holds = [], [], [], []
         for n in which:
             finger = self.fingers[n // 2]

@@ -332,7 +332,8 @@ class World:
 
     def joint_floors(self, body: int, joints: list[int], lowers: list[float],
                      uppers: list[float], holds: list[float]) -> None:
-        """Raise (or lower) joints' lower limits: one-sided stops of ``holds`` N·m each.
+        """Raise (or lower) joints' lower limits: one-sided stops of ``holds`` N·m each
+        (``math.inf``: any load).
 
         A joint limit is a unilateral constraint solved together with the contacts and motors
         (measured: a thumb at its floor, pushed back by 40 N, about 3x its motor, gives 0.02
