@@ -14,8 +14,9 @@ finite-torque motor behind a worm gear:
   stop of unbounded force (``HOLD_FACTOR``: the worm is self-locking) that the solver solves
   together with the contacts, while the motor keeps pushing forward with its own torque: a
   stalled finger keeps its squeeze and cannot be pushed back (measured: 0.02 mrad under 40 N,
-  about 3x the motor; the thumb holds 400 N), with no switching between modes. The floor sits exactly at the peak, with no
-  backlash: PyBullet's joint limit is active only for a joint at or past it when a step starts,
+  about 3x the motor; the thumb holds 400 N), with no switching between modes. The floor sits
+  exactly at the peak, with no backlash: PyBullet's joint limit is active only for a joint at or
+  past it when a step starts,
   so a floor even 0.2 mrad below the joint let a 40 N push carry the thumb 47 mrad back in one
   step. The stop does not correct position (the world's ``erp`` is 0): a joint the solver let
   slip below its floor stays there. A correction towards the floor pumped squeeze into fingers
