@@ -12,7 +12,7 @@ objects and by family (mesh, procedural, named...), with 95 % bootstrap interval
 * the pooled Spearman of the grips' mean robustness, and its mean within objects, beside each
   engine's own within-object retest;
 * top-1, both ways: how often the grip one engine ranks first (by mean robustness) succeeds in
-  most of its trials in the other;
+  most of its trials in the other (grips tied first count equally, as a pick among them would);
 * with ``ceilings``, how much of a label's differences between the grips of an object is the
   grip, the engine and the draws (:mod:`grip_env.dataset.label_shares`, from both engines'
   2T trials a grip);
@@ -312,9 +312,15 @@ def _object_figures(runs: _Runs, engine: str, other: str) -> dict[str, Any]:
     return {"trials": len(a), "alike": int((a == b).sum()), "a": int(a.sum()),
             "components": _components(runs, (engine, other)), "label_trials": _trials(own),
             "b": int(b.sum()), "means": (mean_a, mean_b), "spearman": _spearman(mean_a, mean_b),
-            "top_own": float(rate_b[int(np.argmax(mean_a))] > 0.5),
-            "top_other": float(rate_a[int(np.argmax(mean_b))] > 0.5),
+            "top_own": _first_holds(mean_a, rate_b), "top_other": _first_holds(mean_b, rate_a),
             "retest_own": retest(engine), "retest_other": retest(other)}
+
+
+def _first_holds(ranked: np.ndarray, rates: np.ndarray) -> float:
+    """Chance that the grip first by ``ranked`` succeeds in most trials by ``rates``: the share of
+    the grips tied first that do (a uniform pick among them), not the first one listed."""
+    first = ranked == ranked.max()
+    return float(np.mean(rates[first] > 0.5))
 
 
 def _trials(frame: pd.DataFrame) -> int:
