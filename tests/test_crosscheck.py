@@ -146,6 +146,11 @@ def test_top_1_counts_the_grips_tied_first_alike_not_the_first_listed():
     assert _first_holds(ranked[::-1], rates[::-1]) == pytest.approx(1 / 3)  # order-free
     assert _first_holds(np.array([50.0, 60.0]), np.array([1.0, 0.6])) == 1.0
     assert _first_holds(np.array([50.0, 60.0]), np.array([1.0, 0.5])) == 0.0  # half is not most
+    levels = [127.99999999999994, 53.81737057623772, 107.63474115247543, 45.25483399593903]
+    one, other = levels + [76.1], levels[:3] + [76.1, levels[3]]  # the same trials reordered
+    summed = np.array([sum(one) / 5, sum(other) / 5, 60.0])
+    assert summed[0] != summed[1]  # a last bit apart
+    assert _first_holds(summed, np.array([0.0, 1.0, 1.0])) == pytest.approx(0.5)
 
 
 @pytest.mark.slow

@@ -16,11 +16,11 @@ finite-torque motor behind a worm gear:
   stalled finger keeps its squeeze and cannot be pushed back (measured: 0.02 mrad under 40 N,
   about 3x the motor; the thumb holds 400 N), with no switching between modes. The floor sits
   exactly at the peak, with no backlash: PyBullet's joint limit is active only for a joint at or
-  past it when a step starts,
-  so a floor even 0.2 mrad below the joint let a 40 N push carry the thumb 47 mrad back in one
-  step. The stop does not correct position (the world's ``erp`` is 0): a joint the solver let
-  slip below its floor stays there. A correction towards the floor pumped squeeze into fingers
-  the object had stopped, more at every added solver iteration (BENCHMARKS.md).
+  past it when a step starts, so a floor even 0.2 mrad below the joint let a 40 N push carry the
+  thumb 47 mrad back in one step. The stop does not correct position (the world's ``erp`` is
+  0): a joint the solver let slip below its floor stays there. A correction towards the floor
+  pumped squeeze into fingers the object had stopped, more at every added solver iteration
+  (BENCHMARKS.md).
 * once joint 2 is stopped while the finger touches the object, by either link, joint 3 is
   released from the coupling and closes on its own with torque limit ``tau3`` (breakaway),
   locked behind by its own worm gear. A fingertip grip thus stalls on its two motors, whose
