@@ -13,7 +13,9 @@ from grip_env.config import Config
 from grip_env.dataset import generate
 from grip_env.dataset.crosscheck import (
     CrossCheck,
+    _by_pieces,
     _first_holds,
+    _group_values,
     _kappa,
     _run_key,
     crosscheck,
@@ -51,6 +53,8 @@ def test_every_grip_runs_in_both_engines_and_pybullet_reproduces_its_labels(chec
     assert found.families["named"].grips == 8
     assert set(found.by_grips) == {"4 grips"}  # both objects keep TINY's 4 grips
     assert found.by_grips["4 grips"].agreement == overall.agreement  # the same objects
+    assert set(found.by_pieces) == {"one convex piece"}  # a rectangle and a hexagon
+    assert found.by_pieces["one convex piece"].within == overall.within
     for name in ("agreement", "kappa", "within", "pooled", "top1_own", "top1_other",
                  "retest_own", "retest_other"):
         value, (low, high) = getattr(overall, name), getattr(overall, f"{name}_interval")
@@ -137,6 +141,34 @@ def test_kappa_is_cohen_s_on_the_pooled_trials():
     assert agreement == pytest.approx(0.6) and kappa == pytest.approx(0.2)
 
 
+def test_each_engine_s_mean_robustness_is_over_the_group_s_trials():
+    # 3 + 2 trials: own engine 30 + 40 g in all, the other 15 + 10 g; an object with more
+    # trials weighs more (a mean over trials, not over objects' means)
+    rows = [{"trials": 3, "alike": 3, "a": 1, "b": 1, "sums": (30.0, 15.0),
+             "means": (np.array([10.0, 20.0]), np.array([5.0, 6.0]))},
+            {"trials": 2, "alike": 1, "a": 1, "b": 0, "sums": (40.0, 10.0),
+             "means": (np.array([20.0, 20.0]), np.array([5.0, 5.0]))}]
+    for row in rows:
+        row.update(spearman=float("nan"), top_own=1.0, top_other=0.0, retest_own=float("nan"),
+                   retest_other=float("nan"))
+    found = _group_values(rows)
+    assert found["robustness_own"] == pytest.approx(70.0 / 5)
+    assert found["robustness_other"] == pytest.approx(25.0 / 5)
+
+
+def test_objects_are_grouped_by_their_simulated_convex_pieces():
+    from types import SimpleNamespace
+
+    from grip_env.objects import PlanarObject
+
+    square = PlanarObject.from_polygon([[0, 0], [40, 0], [40, 40], [0, 40]], name="square")
+    ell = PlanarObject.from_polygon([[0, 0], [40, 0], [40, 15], [15, 15], [15, 40], [0, 40]],
+                                    name="ell")
+    checks = [SimpleNamespace(task=SimpleNamespace(obj=o, config=Config()))
+              for o in (ell, square, ell)]
+    assert _by_pieces(checks) == {"one convex piece": [1], "several convex pieces": [0, 2]}
+
+
 def test_top_1_counts_the_grips_tied_first_alike_not_the_first_listed():
     # four grips; the first three tie at the ceiling, and in the other engine only the third
     # and the fourth succeed in most trials: a pick among the tied holds 1 time in 3
@@ -190,6 +222,8 @@ def test_the_card_and_the_study_report_show_a_recorded_crosscheck(tiny, checked,
     assert f"| all | 2 | {overall.agreement:.1%} [" in card
     assert f"| named | 2 | {found.families['named'].agreement:.1%} [" in card
     assert f"| 4 grips | 2 | {found.by_grips['4 grips'].agreement:.1%} [" in card
+    assert f"| one convex piece | 2 | {overall.agreement:.1%} [" in card
+    assert f"| {overall.robustness_own:.1f} / {overall.robustness_other:.1f} |" in card
     assert "| mujoco | 48 |" in card and "core-s a trustworthy label" in card
     assert f"{overall.share_engine:.1%} [" in card and "label: the grip's share" in card
     study = tmp_path / "study"

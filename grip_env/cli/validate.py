@@ -128,12 +128,14 @@ def _crosscheck(directory: Path, objects: int, seed: int, workers: int,
         parts = None if report is None else crosscheck_parts(report)
         found = crosscheck(directory, objects, seed=seed, workers=workers, parts=parts)
     typer.echo(found.summary())
-    for group, figures in [*found.families.items(), *found.by_grips.items()]:
+    for group, figures in [*found.families.items(), *found.by_grips.items(),
+                           *found.by_pieces.items()]:
         typer.echo(f"  {group} ({figures.objects} objects): success agree "
                    f"{figures.agreement:.1%}, kappa {figures.kappa:.2f}, within "
                    f"{figures.within:.2f} (retests {figures.retest_own:.2f}, "
                    f"{figures.retest_other:.2f}), pooled {figures.pooled:.2f}, top-1 "
-                   f"{figures.top1_own:.0%} / {figures.top1_other:.0%}")
+                   f"{figures.top1_own:.0%} / {figures.top1_other:.0%}, mean robustness "
+                   f"{figures.robustness_own:.1f} / {figures.robustness_other:.1f} g")
     for cost in found.cost:
         typer.echo(f"  {cost.engine}: {cost.ms_per_trial:.0f} ms a trial, "
                    f"{cost.us_per_step:.0f} us a step, {cost.trials_for_trustworthy:.1f} trials "

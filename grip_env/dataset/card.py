@@ -275,8 +275,8 @@ def _figure(group: dict[str, Any], name: str, percent: bool = False) -> str:
 
 def crosscheck_tables(found: dict[str, Any]) -> tuple[str, pd.DataFrame, pd.DataFrame]:
     """A ``validate --crosscheck`` result (its report's ``crosscheck``) as what it is, the
-    agreement overall, by family and by grips an object, with each engine's retest beside it,
-    and the engines' costs (tables of formatted text)."""
+    agreement overall, by family, by grips an object and by convex pieces, with each engine's
+    retest and mean robustness beside it, and the engines' costs (tables of formatted text)."""
     a, b = found["engine"], found["other"]
     intro = (f"`grip-env validate DIR --crosscheck {found.get('objects', '')} --seed "
              f"{found['seed']}`: every recorded grip of the sampled objects simulated again in "
@@ -291,13 +291,14 @@ def crosscheck_tables(found: dict[str, Any]) -> tuple[str, pd.DataFrame, pd.Data
              "the CPU of the run that simulated each engine's trials (a run that resumes "
              "another reads them back), so two engines' rows may come from different loads.")
     groups = [("all", found["overall"]), *sorted(found.get("families", {}).items()),
-              *found.get("by_grips", {}).items()]
+              *found.get("by_grips", {}).items(), *found.get("by_pieces", {}).items()]
     agreement = pd.DataFrame([{
         "objects": name, "n": str(g["objects"]), "success alike": _figure(g, "agreement", True),
         "kappa": _figure(g, "kappa"), "within-object Spearman": _figure(g, "within"),
         f"retest {a}": _figure(g, "retest_own"), f"retest {b}": _figure(g, "retest_other"),
         "pooled Spearman": _figure(g, "pooled"), f"top-1 {a} in {b}": _figure(g, "top1_own", True),
         f"top-1 {b} in {a}": _figure(g, "top1_other", True),
+        f"mean robustness {a} / {b} (g)": _robustness(g),
         "label: the grip's share": _figure(g, "share_grip", True),
         "the engine's": _figure(g, "share_engine", True),
         "the draws'": _figure(g, "share_draws", True)} for name, g in groups])
@@ -308,6 +309,15 @@ def crosscheck_tables(found: dict[str, Any]) -> tuple[str, pd.DataFrame, pd.Data
         "core-s a trustworthy label": f"{c['core_seconds_per_label']:.2f}"}
         for c in found.get("cost", [])])
     return intro, agreement, cost
+
+
+def _robustness(group: dict[str, Any]) -> str:
+    """Each engine's mean robustness over the group's trials (a report made before they were
+    recorded shows a dash)."""
+    own, other = group.get("robustness_own"), group.get("robustness_other")
+    if own is None or other is None or not (np.isfinite(own) and np.isfinite(other)):
+        return "–"
+    return f"{own:.1f} / {other:.1f}"
 
 
 def _models(found: dict[str, Any]) -> str:

@@ -6,9 +6,11 @@ the same draws (trials 0..T-1 of the dataset's seed) and the same protocol; with
 each engine also runs trials T..2T-1, its own within-object retest (the ceiling any agreement
 between engines can reach). The own engine's first run is the recorded labels again (checked:
 ``reproduced`` counts the grips whose mean robustness is the recorded one). Reported, over all
-objects and by family (mesh, procedural, named...), with 95 % bootstrap intervals over objects:
+objects, by family (mesh, procedural, named...), by the grips an object kept and by how many convex
+pieces its simulated body is made of, with 95 % bootstrap intervals over objects:
 
-* per-trial success agreement and Cohen's kappa;
+* per-trial success agreement and Cohen's kappa, and each engine's mean robustness (how much one
+  engine holds more than the other on the same trials);
 * the pooled Spearman of the grips' mean robustness, and its mean within objects, beside each
   engine's own within-object retest;
 * top-1, both ways: how often the grip one engine ranks first (by mean robustness) succeeds in
@@ -86,6 +88,10 @@ class Agreement:
     share_engine_interval: tuple[float, float]
     share_draws: float  # the trials' draws the label averages
     share_draws_interval: tuple[float, float]
+    robustness_own: float = float("nan")  # mean robustness (g) of the group's trials, own engine
+    robustness_own_interval: tuple[float, float] = (float("nan"), float("nan"))
+    robustness_other: float = float("nan")  # ... in the other engine
+    robustness_other_interval: tuple[float, float] = (float("nan"), float("nan"))
 
 
 @dataclass
@@ -118,6 +124,10 @@ class CrossCheck:
     #: differ by a shift or a turn ranks near-equal grips in both engines (BENCHMARKS.md, "Mesh
     #: objects in the cross-check").
     by_grips: dict[str, Agreement] = field(default_factory=dict)
+    #: The objects simulated as one convex prism against those cut into several: where pieces
+    #: meet, each engine's contacts see a seam the real body does not have (BENCHMARKS.md, "Seams
+    #: between convex pieces").
+    by_pieces: dict[str, Agreement] = field(default_factory=dict)
     #: Each engine's label model, as this code made them (a recorded cross-check of other
     #: models is stale: ``tests/test_crosscheck.py`` checks the shipped one).
     label_models: dict[str, str] = field(default_factory=dict)
@@ -310,6 +320,7 @@ def _object_figures(runs: _Runs, engine: str, other: str) -> dict[str, Any]:
                                                             _means(again))
 
     return {"trials": len(a), "alike": int((a == b).sum()), "a": int(a.sum()),
+            "sums": (float(own["robustness"].sum()), float(theirs["robustness"].sum())),
             "components": _components(runs, (engine, other)), "label_trials": _trials(own),
             "b": int(b.sum()), "means": (mean_a, mean_b), "spearman": _spearman(mean_a, mean_b),
             "top_own": _first_holds(mean_a, rate_b), "top_other": _first_holds(mean_b, rate_a),
@@ -376,6 +387,9 @@ def _group_values(rows: list[dict[str, Any]]) -> dict[str, float]:
                                     np.concatenate([r["means"][1] for r in rows]))
     else:
         found["pooled"] = float("nan")
+    trials = sum(r["trials"] for r in rows)
+    for k, name in enumerate(("robustness_own", "robustness_other")):
+        found[name] = sum(r["sums"][k] for r in rows) / trials if trials else float("nan")
     for score in _SCORES:
         values = np.array([r[score] for r in rows], float)
         found[score] = float(np.nanmean(values)) if np.isfinite(values).any() else float("nan")
@@ -465,12 +479,15 @@ def _figures(checks: list[_ObjectCheck], runs: list[_Runs], engine: str,
     by_grips = {name: _agreement([rows[i] for i in members], sum(grips[i] for i in members),
                                  _group_stream(seed, name))
                 for name, members in _by_grip_count(checks, grips).items() if members}
+    by_pieces = {name: _agreement([rows[i] for i in members], sum(grips[i] for i in members),
+                                  _group_stream(seed, name))
+                 for name, members in _by_pieces(checks).items() if members}
     reproduced = sum(_reproduced(r.draws[engine], c) for r, c in zip(runs, checks, strict=True))
     trials = checks[0].task.config.dataset.trials if checks else 0
     cost = _costs(runs, (engine, other), {engine: overall.retest_own,
                                           other: overall.retest_other}, trials)
     return CrossCheck(engine, other, seed, reproduced, overall, families, cost, by_grips,
-                      {e: label_model_for(e) for e in (engine, other)})
+                      by_pieces, {e: label_model_for(e) for e in (engine, other)})
 
 
 def _by_grip_count(checks: list[_ObjectCheck], grips: list[int]) -> dict[str, list[int]]:
@@ -480,3 +497,14 @@ def _by_grip_count(checks: list[_ObjectCheck], grips: list[int]) -> dict[str, li
     cap = checks[0].task.config.dataset.max_grips_per_object
     return {f"{cap} grips": [i for i, n in enumerate(grips) if n >= cap],
             f"under {cap} grips": [i for i, n in enumerate(grips) if n < cap]}
+
+
+def _by_pieces(checks: list[_ObjectCheck]) -> dict[str, list[int]]:
+    """The objects (indices) whose simulated body is one convex prism, and those of several."""
+    def pieces(check: _ObjectCheck) -> int:
+        tolerance = check.task.config.objects.sim_tolerance_mm
+        return len(check.task.obj.simulated_shape(tolerance).pieces)
+
+    counts = [pieces(check) for check in checks]
+    return {"one convex piece": [i for i, n in enumerate(counts) if n == 1],
+            "several convex pieces": [i for i, n in enumerate(counts) if n > 1]}
