@@ -1,0 +1,111 @@
+"""Do the engines part more where a grip's contacts lie near a seam? (run by hand)
+
+    python -m tests.benchmarks.seam_distance --parts R.crosscheck
+
+Reads a cross-check's kept outcomes (``grip-env validate standard --crosscheck N --report R.json``
+keeps them in ``R.crosscheck/``). For every grip of an object simulated as several convex
+pieces, the distance from its three planned contact points to the nearest point where a seam
+between two pieces meets the outline at a vertex that is not a concave corner (within 5 degrees
+of straight, or convex: where a seam is a ridge on a face; MuJoCo's pieces or PyBullet's eroded
+ones, whichever is nearer), and the grip's mean robustness in each engine; then, by distance,
+the grips, the engines' means and PyBullet's excess.
+"""
+
+from __future__ import annotations
+
+# grip_env before numpy: numpy held at portable kernels, as the dataset was made
+import grip_env  # noqa: F401  # isort: skip
+
+import argparse
+import itertools
+import json
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from shapely.geometry import Point, Polygon
+from shapely.ops import unary_union
+
+from grip_env.sim.world import COLLISION_MARGIN_MM
+
+SAMPLE = 80
+#: A vertex that turns inwards by more than this (sine of 5 degrees) is a concave corner.
+CONCAVE_SINE = np.sin(np.radians(5.0))
+BINS_MM = (0.0, 2.0, 4.0, 8.0, 16.0, np.inf)
+
+
+def seam_ends(pieces: tuple[np.ndarray, ...]) -> np.ndarray:
+    """Points (mm) where a seam between pieces meets the union's outline away from a concave
+    corner."""
+    outline = unary_union([Polygon(p) for p in pieces]).exterior
+    ring = np.asarray(outline.coords)[:-1]
+    turn = 1.0 if outline.is_ccw else -1.0
+    before, after = ring - np.roll(ring, 1, axis=0), np.roll(ring, -1, axis=0) - ring
+    cross = before[:, 0] * after[:, 1] - before[:, 1] * after[:, 0]
+    sine = turn * cross / (
+        np.linalg.norm(before, axis=1) * np.linalg.norm(after, axis=1))
+    concave = ring[sine < -CONCAVE_SINE]
+    ends = []
+    for piece in pieces:
+        for a, b in zip(piece, np.roll(piece, -1, axis=0), strict=True):
+            if outline.distance(Point((a + b) / 2)) < 1e-6:
+                continue  # an edge on the outline, not a seam
+            for end in (a, b):
+                on_outline = outline.distance(Point(end)) < 1e-6
+                if on_outline and not (len(concave) and
+                                       np.min(np.linalg.norm(concave - end, axis=1)) < 1e-6):
+                    ends.append(end)
+    return np.array(ends, dtype=float).reshape(-1, 2)
+
+
+def grip_rows(parts: Path) -> pd.DataFrame:
+    """One row per grip of every multi-piece object with kept outcomes."""
+    from grip_env.dataset.crosscheck import _from_json
+    from grip_env.dataset.resimulation import _retest_sample
+    from grip_env.datasets import standard_path
+
+    rows = []
+    for check in _retest_sample(standard_path(), SAMPLE, 0):
+        part = parts / f"{check.task.index:05d}.json"
+        shape = check.task.obj.simulated_shape(check.task.config.objects.sim_tolerance_mm)
+        if not part.is_file() or len(shape.pieces) == 1:
+            continue
+        runs = _from_json(json.loads(part.read_text()))
+        ends = np.vstack([seam_ends(shape.pieces),
+                          seam_ends(shape.collision_pieces(COLLISION_MARGIN_MM))])
+        grips = check.recorded.reset_index(drop=True)
+        contacts = np.stack([grips[[f"p{i}_x", f"p{i}_y"]].to_numpy() for i in (1, 2, 3)], 1)
+        means = {e: f.groupby("grip").robustness.mean() for e, f in runs.draws.items()}
+        for k in range(len(grips)):
+            distance = (np.min(np.linalg.norm(contacts[k][:, None] - ends[None], axis=2))
+                        if len(ends) else np.inf)
+            rows.append({"object_id": check.task.object_id, "pieces": len(shape.pieces),
+                         "grip": k, "distance_mm": distance,
+                         **{e: float(m[k]) for e, m in means.items()}})
+    return pd.DataFrame(rows)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--parts", type=Path, required=True)
+    args = parser.parse_args()
+    table = grip_rows(args.parts)
+    print(f"{len(table)} grips of {table.object_id.nunique()} objects of several pieces")
+    print("| nearest seam end (mm) | grips | objects | PyBullet mean (g) | MuJoCo | PyBullet minus "
+          "MuJoCo |")
+    print("| --- | --- | --- | --- | --- | --- |")
+    for low, high in itertools.pairwise(BINS_MM):
+        rows = table[(table.distance_mm >= low) & (table.distance_mm < high)]
+        if len(rows):
+            print(f"| {low:g}–{high:g} | {len(rows)} | {rows.object_id.nunique()} | "
+                  f"{rows.pybullet.mean():.1f} | {rows.mujoco.mean():.1f} | "
+                  f"{(rows.pybullet - rows.mujoco).mean():+.1f} |")
+    none = table[~np.isfinite(table.distance_mm)]
+    if len(none):
+        print(f"| no such seam end | {len(none)} | {none.object_id.nunique()} | "
+              f"{none.pybullet.mean():.1f} | {none.mujoco.mean():.1f} | "
+              f"{(none.pybullet - none.mujoco).mean():+.1f} |")
+
+
+if __name__ == "__main__":
+    main()
