@@ -8,7 +8,9 @@ pieces, the distance from its three planned contact points to the nearest point 
 between two pieces meets the outline at a vertex that is not a concave corner (within 5 degrees
 of straight, or convex: where a seam is a ridge on a face; MuJoCo's pieces or PyBullet's eroded
 ones, whichever is nearer), and the grip's mean robustness in each engine; then, by distance,
-the grips, the engines' means and PyBullet's excess.
+the grips, the engines' means and PyBullet's excess. Then every object of the sample (one piece
+or several) by family and piece count: the within-object Spearman between the engines' grip
+means and PyBullet's mean robustness over MuJoCo's.
 """
 
 from __future__ import annotations
@@ -85,6 +87,38 @@ def grip_rows(parts: Path) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def object_rows(parts: Path) -> pd.DataFrame:
+    """One row per object with kept outcomes: family, pieces, the engines' agreement."""
+    from grip_env.dataset.crosscheck import _from_json, _means, _spearman
+    from grip_env.dataset.resimulation import _retest_sample
+    from grip_env.datasets import standard_path
+    from grip_env.objects.family import object_family
+
+    rows = []
+    for check in _retest_sample(standard_path(), SAMPLE, 0):
+        part = parts / f"{check.task.index:05d}.json"
+        if not part.is_file():
+            continue
+        draws = _from_json(json.loads(part.read_text())).draws
+        shape = check.task.obj.simulated_shape(check.task.config.objects.sim_tolerance_mm)
+        rows.append({"family": object_family(check.task.obj), "pieces": len(shape.pieces),
+                     "within": _spearman(_means(draws["pybullet"]), _means(draws["mujoco"])),
+                     "pybullet": draws["pybullet"].robustness.mean(),
+                     "mujoco": draws["mujoco"].robustness.mean()})
+    return pd.DataFrame(rows)
+
+
+def print_by_family(table: pd.DataFrame) -> None:
+    """Objects by family and piece count (1, 2-5, 6 or more)."""
+    table = table.assign(group=pd.cut(table.pieces, [0, 1, 5, np.inf], labels=["1", "2–5", "6+"]))
+    print("| family | pieces | objects | within-object Spearman between engines | PyBullet / "
+          "MuJoCo mean robustness (g) |")
+    print("| --- | --- | --- | --- | --- |")
+    for (family, group), rows in table.groupby(["family", "group"], observed=True):
+        print(f"| {family} | {group} | {len(rows)} | {rows.within.mean():.2f} | "
+              f"{rows.pybullet.mean():.1f} / {rows.mujoco.mean():.1f} |")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--parts", type=Path, required=True)
@@ -105,6 +139,8 @@ def main() -> None:
         print(f"| no such seam end | {len(none)} | {none.object_id.nunique()} | "
               f"{none.pybullet.mean():.1f} | {none.mujoco.mean():.1f} | "
               f"{(none.pybullet - none.mujoco).mean():+.1f} |")
+    print()
+    print_by_family(object_rows(args.parts))
 
 
 if __name__ == "__main__":
