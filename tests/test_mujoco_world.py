@@ -140,6 +140,35 @@ def test_friction_pairs_combine_as_bullet_does():
         assert model.pair_friction[with_pad, 2] == pytest.approx(torsion)
 
 
+def test_a_sphere_touches_through_pairs_of_bullets_friction_and_its_compliance():
+    """A free sphere joins the pairs: with the table and with an object, each carrying Bullet's
+    product of the two frictions, and a compliant sphere's pairs its spring (``pad_solref``)."""
+    from grip_env.sim.mujoco_world import pad_solref
+
+    obj = next(o for o in load_object_set("default") if o.name == "rectangle")
+    with MujocoWorld() as mj:
+        table = mj.add_table(friction=0.5)
+        body = mj.add_object(obj, 30.0, 0.2, 0.3)
+        sphere = mj.add_sphere(3.0, 0.05, 0.8, np.array([0.0, 0.0, 50.0]))
+        mj.set_contact_compliance(sphere.uid, -1, 22_600.0, 8.5)
+        model, _ = mj._compiled()
+        ball = mj._link_geoms(sphere.uid, -1)
+        assert model.geom_size[ball[0], 0] == pytest.approx(0.003)
+        assert model.body_mass[mj._body_id(sphere.uid, -1)] == pytest.approx(0.05)
+        mine = (model.pair_geom1 == ball[0]) | (model.pair_geom2 == ball[0])
+        others = (set(model.pair_geom1[mine]) | set(model.pair_geom2[mine])) - {ball[0]}
+        table_geom = mj._link_geoms(table.uid, -1)[0]
+        assert others == {table_geom, *mj._link_geoms(body.uid, -1)}
+        with_table = mine & ((model.pair_geom1 == table_geom) | (model.pair_geom2 == table_geom))
+        assert model.pair_friction[with_table, 0] == pytest.approx(0.8 * 0.5)
+        assert model.pair_friction[mine & ~with_table, 0] == pytest.approx(0.8 * 0.3)
+        mj.step()
+        invweight = model.body_invweight0[:, 0]
+        k = np.flatnonzero(with_table)[0]
+        assert model.pair_solref[k] == pytest.approx(pad_solref(
+            22_600.0, 8.5, invweight[mj._body_id(sphere.uid, -1)]))
+
+
 @pytest.mark.parametrize("multi", [True, False])
 def test_a_flat_face_rests_on_several_points_with_multi_contact(monkeypatch, multi):
     """A prism on the table touches it at its face's four corners, each piece (MuJoCo's

@@ -332,6 +332,33 @@ class MujocoWorld:
         top = max(float((origin + (turn @ (piece.T / MM)).T)[:, 2].max()) for piece in pieces)
         return Body(uid, top, (-1,), tuple(map(float, inertia_per_kg)))  # type: ignore[arg-type]
 
+    def add_sphere(
+        self, radius_mm: float, mass_kg: float, friction: float, position_mm: NDArray[np.float64],
+        inertia_kg_m2: float | None = None,
+        rgba: tuple[float, float, float, float] = (0.15, 0.15, 0.15, 1.0),
+    ) -> Body:
+        """A free sphere centred at ``position_mm`` (``World.add_sphere``); its contacts are
+        pairs, as every free body's.
+
+        Raises:
+            ValueError: a radius, mass or inertia that is not positive.
+        """
+        from grip_env.sim.world import sphere_inertia_per_kg
+
+        inertia = sphere_inertia_per_kg(radius_mm, mass_kg, inertia_kg_m2)
+        uid = len(self._bodies)
+        name = self._new_body([f"object{uid}"], [], free=True)
+        body = self._spec.worldbody.add_body(name=name,
+                                             pos=(np.asarray(position_mm, float) * MM).tolist())
+        body.add_freejoint()
+        body.explicitinertial = True
+        body.mass = mass_kg
+        body.ipos = [0.0, 0.0, 0.0]  # MjSpec's default (NaN) compiles to the body's position
+        body.inertia = [i * mass_kg for i in inertia]
+        self._geom(body, type=mujoco.mjtGeom.mjGEOM_SPHERE, size=[radius_mm * MM, 0.0, 0.0],
+                   friction=friction, rgba=rgba)
+        return Body(uid, float(position_mm[2]) + radius_mm, (-1,), inertia)
+
     def set_dynamics(self, body: Body, mass_kg: float, friction: float,
                      spinning_friction: float = 0.0) -> None:
         """Mass (with the whole body's inertia) and friction on every piece of ``body``

@@ -206,6 +206,29 @@ class World:
         self.set_dynamics(body, mass_kg, friction)
         return body
 
+    def add_sphere(
+        self, radius_mm: float, mass_kg: float, friction: float, position_mm: NDArray[np.float64],
+        inertia_kg_m2: float | None = None,
+        rgba: tuple[float, float, float, float] = (0.15, 0.15, 0.15, 1.0),
+    ) -> Body:
+        """A free sphere centred at ``position_mm``, of inertia ``inertia_kg_m2`` about every axis
+        (a uniform ball's, 2/5 m r², if None); ``top_mm`` is its top. Bullet's sphere is exact:
+        its collision margin is its radius.
+
+        Raises:
+            ValueError: a radius, mass or inertia that is not positive.
+        """
+        inertia = sphere_inertia_per_kg(radius_mm, mass_kg, inertia_kg_m2)
+        c = self.client
+        shape = c.createCollisionShape(pybullet.GEOM_SPHERE, radius=radius_mm * MM)
+        visual = c.createVisualShape(pybullet.GEOM_SPHERE, radius=radius_mm * MM,
+                                     rgbaColor=list(rgba))
+        position = (np.asarray(position_mm, float) * MM).tolist()
+        uid = c.createMultiBody(mass_kg, shape, visual, basePosition=position)
+        body = Body(uid, float(position_mm[2]) + radius_mm, (-1,), inertia)
+        self.set_dynamics(body, mass_kg, friction)
+        return body
+
     def set_dynamics(self, body: Body, mass_kg: float, friction: float,
                      spinning_friction: float = 0.0) -> None:
         """Mass (with the whole body's inertia) and friction on every link of ``body``.
@@ -474,6 +497,21 @@ def prism_inertia(
     inertia = (float(l_minor + t2), float(l_major + t2), float(l_major + l_minor))
     half = obj.major_axis_angle / 2.0
     return inertia, (0.0, 0.0, float(np.sin(half)), float(np.cos(half)))
+
+
+def sphere_inertia_per_kg(radius_mm: float, mass_kg: float,
+                           inertia_kg_m2: float | None) -> tuple[float, float, float]:
+    """A sphere's principal inertia per kg (m²): ``inertia_kg_m2`` about every axis, or a uniform
+    ball's 2/5 r² if None.
+
+    Raises:
+        ValueError: a radius, mass or inertia that is not positive.
+    """
+    if radius_mm <= 0 or mass_kg <= 0 or (inertia_kg_m2 is not None and inertia_kg_m2 <= 0):
+        raise ValueError(f"a sphere's radius, mass and inertia must be positive, got "
+                         f"{radius_mm}, {mass_kg}, {inertia_kg_m2}")
+    per_kg = 0.4 * (radius_mm * MM) ** 2 if inertia_kg_m2 is None else inertia_kg_m2 / mass_kg
+    return (per_kg, per_kg, per_kg)
 
 
 def _collision_prism(piece: NDArray[np.float64], thickness_mm: float) -> list[list[float]]:
