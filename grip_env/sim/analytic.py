@@ -20,7 +20,10 @@ Coulomb's law:
   planned, e.g. the default rectangle's best by Q_C; paper's mu = 0.4) slides
   out along the fingers when the pull plus its weight exceeds mu times the sum of the pads'
   normal forces, as the engine itself reports them at the largest pull it held (``detail`` gives
-  that sum and the one at the hold before any pull: how far the squeeze gave way).
+  that sum and the one at the hold before any pull: how far the squeeze gave way);
+* ``tip_across_seam``: a fingertip (the hand's pad sphere) pressed with F on a block's face and
+  pulled along it slides at mu F, whether or not the face has a seam between two of the block's
+  simulated convex pieces ahead (a real body has none); near one the engines find a ridge.
 
 A load "slides" the body when it moves more than ``SLIP_MM`` within ``SLIP_TIME_S``: at 1 % over
 the critical load a block slides about 18 mm in that time, while the creep of a sticking contact
@@ -39,6 +42,7 @@ import pandas as pd
 from numpy.typing import NDArray
 
 from grip_env.config import Config
+from grip_env.hand_geometry import PAD_RADIUS_MM
 from grip_env.objects import PlanarObject
 from grip_env.sim import pose
 from grip_env.sim.body import Body
@@ -400,6 +404,154 @@ def pivoting_body(config: Config, mu: float = 0.4) -> CaseResult:
                       "m g d / (2 mu F arm)", detail)
 
 
+#: The seam case's block: ``BLOCK`` with a V-notch in its face y = -20 (``SEAM_NOTCH_MM`` deep,
+#: 4/3 as wide) and, cut, a dent of ``SEAM_DENT_MM`` in the face y = 20 across from the notch's
+#: tip. The dent's vertex is reflex, so every convex decomposition cuts there: Hertel-Mehlhorn
+#: keeps a seam only at a reflex vertex (a collinear vertex was merged over, its seam run to a
+#: corner, and the 1 mm erosion of PyBullet's pieces dropped it), and the constrained Delaunay
+#: edge between the two reflex vertices is the one it keeps. The dent tilts each half of the
+#: face by 5e-5 rad, which moves the answer by about 1e-4 of mu F.
+SEAM_NOTCH_MM = 3.0
+SEAM_DENT_MM = 1e-3
+#: Where the cut block's seam must end on the touched face (x, y mm; PyBullet's eroded pieces
+#: end ``COLLISION_MARGIN_MM`` further in), within ``SEAM_WITHIN_MM``; the uncut block's seams
+#: must all end further than ``SEAM_CLEAR_MM`` from it (its one seam ends at the corner, 20 mm).
+SEAM_POINT_MM = (0.0, 20.0)
+SEAM_WITHIN_MM = 0.01
+SEAM_CLEAR_MM = 10.0
+#: The fingertip pressed on it: a sphere of the pad's radius (``PAD_RADIUS_MM``, the URDF's),
+#: 1 kg of an inertia it cannot roll with (a pad is fixed on its link). The block is loaded with
+#: the reactions (``tip_across_seam``), so heavy, and turning as if so much heavier, that what
+#: they leave over moves it by far less than a slip: the engines place a contact's friction force
+#: up to its depth (0.44 mm) off the face, a torque of about 1 N mm at the pull, which turned a
+#: 1000 kg block of its own inertia 0.03 to 0.3 degrees within the second.
+FINGERTIP_KG = 1.0
+FINGERTIP_INERTIA_KG_M2 = 1e3
+SEAM_BLOCK_KG = 1000.0
+SEAM_BLOCK_TURN_INERTIA = 1000.0
+#: The seam's distances ahead of the tip in ``run_cases``: within the radius of the rubber's
+#: contact at F (sqrt(2 r F / k) = 1.6 mm), where the engines find the ridge.
+SEAM_OFFSETS_MM = (0.5, 1.5)
+
+
+def seam_block(cut: bool = True) -> PlanarObject:
+    """The seam case's block (``SEAM_NOTCH_MM``, ``SEAM_DENT_MM``), cut across at x = 0 or not,
+    to be simulated exactly (tolerance 0: a tolerance keeps no dent smaller than itself)."""
+    half, notch = 20.0, SEAM_NOTCH_MM
+    dent = [[0.0, half - SEAM_DENT_MM]] if cut else []
+    return PlanarObject.from_polygon(
+        [[-half, -half], [-notch * 2 / 3, -half], [0.0, notch - half], [notch * 2 / 3, -half],
+         [half, -half], [half, half], *dent, [-half, half]], name="cut block" if cut else "block")
+
+
+def seam_end_distance(pieces: tuple[NDArray[np.float64], ...],
+                      point_mm: tuple[float, float]) -> float:
+    """The distance (mm) from ``point_mm`` to the nearest end of a seam: a vertex of two or more
+    pieces (inf if there is none)."""
+    vertices = [tuple(np.round(v, 9)) for piece in pieces for v in piece]
+    shared = np.array([v for v in set(vertices) if vertices.count(v) > 1]).reshape(-1, 2)
+    return float(np.min(np.linalg.norm(shared - point_mm, axis=1), initial=np.inf))
+
+
+def check_seam(block: PlanarObject, cut: bool) -> None:
+    """Check that the block's simulated pieces, MuJoCo's and PyBullet's eroded ones, have a seam
+    ending at ``SEAM_POINT_MM`` (within ``SEAM_WITHIN_MM``) if ``cut``, none near it if not.
+
+    Raises:
+        ValueError: the decomposition does not cut where the case needs it to.
+    """
+    from grip_env.sim.world import COLLISION_MARGIN_MM
+
+    shape = block.simulated_shape(0.0)
+    x, y = SEAM_POINT_MM
+    eroded = shape.collision_pieces(COLLISION_MARGIN_MM)
+    for pieces, point in ((shape.pieces, (x, y)), (eroded, (x, y - COLLISION_MARGIN_MM))):
+        distance = seam_end_distance(pieces, point)
+        if (distance > SEAM_WITHIN_MM) if cut else (distance < SEAM_CLEAR_MM):
+            raise ValueError(f"{block.name}: the nearest seam ends {distance:.4g} mm from "
+                             f"{point} in {len(pieces)} pieces")
+
+
+def tip_across_seam(config: Config, mu: float = 0.4, offset_mm: float = 1.0,
+                    cut: bool = True) -> CaseResult:
+    """The pull (in mu F) a fingertip pressed with F on a block's face resists while it is pulled
+    along the face towards, and across, a seam of the block's convex pieces ``offset_mm`` ahead
+    (``cut``; the same block uncut is the control), against 1: a real body has no seams.
+
+    The fingertip is the hand's pad (``PAD_RADIUS_MM``, its friction, torsion and compliance;
+    without the torsion MuJoCo's point contact lost its grip: the uncut face let it slide at
+    half of mu F), starting at the depth the rubber gives F; no gravity; the squeeze
+    ``SQUEEZE_N`` and the pull, ramped up over ``RAMP_S``, follow the block's face, and the block
+    is loaded with their reactions at the contact. Slip is the fingertip's move relative to the
+    block, in the block's frame: a tip that slides a little and lodges against a ridge holds.
+    """
+    sim = config.sim
+    block = seam_block(cut)
+    check_seam(block, cut)
+    depth = SQUEEZE_N / sim.pad_stiffness_n_per_m * 1e3  # the rubber's, pressed with F
+
+    def slides(pulls: float) -> bool:
+        world = make_world(sim)
+        try:
+            body = world.add_object(block, BLOCK_THICKNESS_MM, SEAM_BLOCK_KG, friction=mu,
+                                    tolerance_mm=0.0)
+            x, y = SEAM_POINT_MM
+            tip = world.add_sphere(PAD_RADIUS_MM, FINGERTIP_KG, 1.0,
+                                   np.array([x - offset_mm, y + PAD_RADIUS_MM - depth,
+                                             BLOCK_THICKNESS_MM / 2]), FINGERTIP_INERTIA_KG_M2)
+            world.set_pad_friction(tip.uid, -1, 1.0, sim.pad_torsion_mm)
+            body = replace(body, inertia_per_kg=tuple(SEAM_BLOCK_TURN_INERTIA * i
+                                                      for i in body.inertia_per_kg))
+            world.set_dynamics(body, SEAM_BLOCK_KG, mu)
+            world.set_contact_compliance(tip.uid, -1, sim.pad_stiffness_n_per_m,
+                                         sim.pad_damping_n_s_per_m)
+            world.set_gravity((0.0, 0.0, 0.0))
+            start_turn = world.pose_floats_mm(body.uid)[1]
+
+            def load(share: float) -> None:
+                """The squeeze along the face's inward normal and ``share`` of the pull along
+                the face, on the fingertip; their reactions on the block, at the contact."""
+                position, turn = world.pose_floats_mm(body.uid)
+                turned = pose.multiply(turn, pose.conjugate(start_turn))
+                normal = np.array(pose.rotate(turned, (0.0, 1.0, 0.0)))
+                along = np.array(pose.rotate(turned, (1.0, 0.0, 0.0)))
+                force = (share * pulls * mu * along - normal) * SQUEEZE_N
+                contact = np.subtract(world.pose_floats_mm(tip.uid)[0], position) - (
+                    (PAD_RADIUS_MM - depth) * normal)  # on the face
+                world.push(tip.uid, force)
+                world.push(body.uid, -force)  # and the contact's torque about its centre
+                world.twist(body.uid, -np.cross(contact * 1e-3, force))
+
+            def slip() -> NDArray[np.float64]:
+                return np.array(pose.in_frame(*world.pose_floats_mm(body.uid),
+                                              *world.pose_floats_mm(tip.uid))[0])
+
+            for _ in range(round(TWIST_SETTLE_S / sim.timestep)):
+                load(0.0)
+                world.step()
+            start = slip()
+            for step in range(round(SLIP_TIME_S / sim.timestep)):
+                load(min(1.0, (step + 1) * sim.timestep / RAMP_S))
+                world.step()
+                if np.linalg.norm(slip() - start) > SLIP_MM:
+                    return True
+            turn = pose.multiply(world.pose_floats_mm(body.uid)[1], pose.conjugate(start_turn))
+            when_held[pulls] = (world.contact_normal_force_n(tip.uid, body.uid),
+                                np.degrees(pose.angle(turn)))
+            return False
+        finally:
+            world.close()
+
+    when_held: dict[float, tuple[float, float]] = {}
+    found = critical_load(slides, 0.5, 2.0)
+    normal, turn = when_held[max(when_held)]
+    name = (f"tip across a seam ({offset_mm:g} mm ahead)" if cut
+            else f"tip across an uncut face ({offset_mm:g} mm)")
+    detail = (f"at the largest pull held: sum of normal forces {normal:.3f} N (F = "
+              f"{SQUEEZE_N:g} N), the block turned {turn:.2g} deg")
+    return CaseResult(name, sim.engine, 1.0, found, "pull / (mu F)", detail)
+
+
 class _Held(Exception):
     """Raised from the trial's ``held`` phase to stop it once the case is measured."""
 
@@ -471,9 +623,12 @@ def run_cases(config: Config, box: PlanarObject, grip: pd.DataFrame,
     ``box`` held by ``grip`` (see :func:`held_box`)."""
     cases: list[Callable[[Config], CaseResult]] = [
         tilted_plane, pushed_block, lambda c: two_pad_squeeze(c, compliant=False),
-        two_pad_squeeze, twisted_squeeze, pivoting_body, lambda c: held_box(c, box, grip)]
+        two_pad_squeeze, twisted_squeeze, pivoting_body, lambda c: held_box(c, box, grip),
+        lambda c: tip_across_seam(c, offset_mm=1.5, cut=False),
+        *(lambda c, at=at: tip_across_seam(c, offset_mm=at) for at in SEAM_OFFSETS_MM)]
     names = ("tilted plane", "pushed block", "two-pad squeeze (rigid pads)", "two-pad squeeze",
-             "twisted squeeze", "pivoting body", "held box")
+             "twisted squeeze", "pivoting body", "held box", "tip across an uncut face",
+             *(f"tip across a seam ({at:g} mm ahead)" for at in SEAM_OFFSETS_MM))
     results = []
     for engine in engines:
         engine_config = config.override(sim={"engine": engine})
