@@ -75,6 +75,10 @@ def test_a_sphere_rests_on_the_table_at_its_radius(engine):
     height, normal, _ = _rest_sphere(engine, compliant=True)
     assert 3.0 - height == pytest.approx(0.5 * 9.81 / 22_600.0 * 1e3, abs=0.015)
     assert normal == pytest.approx(0.5 * 9.81, rel=1e-3)
+    from grip_env.sim.engine import make_world
+
+    with make_world(_config(engine).sim) as world, pytest.raises(ValueError, match="inertia"):
+        world.add_sphere(3.0, 0.5, 0.4, np.zeros(3), inertia_kg_m2=0.0)
 
 
 def _sphere_slides(engine: str, pushes: float, torsion: bool) -> float:
