@@ -16,6 +16,7 @@ from __future__ import annotations
 import grip_env  # noqa: F401  # isort: skip
 
 import argparse
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
@@ -76,21 +77,29 @@ def run_object(item: tuple[str, str]) -> list[dict[str, Any]]:
     return rows
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def family_table(doc: str, run: Callable[[tuple[str, str]], list[dict[str, Any]]],
+                 ) -> tuple[pd.DataFrame, str]:
+    """Parse ``--family``, ``--workers`` and ``--out``, run ``run`` on every object of the
+    family (in a process pool) and return its rows (kept in ``--out``) and the family."""
+    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0])
     parser.add_argument("--family", default="mesh")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", help="a Parquet file of every trial's row")
     args = parser.parse_args()
     items = [(args.family, c.task.object_id) for c in _checks(args.family)]
     with ProcessPoolExecutor(args.workers) as pool:
-        table = pd.DataFrame([row for rows in pool.map(run_object, items) for row in rows])
+        table = pd.DataFrame([row for rows in pool.map(run, items) for row in rows])
     if args.out:
         table.to_parquet(args.out)
+    return table, args.family
+
+
+def main() -> None:
+    table, family = family_table(__doc__, run_object)
     table["C1 tertile"] = table.groupby(["object_id", "engine"]).C1.transform(
         lambda v: pd.qcut(v.rank(method="first"), 3, labels=["low", "mid", "high"]))
     with pd.option_context("display.width", 200, "display.max_columns", 20):
-        print(f"{table.object_id.nunique()} {args.family} objects, {len(table) // 2} grips")
+        print(f"{table.object_id.nunique()} {family} objects, {len(table) // 2} grips")
         print(table.groupby("engine")[COLUMNS].mean().round(2).to_string())
         print(table.groupby(["C1 tertile", "engine"], observed=True)[COLUMNS].mean().round(2)
               .to_string())

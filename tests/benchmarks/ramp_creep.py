@@ -16,15 +16,13 @@ from __future__ import annotations
 # grip_env before numpy: numpy held at portable kernels, as the dataset was made
 import grip_env  # noqa: F401  # isort: skip
 
-import argparse
-from concurrent.futures import ProcessPoolExecutor
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from tests.benchmarks.engines import ENGINES
-from tests.benchmarks.hold_squeeze import _checks
+from tests.benchmarks.hold_squeeze import _checks, family_table
 
 
 class _Recorder:
@@ -112,21 +110,12 @@ def _weakest(steps: list[tuple[int, float, float, float]], sim: Any) -> dict[str
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--family", default="mesh")
-    parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--out", help="a Parquet file of every trial's row")
-    args = parser.parse_args()
-    items = [(args.family, c.task.object_id) for c in _checks(args.family)]
-    with ProcessPoolExecutor(args.workers) as pool:
-        table = pd.DataFrame([row for rows in pool.map(run_object, items) for row in rows])
-    if args.out:
-        table.to_parquet(args.out)
+    table, family = family_table(__doc__, run_object)
     table["crept past half"] = (table.drift_held_mm > 2.5) | (table.turn_held_deg > 5.0)
     columns = ["robustness", "drift_held_mm", "turn_held_deg", "crept past half",
                "steps_per_level"]
     with pd.option_context("display.width", 200, "display.max_columns", 20):
-        print(f"{table.object_id.nunique()} {args.family} objects, held trials by engine")
+        print(f"{table.object_id.nunique()} {family} objects, held trials by engine")
         print(table.groupby(["C1 third", "engine"], observed=True)[columns].mean().round(2)
               .to_string())
         print(table.groupby(["C1 third", "engine"], observed=True).size().to_string())
