@@ -8,7 +8,9 @@ every direction ramped to its own first failure (``disturbance.direction_limits`
 drift and turn in the palm frame read after every step. For the weakest direction (the trial's
 label) it reports the drift and turn the object had reached at the last level it held (creep
 already spent of the 5 mm / 10 degree hold tolerance), the share of failures that come after
-the object had crept past half the tolerance, and the steps a held level took to settle.
+the object had crept past half the tolerance, and the steps a held level took to settle; and
+how far the fingers' flexion joints moved by then: the most any went back below its worm-gear
+floor (the stop's give) and the most any moved from where the ramp found it.
 """
 
 from __future__ import annotations
@@ -28,10 +30,11 @@ from tests.benchmarks.hold_squeeze import _checks, family_table
 class _Recorder:
     """Wraps a ramp's probe: after every step, the climb, the level and the object's motion."""
 
-    def __init__(self, probe: Any) -> None:
+    def __init__(self, probe: Any, hand: Any) -> None:
         from grip_env.sim.disturbance import RampProbe
 
-        self.inner, self.rows = probe, []
+        self.inner, self.hand, self.rows = probe, hand, []
+        self.start = hand.joint_states()[0]
         self.climb, self.level, self.reference = -1, 0.0, None
         self.probe = RampProbe(self.restore, self.push, self.step, probe.moved, probe.where,
                                probe.palm_axes)
@@ -51,7 +54,10 @@ class _Recorder:
         self.inner.step()
         self.inner.moved()  # updates where()
         drift, turn = pose.moved_from(self.reference, self.inner.where())
-        self.rows.append((self.climb, self.level, drift, turn))
+        q = self.hand.joint_states()[0]
+        give = float(np.max(self.hand.state().peak - q))
+        travel = float(np.max(np.abs(q - self.start)))
+        self.rows.append((self.climb, self.level, drift, turn, give, travel))
 
 
 def run_object(item: tuple[str, str]) -> list[dict[str, Any]]:
@@ -71,15 +77,17 @@ def run_object(item: tuple[str, str]) -> list[dict[str, Any]]:
     rows: list[dict[str, Any]] = []
     for engine in ENGINES:
         recorders: list[_Recorder] = []
+        scenes: list[Any] = []
 
         def ramp(probe: Any, mass: float, gyration: float, sim: Any,
-                 recorders: list[_Recorder] = recorders) -> float:
-            recorder = _Recorder(probe)
+                 recorders: list[_Recorder] = recorders, scenes: list[Any] = scenes) -> float:
+            recorder = _Recorder(probe, scenes[0].hand)
             recorders.append(recorder)
             return float(disturbance.direction_limits(recorder.probe, mass, gyration, sim).min())
 
         scene_config = config.override(sim={"engine": engine})
         with TrialScene(obj, scene_config, ramp=ramp) as scene:
+            scenes.append(scene)
             for k, (plan, noise) in enumerate(zip(grip_plans(grips), draws, strict=True)):
                 if third[k] == "mid":
                     continue
@@ -92,9 +100,9 @@ def run_object(item: tuple[str, str]) -> list[dict[str, Any]]:
     return rows
 
 
-def _weakest(steps: list[tuple[int, float, float, float]], sim: Any) -> dict[str, float]:
+def _weakest(steps: list[tuple[float, ...]], sim: Any) -> dict[str, float]:
     """The weakest direction's climb: the lowest failing level, its motion before it failed."""
-    table = pd.DataFrame(steps, columns=["climb", "level", "drift", "turn"])
+    table = pd.DataFrame(steps, columns=["climb", "level", "drift", "turn", "give", "travel"])
     failed = table.groupby("climb").apply(
         lambda c: c[(c.drift > sim.hold_tolerance_mm) | (c.turn > sim.hold_rotation_deg)]
         .level.min(), include_groups=False)
@@ -106,6 +114,8 @@ def _weakest(steps: list[tuple[int, float, float, float]], sim: Any) -> dict[str
     return {"direction": climb, "drift_held_mm": float(last.drift.iloc[-1]) if len(last) else 0.0,
             "turn_held_deg": float(last.turn.iloc[-1]) if len(last) else 0.0,
             "steps_per_level": float(held.groupby("level").size().mean()) if len(held) else 0.0,
+            "give_mrad": 1e3 * float(held.give.max()) if len(held) else 0.0,
+            "travel_mrad": 1e3 * float(held.travel.max()) if len(held) else 0.0,
             "broke": bool(np.isfinite(first_bad))}
 
 
@@ -113,7 +123,7 @@ def main() -> None:
     table, family = family_table(__doc__, run_object)
     table["crept past half"] = (table.drift_held_mm > 2.5) | (table.turn_held_deg > 5.0)
     columns = ["robustness", "drift_held_mm", "turn_held_deg", "crept past half",
-               "steps_per_level"]
+               "steps_per_level", "give_mrad", "travel_mrad"]
     with pd.option_context("display.width", 200, "display.max_columns", 20):
         print(f"{table.object_id.nunique()} {family} objects, held trials by engine")
         print(table.groupby(["C1 third", "engine"], observed=True)[columns].mean().round(2)
