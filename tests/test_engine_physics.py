@@ -21,6 +21,12 @@ def _mujoco(*marks: pytest.MarkDecorator) -> object:
     return pytest.param("mujoco", marks=[*marks, *ENGINES[1].marks])
 
 
+def _failing_in_both(pybullet: str, mujoco: str) -> list[object]:
+    """Both engines, each a strict expected failure for its own reason."""
+    return [pytest.param("pybullet", marks=pytest.mark.xfail(strict=True, reason=pybullet)),
+            _mujoco(pytest.mark.xfail(strict=True, reason=mujoco))]
+
+
 def _held_box(engine: str) -> analytic.CaseResult:
     from tests.benchmarks.engines import held_box_grip
 
@@ -230,15 +236,12 @@ def test_a_body_held_at_two_points_pivots_where_its_engines_friction_model_says(
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("engine", [
-    pytest.param("pybullet", marks=pytest.mark.xfail(
-        strict=True, reason="PyBullet's body pivots at 122 % of a disc contact's limit: Bullet "
-        "bounds torsional and sideways friction each alone, so the weight a contact carries "
-        "sideways takes nothing from its twist (BENCHMARKS.md, 'Twist and pivot')")),
-    _mujoco(pytest.mark.xfail(
-        strict=True, reason="MuJoCo's body pivots at 106 % of a disc contact's limit: its "
-        "elliptic cone lies outside the disc's limit surface (BENCHMARKS.md, 'Twist and "
-        "pivot')"))])
+@pytest.mark.parametrize("engine", _failing_in_both(
+    "PyBullet's body pivots at 122 % of a disc contact's limit: Bullet bounds torsional and "
+    "sideways friction each alone, so the weight a contact carries sideways takes nothing from "
+    "its twist (BENCHMARKS.md, 'Twist and pivot')",
+    "MuJoCo's body pivots at 106 % of a disc contact's limit: its elliptic cone lies outside "
+    "the disc's limit surface (BENCHMARKS.md, 'Twist and pivot')"))
 def test_a_body_held_at_two_points_pivots_under_its_weight_at_a_disc_contacts_limit(engine):
     result = analytic.pivoting_body(_config(engine), mu=0.4)
     assert result.analytic == pytest.approx(0.817, abs=0.002)
@@ -275,15 +278,13 @@ def test_a_fingertip_slides_along_an_uncut_face_at_mu_times_its_squeeze(engine):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("offset_mm", analytic.SEAM_OFFSETS_MM)
-@pytest.mark.parametrize("engine", [
-    pytest.param("pybullet", marks=pytest.mark.xfail(
-        strict=True, reason="PyBullet's fingertip slides across a seam 0.5 / 1.5 mm ahead at 1.196 "
-        "/ 1.262 mu F: the next piece's corner, rounded by Bullet's 1 mm margin, reaches 1 mm "
-        "past the seam under the pressed rubber and carries 1.8-4.8 N at a 8-23 degree tilt")),
-    _mujoco(pytest.mark.xfail(
-        strict=True, reason="MuJoCo's fingertip slides across a seam 0.5 / 1.5 mm ahead at 1.311 "
-        "/ 1.281 mu F: it creeps to the next piece's sharp edge and lodges against it (2.6-3.6 N "
-        "at a 19-24 degree tilt)"))])
+@pytest.mark.parametrize("engine", _failing_in_both(
+    "PyBullet's fingertip slides across a seam 0.5 / 1.5 mm ahead at 1.196 / 1.262 mu F: the "
+    "next piece's corner, rounded by Bullet's 1 mm margin, reaches 1 mm past the seam under the "
+    "pressed rubber and carries 1.8-4.8 N at a 8-23 degree tilt",
+    "MuJoCo's fingertip slides across a seam 0.5 / 1.5 mm ahead at 1.311 / 1.281 mu F: it "
+    "creeps to the next piece's sharp edge and lodges against it (2.6-3.6 N at a 19-24 degree "
+    "tilt)"))
 def test_a_fingertip_slides_across_a_seam_of_the_simulated_pieces_at_mu_times_its_squeeze(
         engine, offset_mm):
     """A real body has no seams: the pull is mu F wherever the seam ends."""
