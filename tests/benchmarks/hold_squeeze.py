@@ -79,13 +79,21 @@ def run_object(item: tuple[str, str]) -> list[dict[str, Any]]:
 
 def family_table(doc: str, run: Callable[[tuple[str, str]], list[dict[str, Any]]],
                  ) -> tuple[pd.DataFrame, str]:
-    """Parse ``--family``, ``--workers`` and ``--out``, run ``run`` on every object of the
-    family (in a process pool) and return its rows (kept in ``--out``) and the family."""
+    """Parse ``--family``, ``--workers``, ``--out`` and ``--converged``, run ``run`` on every
+    object of the family (in a process pool) and return its rows (kept in ``--out``) and the
+    family."""
     parser = argparse.ArgumentParser(description=doc.split("\n\n")[0])
     parser.add_argument("--family", default="mesh")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", help="a Parquet file of every trial's row")
+    parser.add_argument("--converged", action="store_true",
+                        help="MuJoCo at the converged integration of tests.benchmarks."
+                             "mujoco_lean (16 substeps, NoSlip 20, Newton 200 at 1e-10)")
     args = parser.parse_args()
+    if args.converged:  # the workers fork from here and keep the patch
+        from tests.benchmarks import mujoco_lean
+
+        mujoco_lean.apply(mujoco_lean.settings(mujoco_lean.reference_of("lean")))
     items = [(args.family, c.task.object_id) for c in _checks(args.family)]
     with ProcessPoolExecutor(args.workers) as pool:
         table = pd.DataFrame([row for rows in pool.map(run, items) for row in rows])
