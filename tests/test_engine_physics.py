@@ -248,6 +248,15 @@ def test_a_body_held_at_two_points_pivots_under_its_weight_at_a_disc_contacts_li
     assert abs(result.error) < 0.05, result
 
 
+def test_seam_ends_are_the_vertices_two_pieces_share():
+    # two unit squares side by side share the edge x = 1: its ends (1, 0) and (1, 1)
+    left = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    ends = analytic.seam_ends((left, left + [1.0, 0.0]))
+    assert sorted(map(tuple, ends)) == [(1.0, 0.0), (1.0, 1.0)]
+    assert len(analytic.seam_ends((left,))) == 0
+    assert analytic.seam_end_distance((left,), (0.5, 0.5)) == np.inf
+
+
 def test_the_seam_blocks_pieces_are_cut_across_the_touched_face_where_intended():
     """Both engines' pieces (MuJoCo's exact, PyBullet's eroded by its margin) of the cut block
     end a seam within 0.01 mm of the point the tip crosses; the uncut block's none within 10 mm.

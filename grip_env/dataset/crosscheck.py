@@ -88,10 +88,10 @@ class Agreement:
     share_engine_interval: tuple[float, float]
     share_draws: float  # the trials' draws the label averages
     share_draws_interval: tuple[float, float]
-    robustness_own: float = float("nan")  # mean robustness (g) of the group's trials, own engine
-    robustness_own_interval: tuple[float, float] = (float("nan"), float("nan"))
-    robustness_other: float = float("nan")  # ... in the other engine
-    robustness_other_interval: tuple[float, float] = (float("nan"), float("nan"))
+    robustness_own: float  # mean robustness (g) of the group's trials in the own engine
+    robustness_own_interval: tuple[float, float]
+    robustness_other: float  # ... in the other engine
+    robustness_other_interval: tuple[float, float]
 
 
 @dataclass
@@ -473,15 +473,16 @@ def _figures(checks: list[_ObjectCheck], runs: list[_Runs], engine: str,
     groups: dict[str, list[int]] = {}
     for i, check in enumerate(checks):
         groups.setdefault(object_family(check.task.obj), []).append(i)
-    families = {name: _agreement([rows[i] for i in members], sum(grips[i] for i in members),
-                                 _group_stream(seed, f"family {name}"))
-                for name, members in sorted(groups.items())}  # fmt: skip
-    by_grips = {name: _agreement([rows[i] for i in members], sum(grips[i] for i in members),
-                                 _group_stream(seed, name))
-                for name, members in _by_grip_count(checks, grips).items() if members}
-    by_pieces = {name: _agreement([rows[i] for i in members], sum(grips[i] for i in members),
-                                  _group_stream(seed, name))
-                 for name, members in _by_pieces(checks).items() if members}
+
+    def agreements(named: dict[str, list[int]], stream: str = "") -> dict[str, Agreement]:
+        """Each non-empty group's agreement, its bootstrap stream keyed by its name."""
+        return {name: _agreement([rows[i] for i in members], sum(grips[i] for i in members),
+                                 _group_stream(seed, stream + name))
+                for name, members in named.items() if members}
+
+    families = agreements(dict(sorted(groups.items())), "family ")
+    by_grips = agreements(_by_grip_count(checks, grips))
+    by_pieces = agreements(_by_pieces(checks))
     reproduced = sum(_reproduced(r.draws[engine], c) for r, c in zip(runs, checks, strict=True))
     trials = checks[0].task.config.dataset.trials if checks else 0
     cost = _costs(runs, (engine, other), {engine: overall.retest_own,

@@ -444,13 +444,17 @@ def seam_block(cut: bool = True) -> PlanarObject:
          [half, -half], [half, half], *dent, [-half, half]], name="cut block" if cut else "block")
 
 
+def seam_ends(pieces: tuple[NDArray[np.float64], ...]) -> NDArray[np.float64]:
+    """The ends of the seams between convex pieces (mm): the vertices of two or more pieces."""
+    vertices, counts = np.unique(np.round(np.vstack(pieces), 9), axis=0, return_counts=True)
+    return vertices[counts > 1]
+
+
 def seam_end_distance(pieces: tuple[NDArray[np.float64], ...],
                       point_mm: tuple[float, float]) -> float:
-    """The distance (mm) from ``point_mm`` to the nearest end of a seam: a vertex of two or more
-    pieces (inf if there is none)."""
-    vertices = [tuple(np.round(v, 9)) for piece in pieces for v in piece]
-    shared = np.array([v for v in set(vertices) if vertices.count(v) > 1]).reshape(-1, 2)
-    return float(np.min(np.linalg.norm(shared - point_mm, axis=1), initial=np.inf))
+    """The distance (mm) from ``point_mm`` to the nearest end of a seam (inf if none)."""
+    ends = seam_ends(pieces)
+    return float(np.min(np.linalg.norm(ends - point_mm, axis=1), initial=np.inf))
 
 
 def check_seam(block: PlanarObject, cut: bool) -> None:

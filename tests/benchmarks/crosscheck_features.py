@@ -16,7 +16,6 @@ from __future__ import annotations
 import grip_env  # noqa: F401  # isort: skip
 
 import argparse
-import json
 from pathlib import Path
 
 import numpy as np
@@ -24,6 +23,7 @@ import pandas as pd
 from scipy.stats import rankdata, spearmanr
 
 from grip_env.features import FEATURE_NAMES
+from tests.benchmarks.crosscheck_contact_loads import kept_runs
 
 SAMPLE = 80
 MIN_GRIPS = 8
@@ -33,18 +33,15 @@ OTHERS = ("Q_G", "Q_C", "two_finger", "spread", "e1", "e2", "e3", "rho1", "rho2"
 
 def grip_rows(parts: Path) -> pd.DataFrame:
     """One row per grip: family, the rank difference, the features standardised in the object."""
-    from grip_env.dataset.crosscheck import _from_json, _means
-    from grip_env.dataset.resimulation import _retest_sample
-    from grip_env.datasets import standard_path
+    from grip_env.dataset.crosscheck import _means
     from grip_env.objects.family import object_family
 
     frames = []
-    for check in _retest_sample(standard_path(), SAMPLE, 0):
-        part = parts / f"{check.task.index:05d}.json"
+    for check, runs in kept_runs(parts, SAMPLE, 0):
         grips = check.recorded.reset_index(drop=True)
-        if not part.is_file() or len(grips) < MIN_GRIPS:
+        if len(grips) < MIN_GRIPS:
             continue
-        draws = _from_json(json.loads(part.read_text())).draws
+        draws = runs.draws
         scale = len(grips) - 1
         difference = (rankdata(_means(draws["pybullet"])) - rankdata(_means(draws["mujoco"])))
         features = grips[[*FEATURE_NAMES, *OTHERS]].astype(float)

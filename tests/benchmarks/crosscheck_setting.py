@@ -18,7 +18,6 @@ from __future__ import annotations
 import grip_env  # noqa: F401  # isort: skip
 
 import argparse
-import json
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -26,29 +25,28 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from tests.benchmarks.crosscheck_contact_loads import kept_runs
 from tests.benchmarks.engines import ENGINES
 
 SAMPLE = 80
 
 
-def _checks(parts: Path, family: str | None) -> list:
-    from grip_env.dataset.resimulation import _retest_sample
-    from grip_env.datasets import standard_path
+def _kept(parts: Path, family: str | None) -> list:
+    """(check, kept runs) of the sample's objects with parts, of ``family`` if given."""
     from grip_env.objects.family import object_family
 
-    checks = _retest_sample(standard_path(), SAMPLE, 0)
-    return [c for c in checks if (parts / f"{c.task.index:05d}.json").is_file()
-            and (family is None or object_family(c.task.obj) == family)]
+    return [(check, runs) for check, runs in kept_runs(parts, SAMPLE, 0)
+            if family is None or object_family(check.task.obj) == family]
 
 
 def run_object(item: tuple[Path, str, str, str, list[float]]) -> list[dict]:
     """One object's figures: the kept run's and each value's."""
-    from grip_env.dataset.crosscheck import _from_json, _means, _spearman
+    from grip_env.dataset.crosscheck import _means, _spearman
     from grip_env.sim import run_trial_outcomes
 
     parts, object_id, engine, setting, values = item
-    check = next(c for c in _checks(parts, None) if c.task.object_id == object_id)
-    kept = _from_json(json.loads((parts / f"{check.task.index:05d}.json").read_text()))
+    check, kept = next((c, r) for c, r in kept_runs(parts, SAMPLE, 0)
+                       if c.task.object_id == object_id)
     other = next(e for e in ENGINES if e != engine)
     theirs = kept.draws[other]
     config = check.task.config
@@ -94,7 +92,7 @@ def main() -> None:
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", help="a CSV of each object's figures")
     args = parser.parse_args()
-    names = [c.task.object_id for c in _checks(args.parts, args.family)]
+    names = [check.task.object_id for check, _ in _kept(args.parts, args.family)]
     items = [(args.parts, n, args.engine, args.setting, args.values) for n in names]
     with ProcessPoolExecutor(args.workers) as pool:
         rows = [row for found in pool.map(run_object, items) for row in found]

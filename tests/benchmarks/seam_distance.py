@@ -20,7 +20,6 @@ import grip_env  # noqa: F401  # isort: skip
 
 import argparse
 import itertools
-import json
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +27,9 @@ import pandas as pd
 from shapely.geometry import Point, Polygon
 from shapely.ops import unary_union
 
+from grip_env.sim.analytic import seam_ends
 from grip_env.sim.world import COLLISION_MARGIN_MM
+from tests.benchmarks.crosscheck_contact_loads import kept_runs
 
 SAMPLE = 80
 #: A vertex that turns inwards by more than this (sine of 5 degrees) is a concave corner.
@@ -36,45 +37,31 @@ CONCAVE_SINE = np.sin(np.radians(5.0))
 BINS_MM = (0.0, 2.0, 4.0, 8.0, 16.0, np.inf)
 
 
-def seam_ends(pieces: tuple[np.ndarray, ...]) -> np.ndarray:
-    """Points (mm) where a seam between pieces meets the union's outline away from a concave
-    corner."""
+def face_seam_ends(pieces: tuple[np.ndarray, ...]) -> np.ndarray:
+    """Points (mm) where a seam between pieces (``analytic.seam_ends``) meets the union's outline
+    away from a concave corner."""
     outline = unary_union([Polygon(p) for p in pieces]).exterior
     ring = np.asarray(outline.coords)[:-1]
     turn = 1.0 if outline.is_ccw else -1.0
     before, after = ring - np.roll(ring, 1, axis=0), np.roll(ring, -1, axis=0) - ring
     cross = before[:, 0] * after[:, 1] - before[:, 1] * after[:, 0]
-    sine = turn * cross / (
-        np.linalg.norm(before, axis=1) * np.linalg.norm(after, axis=1))
-    concave = ring[sine < -CONCAVE_SINE]
-    ends = []
-    for piece in pieces:
-        for a, b in zip(piece, np.roll(piece, -1, axis=0), strict=True):
-            if outline.distance(Point((a + b) / 2)) < 1e-6:
-                continue  # an edge on the outline, not a seam
-            for end in (a, b):
-                on_outline = outline.distance(Point(end)) < 1e-6
-                if on_outline and not (len(concave) and
-                                       np.min(np.linalg.norm(concave - end, axis=1)) < 1e-6):
-                    ends.append(end)
-    return np.array(ends, dtype=float).reshape(-1, 2)
+    sine = turn * cross / (np.linalg.norm(before, axis=1) * np.linalg.norm(after, axis=1))
+    concave = ring[sine < -CONCAVE_SINE].reshape(-1, 2)
+    ends = seam_ends(pieces)
+    on_outline = np.array([outline.distance(Point(e)) < 1e-6 for e in ends], dtype=bool)
+    at_concave = (np.linalg.norm(ends[:, None] - concave[None], axis=2) < 1e-6).any(axis=1)
+    return ends[on_outline & ~at_concave]
 
 
 def grip_rows(parts: Path) -> pd.DataFrame:
     """One row per grip of every multi-piece object with kept outcomes."""
-    from grip_env.dataset.crosscheck import _from_json
-    from grip_env.dataset.resimulation import _retest_sample
-    from grip_env.datasets import standard_path
-
     rows = []
-    for check in _retest_sample(standard_path(), SAMPLE, 0):
-        part = parts / f"{check.task.index:05d}.json"
+    for check, runs in kept_runs(parts, SAMPLE, 0):
         shape = check.task.obj.simulated_shape(check.task.config.objects.sim_tolerance_mm)
-        if not part.is_file() or len(shape.pieces) == 1:
+        if len(shape.pieces) == 1:
             continue
-        runs = _from_json(json.loads(part.read_text()))
-        ends = np.vstack([seam_ends(shape.pieces),
-                          seam_ends(shape.collision_pieces(COLLISION_MARGIN_MM))])
+        ends = np.vstack([face_seam_ends(shape.pieces),
+                          face_seam_ends(shape.collision_pieces(COLLISION_MARGIN_MM))])
         grips = check.recorded.reset_index(drop=True)
         contacts = np.stack([grips[[f"p{i}_x", f"p{i}_y"]].to_numpy() for i in (1, 2, 3)], 1)
         means = {e: f.groupby("grip").robustness.mean() for e, f in runs.draws.items()}
@@ -89,17 +76,12 @@ def grip_rows(parts: Path) -> pd.DataFrame:
 
 def object_rows(parts: Path) -> pd.DataFrame:
     """One row per object with kept outcomes: family, pieces, the engines' agreement."""
-    from grip_env.dataset.crosscheck import _from_json, _means, _spearman
-    from grip_env.dataset.resimulation import _retest_sample
-    from grip_env.datasets import standard_path
+    from grip_env.dataset.crosscheck import _means, _spearman
     from grip_env.objects.family import object_family
 
     rows = []
-    for check in _retest_sample(standard_path(), SAMPLE, 0):
-        part = parts / f"{check.task.index:05d}.json"
-        if not part.is_file():
-            continue
-        draws = _from_json(json.loads(part.read_text())).draws
+    for check, runs in kept_runs(parts, SAMPLE, 0):
+        draws = runs.draws
         shape = check.task.obj.simulated_shape(check.task.config.objects.sim_tolerance_mm)
         rows.append({"family": object_family(check.task.obj), "pieces": len(shape.pieces),
                      "within": _spearman(_means(draws["pybullet"]), _means(draws["mujoco"])),
