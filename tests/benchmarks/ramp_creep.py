@@ -30,11 +30,11 @@ from tests.benchmarks.hold_squeeze import _checks, family_table
 class _Recorder:
     """Wraps a ramp's probe: after every step, the climb, the level and the object's motion."""
 
-    def __init__(self, probe: Any, hand: Any) -> None:
+    def __init__(self, probe: Any, scene: Any) -> None:
         from grip_env.sim.disturbance import RampProbe
 
-        self.inner, self.hand, self.rows = probe, hand, []
-        self.start = hand.joint_states()[0]
+        self.inner, self.scene, self.hand, self.rows = probe, scene, scene.hand, []
+        self.start = self.hand.joint_states()[0]
         self.climb, self.level, self.reference = -1, 0.0, None
         self.probe = RampProbe(self.restore, self.push, self.step, probe.moved, probe.where,
                                probe.palm_axes)
@@ -60,8 +60,11 @@ class _Recorder:
         self.rows.append((self.climb, self.level, drift, turn, give, travel))
 
 
-def run_object(item: tuple[str, str]) -> list[dict[str, Any]]:
-    """The lowest and highest third of one object's grips by C1, trial 0, both engines."""
+def run_object(item: tuple[str, str], recorder: type[_Recorder] = _Recorder,
+               summarize: Any = None) -> list[dict[str, Any]]:
+    """The lowest and highest third of one object's grips by C1, trial 0, both engines, each
+    ramp's steps kept by ``recorder`` and its weakest climb read by ``summarize`` (default
+    ``_weakest``)."""
     from grip_env.sim import disturbance
     from grip_env.sim.execution import grip_keys, object_key
     from grip_env.sim.trial import TrialScene, grip_plans
@@ -74,6 +77,7 @@ def run_object(item: tuple[str, str]) -> list[dict[str, Any]]:
     third = pd.qcut(grips.C1.rank(method="first"), 3, labels=["low", "mid", "high"])
     draws = trial_noises(config, config.dataset.seed, object_key(obj, grips), grip_keys(grips),
                          range(1))
+    record, read = recorder, summarize or _weakest
     rows: list[dict[str, Any]] = []
     for engine in ENGINES:
         recorders: list[_Recorder] = []
@@ -81,7 +85,7 @@ def run_object(item: tuple[str, str]) -> list[dict[str, Any]]:
 
         def ramp(probe: Any, mass: float, gyration: float, sim: Any,
                  recorders: list[_Recorder] = recorders, scenes: list[Any] = scenes) -> float:
-            recorder = _Recorder(probe, scenes[0].hand)
+            recorder = record(probe, scenes[0])
             recorders.append(recorder)
             return float(disturbance.direction_limits(recorder.probe, mass, gyration, sim).min())
 
@@ -96,19 +100,26 @@ def run_object(item: tuple[str, str]) -> list[dict[str, Any]]:
                 if result.held and recorders:
                     rows.append({"engine": engine, "object_id": object_id, "grip": k,
                                  "C1 third": third[k], "robustness": result.robustness_g,
-                                 **_weakest(recorders[0].rows, scene_config.sim)})
+                                 **read(recorders[0], scene_config.sim)})
     return rows
 
 
-def _weakest(steps: list[tuple[float, ...]], sim: Any) -> dict[str, float]:
-    """The weakest direction's climb: the lowest failing level, its motion before it failed."""
-    table = pd.DataFrame(steps, columns=["climb", "level", "drift", "turn", "give", "travel"])
+def weakest_climb(table: pd.DataFrame, sim: Any) -> tuple[int, float]:
+    """The climb (a ``climb`` column's value) that failed at the lowest level, and that level
+    (inf if no climb failed)."""
     failed = table.groupby("climb").apply(
         lambda c: c[(c.drift > sim.hold_tolerance_mm) | (c.turn > sim.hold_rotation_deg)]
         .level.min(), include_groups=False)
     climb = int(failed.fillna(np.inf).idxmin())
+    return climb, float(failed[climb])
+
+
+def _weakest(recorder: _Recorder, sim: Any) -> dict[str, float]:
+    """The weakest direction's climb: the lowest failing level, its motion before it failed."""
+    table = pd.DataFrame(recorder.rows,
+                         columns=["climb", "level", "drift", "turn", "give", "travel"])
+    climb, first_bad = weakest_climb(table, sim)
     rows = table[table.climb == climb]
-    first_bad = failed[climb]
     held = rows[rows.level < first_bad] if np.isfinite(first_bad) else rows
     last = held[held.level == held.level.max()] if len(held) else held
     return {"direction": climb, "drift_held_mm": float(last.drift.iloc[-1]) if len(last) else 0.0,
