@@ -60,22 +60,27 @@ def pybullet_contacts(scene: TrialScene) -> list[tuple[int, float, float, float,
     return rows
 
 
-def mujoco_contacts(scene: TrialScene) -> list[tuple[int, float, float, float, float, float]]:
-    """(hand link, N, |f_t|, |tau|, mu, mu s) of each hand-object contact (elliptic cones)."""
+def mujoco_hand_contacts(scene: TrialScene):
+    """Each hand-object contact of MuJoCo's last step as (contact, hand link, its wrench in
+    ``efc_force``: normal, two sideways, and twist with condim 4)."""
     world, hand, obj = scene.world, scene.hand.uid, scene.object.uid
     m, d = world._compiled()
     uid, link = world._body_uid, world._body_link
-    rows = []
     for c in d.contact[: d.ncon]:
         bodies = m.geom_bodyid[[c.geom1, c.geom2]]
         owners = uid[bodies].tolist()
-        if set(owners) != {hand, obj} or c.efc_address < 0:
-            continue
-        wrench = d.efc_force[c.efc_address: c.efc_address + c.dim]
+        if set(owners) == {hand, obj} and c.efc_address >= 0:
+            yield (c, int(link[bodies[owners.index(hand)]]),
+                   d.efc_force[c.efc_address: c.efc_address + c.dim])
+
+
+def mujoco_contacts(scene: TrialScene) -> list[tuple[int, float, float, float, float, float]]:
+    """(hand link, N, |f_t|, |tau|, mu, mu s) of each hand-object contact (elliptic cones)."""
+    rows = []
+    for c, hand_link, wrench in mujoco_hand_contacts(scene):
         tau = abs(float(wrench[3])) if c.dim >= 4 else 0.0
-        rows.append((int(link[bodies[owners.index(hand)]]), float(wrench[0]),
-                     float(np.hypot(wrench[1], wrench[2])), tau, float(c.friction[0]),
-                     float(c.friction[2]) if c.dim >= 4 else float("nan")))
+        rows.append((hand_link, float(wrench[0]), float(np.hypot(wrench[1], wrench[2])), tau,
+                     float(c.friction[0]), float(c.friction[2]) if c.dim >= 4 else float("nan")))
     return rows
 
 

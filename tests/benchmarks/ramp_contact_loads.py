@@ -35,6 +35,7 @@ from tests.benchmarks.crosscheck_contact_loads import (
     MIN_NORMAL_N,
     loads,
     mujoco_contacts,
+    mujoco_hand_contacts,
     pybullet_contacts,
 )
 from tests.benchmarks.hold_squeeze import family_table
@@ -68,16 +69,8 @@ def _spots(scene: Any, mujoco: bool) -> list[tuple[int, np.ndarray]]:
     if not mujoco:
         return [(int(p[3]), 1e3 * np.array(p[6])) for p in
                 world.client.getContactPoints(bodyA=hand, bodyB=obj) if p[9] >= MIN_NORMAL_N]
-    m, d = world._compiled()
-    uid, link = world._body_uid, world._body_link
-    spots = []
-    for c in d.contact[: d.ncon]:
-        bodies = m.geom_bodyid[[c.geom1, c.geom2]]
-        owners = uid[bodies].tolist()
-        if (set(owners) == {hand, obj} and c.efc_address >= 0
-                and d.efc_force[c.efc_address] >= MIN_NORMAL_N):
-            spots.append((int(link[bodies[owners.index(hand)]]), 1e3 * np.array(c.pos)))
-    return spots
+    return [(hand_link, 1e3 * np.array(c.pos)) for c, hand_link, wrench in
+            mujoco_hand_contacts(scene) if wrench[0] >= MIN_NORMAL_N]
 
 
 def _spread(spots: list[tuple[int, np.ndarray]]) -> tuple[float, float]:

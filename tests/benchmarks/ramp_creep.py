@@ -77,7 +77,7 @@ def run_object(item: tuple[str, str], recorder: type[_Recorder] = _Recorder,
     third = pd.qcut(grips.C1.rank(method="first"), 3, labels=["low", "mid", "high"])
     draws = trial_noises(config, config.dataset.seed, object_key(obj, grips), grip_keys(grips),
                          range(1))
-    record, read = recorder, summarize or _weakest
+    read = summarize or _weakest
     rows: list[dict[str, Any]] = []
     for engine in ENGINES:
         recorders: list[_Recorder] = []
@@ -85,9 +85,9 @@ def run_object(item: tuple[str, str], recorder: type[_Recorder] = _Recorder,
 
         def ramp(probe: Any, mass: float, gyration: float, sim: Any,
                  recorders: list[_Recorder] = recorders, scenes: list[Any] = scenes) -> float:
-            recorder = record(probe, scenes[0])
-            recorders.append(recorder)
-            return float(disturbance.direction_limits(recorder.probe, mass, gyration, sim).min())
+            kept = recorder(probe, scenes[0])
+            recorders.append(kept)
+            return float(disturbance.direction_limits(kept.probe, mass, gyration, sim).min())
 
         scene_config = config.override(sim={"engine": engine})
         with TrialScene(obj, scene_config, ramp=ramp) as scene:
