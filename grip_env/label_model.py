@@ -37,6 +37,14 @@ History of PyBullet's (the figures behind each are in BENCHMARKS.md):
   self-locking, and MuJoCo's stop already had no bound: both engines now model the same gear.
   A stop of 50 times the motor gives the same outcomes as the unbounded one on 150 standard
   grips, bit for bit. BENCHMARKS.md, "The worm gear's stop, alike in both engines".
+- ``2026.12-restore``: every climb of the ramp starts from the saved moment. Bullet's
+  ``restoreState`` wrote the saved contact points into the manifolds as they were, beside the
+  points of the moment, so each fingertip of a restored grip pressed through stacked points, a
+  whole pad spring each (up to twice the hand's squeeze), and each direction's climb began from
+  a state set by the climb before it. The world now empties every manifold after the bodies are
+  restored and finds the contacts afresh (``World.restore``): every restore is the same, bit for
+  bit, whatever ran before it. MuJoCo's restore was already exact; its label model is unchanged.
+  BENCHMARKS.md, "A restore that keeps no contact of the moment".
 
 MuJoCo's (``sim.engine: mujoco``):
 
@@ -84,7 +92,7 @@ MuJoCo's (``sim.engine: mujoco``):
 
 from __future__ import annotations
 
-LABEL_MODEL = "2026.12-worm"
+LABEL_MODEL = "2026.12-restore"
 #: MuJoCo's label model (``sim.engine: mujoco``), pinned by its own golden recording
 #: (``python -m tests.golden --engine mujoco --record`` renews it; BENCHMARKS.md, "PyBullet
 #: beside MuJoCo").

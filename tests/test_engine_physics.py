@@ -87,6 +87,54 @@ def test_a_sphere_rests_on_the_table_at_its_radius(engine):
         world.add_sphere(3.0, 0.5, 0.4, np.zeros(3), inertia_kg_m2=0.0)
 
 
+class _Restored(Exception):
+    """Raised from the held phase once the restores are measured."""
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_restore_returns_the_held_grip_whatever_ran_since(engine):
+    """The hand holds the disc (its best grip by Q_C); the world is saved, the disc pushed one
+    way or another, and restored: it moves on bit for bit alike, touched by the three fingers.
+    Bullet's ``restoreState`` kept the contact points of the moment beside the saved ones: the
+    pads pressed through stacked springs, differently after every restore."""
+    from grip_env.objects import load_object_set
+    from grip_env.planning.pipeline import candidates
+    from grip_env.sim.trial import TrialScene, grip_plans
+    from grip_env.sim.uncertainty import TrialNoise
+
+    config = Config().override(grasp={"mu": 0.4})
+    box = next(o for o in load_object_set("default") if o.name == "disc")
+    grip = candidates(box, config=config).sort_values("Q_C", kind="stable").head(1)
+    found: list[tuple[int, list[tuple]]] = []
+
+    def measure(phase: str, scene: TrialScene) -> None:
+        if phase != "held":
+            return
+        world, hand, uid = scene.world, scene.hand, scene.object.uid
+        saved, state = world.save(), hand.state()
+        world.step()
+        found.append((len(world.touching_links(hand.uid, uid)),
+                      [world.contact_normal_force_n(hand.uid, uid)]))
+        for push in ([3.0, 0.0, 0.0], [0.0, -4.0, 1.0]):
+            for _ in range(20):
+                world.push(uid, np.array(push))
+                world.step()
+            world.restore(saved)
+            hand.restore(state)
+            world.step()
+            touching = len(world.touching_links(hand.uid, uid))
+            world.step(30)
+            found.append((touching, [*world.pose_floats_mm(uid)[0]]))
+        raise _Restored
+
+    with TrialScene(box, config.override(sim={"engine": engine})) as scene, \
+            pytest.raises(_Restored):
+        scene.run(grip_plans(grip)[0], TrialNoise((0.0, 0.0), 0.0, 0.4, 1.0), on_phase=measure)
+    (links, _), first, second = found
+    assert first == second
+    assert first[0] == links == 3
+
+
 def _sphere_slides(engine: str, pushes: float, torsion: bool) -> float:
     """How far (mm) a sphere of the pad's rubber that cannot roll slides on the table in 1 s,
     pushed with ``pushes`` times mu m g (mu = 0.4 x 1, Bullet's product in both engines)."""

@@ -410,8 +410,31 @@ class World:
         return self.client.saveState()
 
     def restore(self, state: int) -> None:
-        """Return the world to a saved state."""
+        """Return the world to a saved state, the same whatever happened since it was saved.
+
+        Bullet's ``restoreState`` restores every body and joint exactly, but writes the saved
+        contact points into the contact manifolds as they are when it is called: a fingertip
+        restored to a held grip kept points of the moment beside the saved ones, each a whole
+        pad spring (the squeeze up to twice the hand's), and each restore began from a
+        different state, set by what ran before it. After the bodies are restored, every
+        manifold is emptied and the contacts are found afresh at the restored poses, as if the
+        world had been built there (``tests/test_engine_physics.py``; BENCHMARKS.md, "A restore
+        that keeps no contact of the moment").
+        """
         self.client.restoreState(state)
+        self._renew_contacts()
+
+    def _renew_contacts(self) -> None:
+        """Empty every contact manifold that holds points (their pairs kept from colliding for
+        one collision pass), then find the contacts at the present poses."""
+        c = self.client
+        pairs = sorted({point[1:5] for point in c.getContactPoints()})
+        for a, b, link_a, link_b in pairs:
+            c.setCollisionFilterPair(a, b, link_a, link_b, 0)
+        c.performCollisionDetection()
+        for a, b, link_a, link_b in pairs:
+            c.setCollisionFilterPair(a, b, link_a, link_b, 1)
+        c.performCollisionDetection()
 
     def forget(self, state: int) -> None:
         """Free a saved state."""
