@@ -8,7 +8,10 @@ import pytest
 
 from grip_env.config import Config
 from grip_env.sim import analytic
+from grip_env.sim.uncertainty import TrialNoise
 
+#: A trial without execution error or draws, at the paper's mu.
+NO_ERROR = TrialNoise((0.0, 0.0), 0.0, 0.4, 1.0)
 ENGINES = ["pybullet", pytest.param("mujoco", marks=pytest.mark.skipif(
     __import__("importlib").util.find_spec("mujoco") is None, reason="mujoco not installed"))]
 
@@ -91,20 +94,52 @@ class _Restored(Exception):
     """Raised from the held phase once the restores are measured."""
 
 
+def _disc_grips(count: int) -> tuple[Config, object, object]:
+    """The paper's mu, the default disc (its simulated outline has many facets) and its ``count``
+    best grips by Q_C."""
+    from grip_env.objects import load_object_set
+    from grip_env.planning.pipeline import candidates
+
+    config = Config().override(grasp={"mu": 0.4})
+    disc = next(o for o in load_object_set("default") if o.name == "disc")
+    return config, disc, candidates(disc, config=config).sort_values("Q_C", kind="stable").head(
+        count)
+
+
+@pytest.mark.parametrize("engine", ENGINES)
+def test_a_trial_s_robustness_is_its_weakest_direction_s_own_limit(engine):
+    """Every direction of the ramp climbs from the same restored moment, so the label (the ramp
+    stops each direction at the weakest level so far) is the least of the limits each direction
+    reaches alone. With Bullet's stacked contact points each climb began where the one before
+    left the contacts, and the two differed."""
+    from grip_env.sim import disturbance
+    from grip_env.sim.trial import TrialScene, grip_plans
+
+    config, disc, grips = _disc_grips(3)
+    limits: list[float] = []
+
+    def every_direction(probe, mass_kg, gyration_m, sim) -> float:
+        limits.append(float(disturbance.direction_limits(probe, mass_kg, gyration_m, sim).min()))
+        return limits[-1]
+
+    config = config.override(sim={"engine": engine})
+    for plan in grip_plans(grips):
+        with TrialScene(disc, config) as scene:
+            label = scene.run(plan, NO_ERROR).robustness_g
+        with TrialScene(disc, config, ramp=every_direction) as scene:
+            scene.run(plan, NO_ERROR)
+        assert label == limits[-1]
+
+
 @pytest.mark.parametrize("engine", ENGINES)
 def test_a_restore_returns_the_held_grip_whatever_ran_since(engine):
     """The hand holds the disc (its best grip by Q_C); the world is saved, the disc pushed one
     way or another, and restored: it moves on bit for bit alike, touched by the three fingers.
     Bullet's ``restoreState`` kept the contact points of the moment beside the saved ones: the
     pads pressed through stacked springs, differently after every restore."""
-    from grip_env.objects import load_object_set
-    from grip_env.planning.pipeline import candidates
     from grip_env.sim.trial import TrialScene, grip_plans
-    from grip_env.sim.uncertainty import TrialNoise
 
-    config = Config().override(grasp={"mu": 0.4})
-    box = next(o for o in load_object_set("default") if o.name == "disc")
-    grip = candidates(box, config=config).sort_values("Q_C", kind="stable").head(1)
+    config, box, grip = _disc_grips(1)
     found: list[tuple[int, list[tuple]]] = []
 
     def measure(phase: str, scene: TrialScene) -> None:
@@ -129,7 +164,7 @@ def test_a_restore_returns_the_held_grip_whatever_ran_since(engine):
 
     with TrialScene(box, config.override(sim={"engine": engine})) as scene, \
             pytest.raises(_Restored):
-        scene.run(grip_plans(grip)[0], TrialNoise((0.0, 0.0), 0.0, 0.4, 1.0), on_phase=measure)
+        scene.run(grip_plans(grip)[0], NO_ERROR, on_phase=measure)
     (links, _), first, second = found
     assert first == second
     assert first[0] == links == 3
