@@ -115,8 +115,8 @@ def direction_limits(probe: RampProbe, mass_kg: float, gyration_m: float,
     """Each disturbance's own limit (g, in the order of ``disturbances(config)``; 0 when its
     first level fails): every direction climbs to its own first failure, where
     :func:`robustness` stops each at the weakest level found so far. A diagnostic: it costs
-    more, and where the engine restores the saved moment exactly, :func:`robustness` is the
-    minimum of these limits."""
+    more, and since every climb starts from the same restored moment (in both engines),
+    :func:`robustness` is the minimum of these limits."""
     levels = ramp_levels(config)
     failed = [_climb(probe, d, mass_kg, gyration_m, levels, config)
               for d in disturbances(config)]
