@@ -25,7 +25,7 @@ import numpy as np
 import grip_env.sim.trial as trial_module
 from grip_env.sim import run_trial_outcomes
 from tests.benchmarks.crosscheck_directions import every_direction
-from tests.benchmarks.torsion_arm import sample
+from tests.benchmarks.engines import sampled_work
 
 
 def attempted_levels(held: list[int], ceiling: int) -> tuple[int, int]:
@@ -47,7 +47,7 @@ def main() -> None:
     args = parser.parse_args()
     found: list[dict[str, float]] = []
     trial_module.robustness = every_direction(found)
-    work = sample(args.grips, args.seed)
+    work = sampled_work(args.grips, args.seed)
     from grip_env.sim.disturbance import ramp_levels
 
     levels = ramp_levels(work[0][2].sim)

@@ -22,20 +22,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import spearmanr
 
-from tests.benchmarks.engines import ENGINES
-
-
-def sample(grips: int, seed: int) -> list[tuple]:
-    """(object, planned grips, config) of the seeded sample, as ``engines --grips`` draws it."""
-    from grip_env.dataset.resimulation import _as_planned, _sample, kept_grips
-    from grip_env.datasets import standard_path
-
-    work = []
-    for check in _sample(standard_path(), grips, seed):
-        chosen = check.recorded.iloc[list(check.picked)]
-        planned = _as_planned(chosen, kept_grips(check.task), check.task.object_id)
-        work.append((check.task.obj, planned, check.task.config))
-    return work
+from tests.benchmarks.engines import ENGINES, sampled_work
 
 
 def outcomes(work: list[tuple], engine: str, value: float,
@@ -66,7 +53,7 @@ def main() -> None:
     parser.add_argument("--engines", nargs="+", default=list(ENGINES), choices=ENGINES)
     parser.add_argument("--setting", default="pad_torsion_mm", help="the sim setting swept")
     args = parser.parse_args()
-    work = sample(args.grips, args.seed)
+    work = sampled_work(args.grips, args.seed)
     print(f"| engine | {args.setting} | held | success | mean robustness (g) | minus the first "
           "value's | success alike | Spearman | CPU s | steps |")
     print("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |")
