@@ -10,7 +10,9 @@ sample (those ``KEPT`` holds, in the sample's order) in one engine with ``sim`` 
 overridden, trials 0..T-1 and T..2T-1 as the cross-check does, and writes each object's outcomes
 and CPU seconds to ``DIR``. ``summary`` prints, for the candidate and for the committed models'
 kept outcomes on the same objects: each engine's within-object retest, the within-object
-Spearman and per-trial success agreement between the engines, and each engine's CPU ms a trial.
+Spearman and per-trial success agreement between the engines; then, per engine, how far the
+candidate keeps the committed label (trials judged alike, Spearman of the grips' means), its CPU
+ms a trial and the trials and core-seconds of a trustworthy label (``crosscheck.trials_for``).
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from grip_env.dataset.crosscheck import _means, _spearman
+from grip_env.dataset.crosscheck import _means, _spearman, trials_for
 from grip_env.sim import run_trial_outcomes
 from tests.benchmarks.crosscheck_contact_loads import kept_runs
 
@@ -62,9 +64,11 @@ def _figures(draws: dict[str, pd.DataFrame], retest: dict[str, pd.DataFrame]) ->
 
 
 def summary(parts: Path, out: Path) -> None:
-    """The candidate's figures beside the committed models' on the objects ``out`` holds."""
+    """The candidate's figures beside the committed models' on the objects ``out`` holds; how
+    far it keeps the committed label in each engine; each engine's cost of a trustworthy label."""
     rows: dict[str, list[dict[str, float]]] = {"committed": [], "candidate": []}
     cost = {e: [0.0, 0] for e in ENGINES}
+    same: dict[str, list[pd.DataFrame]] = {e: [] for e in ENGINES}
     for check, kept in kept_runs(parts, 40, 0):
         files = {e: out / f"{check.task.object_id}.{e}.parquet" for e in ENGINES}
         if not all(f.is_file() for f in files.values()):
@@ -72,21 +76,43 @@ def summary(parts: Path, out: Path) -> None:
         rows["committed"].append(_figures(kept.draws, kept.retest))
         tables = {e: pd.read_parquet(f) for e, f in files.items()}
         trials = check.task.config.dataset.trials
-        rows["candidate"].append(_figures({e: t[t["trial"] < trials] for e, t in tables.items()},
-                                          {e: t[t["trial"] >= trials] for e, t in tables.items()}))
+        draws = {e: t[t["trial"] < trials] for e, t in tables.items()}
+        rows["candidate"].append(_figures(draws, {e: t[t["trial"] >= trials]
+                                                  for e, t in tables.items()}))
         for e in ENGINES:
+            same[e].append(_paired(draws[e], kept.draws[e], check.task.object_id))
             record = json.loads(files[e].with_suffix(".json").read_text())
             cost[e][0] += record["seconds"]
             cost[e][1] += record["trials"]
     names = list(rows["candidate"][0])
+    means = {model: {n: float(np.nanmean([r[n] for r in found])) for n in names}
+             for model, found in rows.items()}
     print(f"{len(rows['candidate'])} objects (mean over objects)\n")
     print("| model | " + " | ".join(names) + " |")
     print("| --- " * (len(names) + 1) + "|")
-    for model, found in rows.items():
-        print(f"| {model} | " + " | ".join(
-            f"{np.nanmean([r[n] for r in found]):.3f}" for n in names) + " |")
-    print("\ncandidate CPU ms a trial: " + ", ".join(
-        f"{e} {1e3 * s / n:.0f}" for e, (s, n) in cost.items()))
+    for model, figures in means.items():
+        print(f"| {model} | " + " | ".join(f"{figures[n]:.3f}" for n in names) + " |")
+    print("\n| engine | trials alike with the committed | Spearman of grip means with the "
+          "committed (pooled) | CPU ms a trial | trials for a retest of 0.8 (committed's) | "
+          "core-s a label |")
+    print("| --- | --- | --- | --- | --- | --- |")
+    for e, (seconds, count) in cost.items():
+        paired = pd.concat(same[e], ignore_index=True)
+        alike = float((paired["success"] == paired["success_committed"]).mean())
+        grips = paired.groupby(["object_id", "grip"])[["robustness", "robustness_committed"]]
+        rho = _spearman(*grips.mean().to_numpy().T)
+        before, needed = (trials_for(means[m][f"retest {e}"], trials) for m in means)
+        ms = 1e3 * seconds / count
+        print(f"| {e} | {alike:.1%} | {rho:.3f} | {ms:.0f} | {needed:.1f} ({before:.1f}) | "
+              f"{needed * ms / 1e3:.2f} |")
+
+
+def _paired(candidate: pd.DataFrame, committed: pd.DataFrame, object_id: str) -> pd.DataFrame:
+    """The candidate's trials beside the committed model's same trials (grip, trial)."""
+    kept = committed[["grip", "trial", "robustness", "success"]]
+    return candidate[["grip", "trial", "robustness", "success"]].merge(
+        kept, on=["grip", "trial"], suffixes=("", "_committed"), validate="one_to_one"
+    ).assign(object_id=object_id)
 
 
 def main() -> None:
