@@ -5,14 +5,15 @@
     python -m tests.benchmarks.candidate_model run --engine mujoco ...   # the same, beside it
     python -m tests.benchmarks.candidate_model summary --out DIR --parts KEPT.crosscheck
 
-``run`` simulates every recorded grip of the first ``--objects`` objects of the cross-check's
-sample (those ``KEPT`` holds, in the sample's order) in one engine with ``sim`` settings
-overridden, trials 0..T-1 and T..2T-1 as the cross-check does, and writes each object's outcomes
-and CPU seconds to ``DIR``. ``summary`` prints, for the candidate and for the committed models'
-kept outcomes on the same objects: each engine's within-object retest, the within-object
-Spearman and per-trial success agreement between the engines; then, per engine, how far the
-candidate keeps the committed label (trials judged alike, Spearman of the grips' means), its CPU
-ms a trial and the trials and core-seconds of a trustworthy label (``crosscheck.trials_for``).
+``run`` simulates every recorded grip of the first ``--objects`` objects of the cross-check's sample
+(those ``KEPT`` holds, in the sample's order) in one engine with ``sim`` settings overridden
+(``--set SECTION.NAME=VALUE`` for another section's, e.g. ``uncertainty.stratified=true``), trials
+0..T-1 and T..2T-1 as the cross-check does, and writes each object's outcomes and CPU seconds to
+``DIR``. ``summary`` prints, for the candidate and for the committed models' kept outcomes on the
+same objects: each engine's within-object retest, the within-object Spearman and per-trial success
+agreement between the engines; then, per engine, how far the candidate keeps the committed label
+(trials judged alike, Spearman of the grips' means), its CPU ms a trial and the trials and
+core-seconds of a trustworthy label (``crosscheck.trials_for``).
 """
 
 from __future__ import annotations
@@ -24,24 +25,30 @@ import argparse
 import json
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
+import yaml
 
 from grip_env.dataset.crosscheck import _means, _spearman, trials_for
 from grip_env.sim import run_trial_outcomes
 from tests.benchmarks.crosscheck_contact_loads import kept_runs
+from tests.benchmarks.torsion_arm import paired_interval
 
 ENGINES = ("pybullet", "mujoco")
 
 
-def run(parts: Path, objects: int, engine: str, sim: dict[str, float], out: Path) -> None:
-    """Simulate the first ``objects`` kept objects in ``engine`` under ``sim``, into ``out``."""
+def run(parts: Path, objects: int, engine: str, sim: dict[str, float], out: Path,
+        other: dict[str, dict[str, Any]] | None = None) -> None:
+    """Simulate the first ``objects`` kept objects in ``engine`` under ``sim`` (and the other
+    sections' settings ``other``), into ``out``."""
+    other = other or {}
     out.mkdir(parents=True, exist_ok=True)
     for count, (check, _) in enumerate(kept_runs(parts, 40, 0)):
         if count >= objects:
             break
-        config = check.task.config.override(sim={"engine": engine, **sim})
+        config = check.task.config.override(sim={"engine": engine, **sim}, **other)
         grips = check.recorded.assign(object_id=check.task.object_id).reset_index(drop=True)
         trials, seed = config.dataset.trials, config.dataset.seed
         started = time.process_time()
@@ -50,7 +57,7 @@ def run(parts: Path, objects: int, engine: str, sim: dict[str, float], out: Path
         seconds = time.process_time() - started
         both.to_parquet(out / f"{check.task.object_id}.{engine}.parquet")
         (out / f"{check.task.object_id}.{engine}.json").write_text(json.dumps(
-            {"seconds": seconds, "trials": len(both), "sim": sim}))
+            {"seconds": seconds, "trials": len(both), "sim": sim, "other": other}))
         print(f"{check.task.object_id} {engine}: {1e3 * seconds / len(both):.0f} ms a trial",
               flush=True)
 
@@ -92,6 +99,8 @@ def summary(parts: Path, out: Path) -> None:
     print("| --- " * (len(names) + 1) + "|")
     for model, figures in means.items():
         print(f"| {model} | " + " | ".join(f"{figures[n]:.3f}" for n in names) + " |")
+    print("| candidate − committed, 95 % over objects | " + " | ".join(
+        _paired_change(rows, n) for n in names) + " |")
     print("\n| engine | trials alike with the committed | Spearman of grip means with the "
           "committed (pooled) | CPU ms a trial | trials for a retest of 0.8 (committed's) | "
           "core-s a label |")
@@ -105,6 +114,16 @@ def summary(parts: Path, out: Path) -> None:
         ms = 1e3 * seconds / count
         print(f"| {e} | {alike:.1%} | {rho:.3f} | {ms:.0f} | {needed:.1f} ({before:.1f}) | "
               f"{needed * ms / 1e3:.2f} |")
+
+
+def _paired_change(rows: dict[str, list[dict[str, float]]], name: str) -> str:
+    """The mean change of ``name`` from the committed model to the candidate over the objects
+    where both are defined, with its 95 % paired bootstrap interval."""
+    change = np.array([c[name] - k[name] for c, k in zip(rows["candidate"], rows["committed"],
+                                                          strict=True)])
+    change = change[np.isfinite(change)]
+    low, high = paired_interval(change)
+    return f"{change.mean():+.3f} [{low:+.3f}, {high:+.3f}]"
 
 
 def _paired(candidate: pd.DataFrame, committed: pd.DataFrame, object_id: str) -> pd.DataFrame:
@@ -123,11 +142,18 @@ def main() -> None:
     parser.add_argument("--objects", type=int, default=20)
     parser.add_argument("--engine", choices=ENGINES, default="mujoco")
     parser.add_argument("--sim", nargs="*", default=[], metavar="NAME=VALUE")
+    parser.add_argument("--set", nargs="*", default=[], metavar="SECTION.NAME=VALUE",
+                        help="another section's setting, its value read as YAML")
     parser.add_argument("--out", type=Path, required=True)
     args = parser.parse_args()
     if args.mode == "run":
         sim = {name: float(value) for name, value in (item.split("=") for item in args.sim)}
-        run(args.parts, args.objects, args.engine, sim, args.out)
+        other: dict[str, dict[str, Any]] = {}
+        for item in args.set:
+            key, value = item.split("=", 1)
+            section, name = key.split(".", 1)
+            other.setdefault(section, {})[name] = yaml.safe_load(value)
+        run(args.parts, args.objects, args.engine, sim, args.out, other)
     else:
         summary(args.parts, args.out)
 
