@@ -110,7 +110,8 @@ def summary(parts: Path, out: Path) -> None:
         alike = float((paired["success"] == paired["success_committed"]).mean())
         grips = paired.groupby(["object_id", "grip"])[["robustness", "robustness_committed"]]
         rho = _spearman(*grips.mean().to_numpy().T)
-        before, needed = (trials_for(means[m][f"retest {e}"], trials) for m in means)
+        before = trials_for(means["committed"][f"retest {e}"], trials)
+        needed = trials_for(means["candidate"][f"retest {e}"], trials)
         ms = 1e3 * seconds / count
         print(f"| {e} | {alike:.1%} | {rho:.3f} | {ms:.0f} | {needed:.1f} ({before:.1f}) | "
               f"{needed * ms / 1e3:.2f} |")
