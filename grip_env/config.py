@@ -257,6 +257,11 @@ class UncertaintyConfig(_Section):
         description="spread friction and mass over their ranges across each block of "
                     "dataset.trials trials (Latin hypercube) instead of sampling independently",
     )
+    stratified_palm: bool = Field(
+        False,
+        description="spread the palm's two offsets and its yaw error over their distributions "
+                    "across each block of dataset.trials trials (Latin hypercube)",
+    )
     perceived_contour: bool = Field(False, description="plan on the perceived contour")
 
     @model_validator(mode="after")

@@ -146,3 +146,6 @@ def test_the_standard_dataset_stays_the_run_of_its_recorded_config():
     on = config.override(synthesis={"frictional_closure": True})
     assert identity_differences(recorded, run_identity(on, [])["config"]) == [
         "synthesis.frictional_closure: None -> True"]
+    palm = config.override(uncertainty={"stratified_palm": True})
+    assert identity_differences(recorded, run_identity(palm, [])["config"]) == [
+        "uncertainty.stratified_palm: None -> True"]

@@ -210,6 +210,31 @@ def test_stratified_draws_put_one_trial_in_each_stratum_of_a_block():
     assert len(set(np.round(masses, 12))) == 10 and (masses > 0).all()
 
 
+def test_stratified_palm_errors_put_one_trial_in_each_stratum_and_leave_the_rest_alone():
+    """``stratified_palm`` spreads both palm offsets and the yaw error over their normal
+    distributions (one trial in each fifth of a block); friction and mass keep their own draws,
+    and their stratification keeps its strata."""
+    from scipy.special import ndtr
+
+    five = Config().override(dataset={"trials": 5})
+    u = five.uncertainty
+    palm = five.override(uncertainty={"stratified_palm": True})
+    plain = trial_noises(five, 3, 99, [0], range(10))[0]
+    spread = trial_noises(palm, 3, 99, [0], range(10))[0]
+    for block in (spread[:5], spread[5:]):
+        for values, std in (([n.offset_mm[0] for n in block], u.position_std_mm),
+                            ([n.offset_mm[1] for n in block], u.position_std_mm),
+                            ([n.yaw_error for n in block], u.yaw_std_rad)):
+            assert sorted((ndtr(np.array(values) / std) * 5).astype(int)) == [0, 1, 2, 3, 4]
+    assert [(n.friction, n.mass_scale) for n in spread] == [
+        (n.friction, n.mass_scale) for n in plain]
+    assert spread[0].offset_mm != plain[0].offset_mm
+    both = five.override(uncertainty={"stratified": True, "stratified_palm": True})
+    objects_only = five.override(uncertainty={"stratified": True})
+    assert [(n.friction, n.mass_scale) for n in trial_noises(both, 3, 99, [0], range(10))[0]] == [
+        (n.friction, n.mass_scale) for n in trial_noises(objects_only, 3, 99, [0], range(10))[0]]
+
+
 def test_an_unknown_draw_scheme_is_refused_by_name():
     with pytest.raises(ValueError, match="draws"):
         Config().override(uncertainty={"draws": "shared"})

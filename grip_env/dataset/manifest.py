@@ -36,7 +36,8 @@ LEARNING_SECTIONS = ("learning", "selector")
 #: Settings added after datasets were made without them, with the value that reproduces those
 #: datasets: a run identity leaves them out at that value, so such a dataset stays this code's run.
 LATER_SETTINGS: dict[str, dict[str, Any]] = {"synthesis": {"frictional_closure": False},
-                                              "sim": {"engine": DEFAULT_ENGINE}}
+                                              "sim": {"engine": DEFAULT_ENGINE},
+                                              "uncertainty": {"stratified_palm": False}}
 _VERSIONED_PACKAGES = ("numpy", "pandas", "pyarrow", "pybullet", "mujoco", "scipy", "shapely",
                        "pydantic")
 

@@ -5,7 +5,8 @@ trial k of every grip of an object draws from one generator keyed by (seed, obje
 grips of one object are compared under the same friction, mass and palm error (common random
 numbers); ``per_grip`` keys it by (seed, grip, k) instead. With ``uncertainty.stratified``,
 friction and mass are spread over their ranges across each block of ``dataset.trials`` trials
-(one stratum per trial, a Latin hypercube) instead of sampled independently.
+(one stratum per trial, a Latin hypercube) instead of sampled independently; with
+``uncertainty.stratified_palm``, so are the palm's two offsets and its yaw error.
 """
 
 from __future__ import annotations
@@ -20,8 +21,9 @@ from scipy.special import ndtri
 from grip_env.config import Config
 from grip_env.objects import PlanarObject
 
-#: Tags the stratification's permutations apart from the trials' own streams.
+#: Tag the stratifications' permutations apart from the trials' own streams and each other.
 _STRATA_TAG = 0x5354
+_PALM_STRATA_TAG = 0x5350
 
 
 @dataclass(frozen=True)
@@ -48,15 +50,16 @@ def object_mass_kg(obj: PlanarObject, config: Config | None = None) -> float:
 
 
 def sample_noise(rng: np.random.Generator, config: Config | None = None,
-                 quantiles: tuple[float, float] | None = None) -> TrialNoise:
+                 quantiles: tuple[float, float] | None = None,
+                 palm_quantiles: tuple[float, float, float] | None = None) -> TrialNoise:
     """Draw one trial's noise from ``rng``.
 
     Palm position: isotropic Gaussian with std ``uncertainty.position_std_mm`` per axis;
     yaw: Gaussian with std ``yaw_std_rad``; friction: uniform in ``friction_range``, never below
     the planner's assumed minimum ``grasp.mu``; mass: a log-normal factor of mean 1 and
     relative std ``mass_rel_std`` on the object's nominal mass (``object_mass_kg``).
-    ``quantiles`` (friction, mass), each in (0, 1), replace their two draws (stratification);
-    ``rng`` is consumed the same either way.
+    ``quantiles`` (friction, mass) and ``palm_quantiles`` (offset x, offset y, yaw), each in
+    (0, 1), replace their draws (stratification); ``rng`` is consumed the same either way.
     """
     config = config if config is not None else Config()
     u = config.uncertainty
@@ -67,6 +70,10 @@ def sample_noise(rng: np.random.Generator, config: Config | None = None,
     yaw = rng.normal(0.0, u.yaw_std_rad)
     unit_friction = rng.uniform()
     standard_mass = rng.normal()
+    if palm_quantiles is not None:
+        x, y, z = (float(ndtri(q)) for q in palm_quantiles)
+        offset = u.position_std_mm * np.array([x, y])
+        yaw = u.yaw_std_rad * z
     if quantiles is not None:
         unit_friction, standard_mass = quantiles[0], float(ndtri(quantiles[1]))
     friction = low + (high - low) * unit_friction
@@ -101,26 +108,30 @@ def trial_noises(
     common = config.uncertainty.draws == "common"
     cache: dict[tuple[int, int], TrialNoise] = {}
 
+    u = config.uncertainty
+
     def draw(key: int, k: int) -> TrialNoise:
         if (key, k) not in cache:
-            quantiles = _stratum(config, seed, key, k) if config.uncertainty.stratified else None
-            cache[key, k] = sample_noise(trial_rng(seed, key, k), config, quantiles)
+            quantiles = _stratum(config, seed, key, k, 2, _STRATA_TAG) if u.stratified else None
+            palm = (_stratum(config, seed, key, k, 3, _PALM_STRATA_TAG)
+                    if u.stratified_palm else None)
+            cache[key, k] = sample_noise(trial_rng(seed, key, k), config, quantiles, palm)
         return cache[key, k]
 
     return [[draw(object_key if common else grip, k) for k in trials] for grip in grip_keys]
 
 
-def _stratum(config: Config, seed: int, key: int, trial: int) -> tuple[float, float]:
-    """Friction and mass quantiles of ``trial``: block ``trial // n`` of n = ``dataset.trials``
-    trials gives each of its trials one of n equal strata of each, in a seeded order, and a
-    uniform place inside it."""
+def _stratum(config: Config, seed: int, key: int, trial: int, dims: int,
+             tag: int) -> tuple[float, ...]:
+    """The ``dims`` quantiles of ``trial`` (a Latin hypercube): block ``trial // n`` of n =
+    ``dataset.trials`` trials gives each of its trials one of n equal strata of each dimension,
+    in a seeded order keyed by ``tag``, and a uniform place inside it."""
     n = config.dataset.trials
     block, place = divmod(int(trial), n)
-    rng = np.random.default_rng(np.random.SeedSequence([int(seed), int(key), block, _STRATA_TAG]))
-    strata = np.stack([rng.permutation(n), rng.permutation(n)])
-    jitter = rng.uniform(size=(2, n))
-    friction, mass = (strata[:, place] + jitter[:, place]) / n
-    return float(friction), float(mass)
+    rng = np.random.default_rng(np.random.SeedSequence([int(seed), int(key), block, tag]))
+    strata = np.stack([rng.permutation(n) for _ in range(dims)])
+    jitter = rng.uniform(size=(dims, n))
+    return tuple(float(q) for q in (strata[:, place] + jitter[:, place]) / n)
 
 
 def zero_noise(config: Config | None = None) -> TrialNoise:

@@ -14,6 +14,13 @@ same objects: each engine's within-object retest, the within-object Spearman and
 agreement between the engines; then, per engine, how far the candidate keeps the committed label
 (trials judged alike, Spearman of the grips' means), its CPU ms a trial and the trials and
 core-seconds of a trustworthy label (``crosscheck.trials_for``).
+
+A candidate run with ``--set dataset.trials=T`` is compared at T trials a grip: its trials 0..T-1
+against T..2T-1, the committed models' kept trials 0..T-1 against 5..5+T-1, both retests measured,
+not extrapolated. Under stratified draws (``uncertainty.stratified``/``stratified_palm``) a label
+is a whole block, so it needs at least T trials; ``summary`` then also prints, per engine, the
+change of each object's mean robustness and success rate from the committed's ten trials: the
+draws' distribution is unchanged by stratifying, so the label's expectation must be.
 """
 
 from __future__ import annotations
@@ -76,25 +83,34 @@ def summary(parts: Path, out: Path) -> None:
     rows: dict[str, list[dict[str, float]]] = {"committed": [], "candidate": []}
     cost = {e: [0.0, 0] for e in ENGINES}
     same: dict[str, list[pd.DataFrame]] = {e: [] for e in ENGINES}
+    shifts: dict[str, list[tuple[float, float]]] = {e: [] for e in ENGINES}
+    trials, stratified = 0, False
     for check, kept in kept_runs(parts, 40, 0):
         files = {e: out / f"{check.task.object_id}.{e}.parquet" for e in ENGINES}
         if not all(f.is_file() for f in files.values()):
             continue
-        rows["committed"].append(_figures(kept.draws, kept.retest))
+        records = {e: json.loads(f.with_suffix(".json").read_text()) for e, f in files.items()}
+        other = records["mujoco"].get("other", {})
+        trials = other.get("dataset", {}).get("trials", check.task.config.dataset.trials)
+        stratified = any(other.get("uncertainty", {}).get(name, False)
+                         for name in ("stratified", "stratified_palm"))
+        kept_first = {e: t[t["trial"] < trials] for e, t in kept.draws.items()}
+        kept_retest = {e: t[t["trial"] < t["trial"].min() + trials] for e, t in kept.retest.items()}
+        rows["committed"].append(_figures(kept_first, kept_retest))
         tables = {e: pd.read_parquet(f) for e, f in files.items()}
-        trials = check.task.config.dataset.trials
         draws = {e: t[t["trial"] < trials] for e, t in tables.items()}
         rows["candidate"].append(_figures(draws, {e: t[t["trial"] >= trials]
                                                   for e, t in tables.items()}))
         for e in ENGINES:
             same[e].append(_paired(draws[e], kept.draws[e], check.task.object_id))
-            record = json.loads(files[e].with_suffix(".json").read_text())
-            cost[e][0] += record["seconds"]
-            cost[e][1] += record["trials"]
+            shifts[e].append(_shift(tables[e], pd.concat([kept.draws[e], kept.retest[e]])))
+            cost[e][0] += records[e]["seconds"]
+            cost[e][1] += records[e]["trials"]
     names = list(rows["candidate"][0])
     means = {model: {n: float(np.nanmean([r[n] for r in found])) for n in names}
              for model, found in rows.items()}
-    print(f"{len(rows['candidate'])} objects (mean over objects)\n")
+    print(f"{len(rows['candidate'])} objects (mean over objects), {trials} trials a grip "
+          "against the next " + str(trials) + "\n")
     print("| model | " + " | ".join(names) + " |")
     print("| --- " * (len(names) + 1) + "|")
     for model, figures in means.items():
@@ -112,9 +128,30 @@ def summary(parts: Path, out: Path) -> None:
         rho = _spearman(*grips.mean().to_numpy().T)
         before = trials_for(means["committed"][f"retest {e}"], trials)
         needed = trials_for(means["candidate"][f"retest {e}"], trials)
+        needed = max(needed, trials) if stratified else needed
         ms = 1e3 * seconds / count
         print(f"| {e} | {alike:.1%} | {rho:.3f} | {ms:.0f} | {needed:.1f} ({before:.1f}) | "
               f"{needed * ms / 1e3:.2f} |")
+    print("\n| engine | mean robustness a grip, candidate − committed (g, 95 % over objects) | "
+          "success rate, candidate − committed |")
+    print("| --- | --- | --- |")
+    for e in ENGINES:
+        change = np.array(shifts[e])
+        print(f"| {e} | " + " | ".join(_interval(change[:, i], f) for i, f in
+                                       ((0, "{:+.2f}"), (1, "{:+.3f}"))) + " |")
+
+
+def _shift(candidate: pd.DataFrame, committed: pd.DataFrame) -> tuple[float, float]:
+    """The change of an object's mean robustness (g) and success rate from the committed
+    model's trials to the candidate's."""
+    return (float(candidate["robustness"].mean() - committed["robustness"].mean()),
+            float(candidate["success"].mean() - committed["success"].mean()))
+
+
+def _interval(change: np.ndarray, form: str) -> str:
+    """``change``'s mean with its 95 % paired bootstrap interval over objects."""
+    low, high = paired_interval(change)
+    return f"{form.format(change.mean())} [{form.format(low)}, {form.format(high)}]"
 
 
 def _paired_change(rows: dict[str, list[dict[str, float]]], name: str) -> str:
@@ -122,9 +159,7 @@ def _paired_change(rows: dict[str, list[dict[str, float]]], name: str) -> str:
     where both are defined, with its 95 % paired bootstrap interval."""
     change = np.array([c[name] - k[name] for c, k in zip(rows["candidate"], rows["committed"],
                                                           strict=True)])
-    change = change[np.isfinite(change)]
-    low, high = paired_interval(change)
-    return f"{change.mean():+.3f} [{low:+.3f}, {high:+.3f}]"
+    return _interval(change[np.isfinite(change)], "{:+.3f}")
 
 
 def _paired(candidate: pd.DataFrame, committed: pd.DataFrame, object_id: str) -> pd.DataFrame:
