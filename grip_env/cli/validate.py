@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from dataclasses import asdict
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -14,6 +14,9 @@ from grip_env.cli.notices import warn_label_model
 from grip_env.cli.options import dataset_folder
 from grip_env.cli.paths import output_file
 from grip_env.progress import shown
+
+if TYPE_CHECKING:
+    from grip_env.dataset.crosscheck import EngineCost
 
 
 def validate(
@@ -139,8 +142,18 @@ def _crosscheck(directory: Path, objects: int, seed: int, workers: int,
     for cost in found.cost:
         typer.echo(f"  {cost.engine}: {cost.ms_per_trial:.0f} ms a trial, "
                    f"{cost.us_per_step:.0f} us a step, {cost.trials_for_trustworthy:.1f} trials "
-                   f"for a retest of 0.8: {cost.core_seconds_per_label:.2f} core-s a label")
+                   f"for a retest of 0.8: {cost.core_seconds_per_label:.2f} core-s a label"
+                   f"{_measured(cost)}")
     return {"objects": objects, **found.as_dict()}
+
+
+def _measured(cost: EngineCost) -> str:
+    """The retest measured at each label size, and the label it makes trustworthy."""
+    if not cost.retest_by_trials:
+        return ""
+    curve = ", ".join(f"{v:.2f}" for v in cost.retest_by_trials)
+    return (f"; retest measured at 1..{len(cost.retest_by_trials)} trials {curve}: "
+            f"{cost.trials_measured:.0f} trials, {cost.core_seconds_measured:.2f} core-s a label")
 
 
 def crosscheck_parts(report: Path) -> Path:

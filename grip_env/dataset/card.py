@@ -305,10 +305,23 @@ def crosscheck_tables(found: dict[str, Any]) -> tuple[str, pd.DataFrame, pd.Data
     cost = pd.DataFrame([{
         "engine": c["engine"], "trials": f"{c['trials']:,}",
         "CPU s a trial": f"{c['ms_per_trial'] / 1e3:.3f}", "µs a step": f"{c['us_per_step']:.0f}",
-        "trials for retest 0.8": f"{c['trials_for_trustworthy']:.1f}",
-        "core-s a trustworthy label": f"{c['core_seconds_per_label']:.2f}"}
+        "trials for retest 0.8 (Spearman-Brown)": f"{c['trials_for_trustworthy']:.1f}",
+        "core-s a trustworthy label": f"{c['core_seconds_per_label']:.2f}",
+        "retest measured at 1..T trials": _curve(c.get("retest_by_trials")),
+        "trials for retest 0.8 (measured)": _count(c.get("trials_measured")),
+        "core-s a label (measured)": _count(c.get("core_seconds_measured"), "{:.2f}")}
         for c in found.get("cost", [])])
     return intro, agreement, cost
+
+
+def _curve(values: list[float] | None) -> str:
+    """A retest curve as its values; a dash for a report made before it was recorded."""
+    return ", ".join(f"{v:.2f}" for v in values) if values else "–"
+
+
+def _count(value: float | None, form: str = "{:.0f}") -> str:
+    """A figure, or a dash when the report predates it or it was not measured."""
+    return form.format(value) if value is not None and np.isfinite(value) else "–"
 
 
 def _robustness(group: dict[str, Any]) -> str:

@@ -19,8 +19,9 @@ pieces its simulated body is made of, with 95 % bootstrap intervals over objects
   grip, the engine and the draws (:mod:`grip_env.dataset.label_shares`, from both engines'
   2T trials a grip);
 * each engine's cost: CPU seconds a trial and a protocol step (of the worker processes), and a
-  trustworthy label's: the trials that bring its within-object retest to ``TRUSTWORTHY``
-  (Spearman-Brown from the measured retest) times a trial's cost.
+  trustworthy label's: the trials that bring its within-object retest to ``TRUSTWORTHY`` times a
+  trial's cost, both by Spearman-Brown from the retest at T trials and as measured at every label
+  size from 1 to T (:mod:`grip_env.dataset.retest_curve`).
 
 Each object's outcomes are kept in ``parts`` (when given) as it finishes: an interrupted run
 given the same folder again simulates only the objects not done, and after a new label model of
@@ -46,11 +47,10 @@ from grip_env.dataset.files import write_text_atomically
 from grip_env.dataset.label_shares import SHARES, grip_components, label_shares
 from grip_env.dataset.manifest import fingerprint, read_manifest
 from grip_env.dataset.resimulation import BOOTSTRAP, _map, _ObjectCheck, _retest_sample
+from grip_env.dataset.retest_curve import TRUSTWORTHY, retest_curve, trials_for, trials_measured
 from grip_env.label_model import engine_of, label_model_for, label_model_of
 from grip_env.objects.family import object_family
 
-#: The within-object retest a trustworthy label reaches (the labels' target, BENCHMARKS.md).
-TRUSTWORTHY = 0.8
 #: The outcome columns an object's part keeps for each run.
 _KEPT = ("grip", "trial", "robustness", "success", "steps")
 #: Per-object scores, each averaged over objects (NaN where an object gives none).
@@ -106,6 +106,12 @@ class EngineCost:
     us_per_step: float
     trials_for_trustworthy: float  # trials a grip for a within-object retest of TRUSTWORTHY
     core_seconds_per_label: float  # those trials (rounded up) times a trial's cost
+    #: The within-object retest measured at 1..T trials a grip (``retest_curve``; empty without
+    #: the retests), the fewest trials whose retest reaches TRUSTWORTHY in it
+    #: (``trials_measured``) and those trials (rounded up) times a trial's cost.
+    retest_by_trials: list[float] = field(default_factory=list)
+    trials_measured: float = float("nan")
+    core_seconds_measured: float = float("nan")
 
 
 @dataclass
@@ -431,8 +437,9 @@ def _agreement(rows: list[dict[str, Any]], grips: int, rng: np.random.Generator)
 
 
 def _costs(runs: list[_Runs], engines: tuple[str, str], retests: dict[str, float],
-           trials: int) -> list[EngineCost]:
-    """Each engine's cost a trial, a step and a trustworthy label."""
+           trials: int, seed: int) -> list[EngineCost]:
+    """Each engine's cost a trial, a step and a trustworthy label (from Spearman-Brown and
+    from the retest measured at each label size)."""
     costs = []
     for engine in engines:
         frames = [f for r in runs for f in (r.draws[engine], r.retest.get(engine))
@@ -442,26 +449,30 @@ def _costs(runs: list[_Runs], engines: tuple[str, str], retests: dict[str, float
         seconds = float(sum(r.seconds[engine] for r in runs))
         per_trial = seconds / count if count else float("nan")
         needed = trials_for(retests[engine], trials)
+        curve = retest_curve(_retest_outcomes(runs, engine), seed=seed)
+        measured = trials_measured(curve, TRUSTWORTHY)
         costs.append(EngineCost(engine, count, steps, seconds, 1e3 * per_trial,
                                 1e6 * seconds / steps if steps else float("nan"), needed,
-                                math.ceil(needed) * per_trial if math.isfinite(needed)
-                                else float("nan")))
+                                _label_cost(needed, per_trial), [float(v) for v in curve],
+                                measured, _label_cost(measured, per_trial)))
     return costs
 
 
-def trials_for(retest: float, trials: int, target: float = TRUSTWORTHY) -> float:
-    """Trials a grip whose mean reaches a within-object retest of ``target``, from the retest
-    measured at ``trials`` a grip (Spearman-Brown: the trials' labels average as independent
-    draws, as BENCHMARKS.md found on the standard dataset). NaN when not measured, inf when the
-    measured retest is not positive."""
-    if not math.isfinite(retest):
-        return float("nan")
-    if retest <= 0:
-        return float("inf")
-    if retest >= 1:
-        return 1.0
-    single = retest / (trials - (trials - 1) * retest)
-    return target * (1 - single) / ((1 - target) * single)
+def _retest_outcomes(runs: list[_Runs], engine: str) -> list[np.ndarray]:
+    """Each retested object's robustness in ``engine``, (grips, 2T): both runs' trials."""
+    found = []
+    for r in runs:
+        again = r.retest.get(engine)
+        if again is not None:
+            both = pd.concat([r.draws[engine], again])
+            found.append(both.pivot(index="grip", columns="trial", values="robustness")
+                         .sort_index().sort_index(axis=1).to_numpy(float))
+    return found
+
+
+def _label_cost(trials: float, per_trial: float) -> float:
+    """A label of ``trials`` (rounded up) at ``per_trial`` core-seconds a trial."""
+    return math.ceil(trials) * per_trial if math.isfinite(trials) else float("nan")
 
 
 def _figures(checks: list[_ObjectCheck], runs: list[_Runs], engine: str,
@@ -486,7 +497,7 @@ def _figures(checks: list[_ObjectCheck], runs: list[_Runs], engine: str,
     reproduced = sum(_reproduced(r.draws[engine], c) for r, c in zip(runs, checks, strict=True))
     trials = checks[0].task.config.dataset.trials if checks else 0
     cost = _costs(runs, (engine, other), {engine: overall.retest_own,
-                                          other: overall.retest_other}, trials)
+                                          other: overall.retest_other}, trials, seed)
     return CrossCheck(engine, other, seed, reproduced, overall, families, cost, by_grips,
                       by_pieces, {e: label_model_for(e) for e in (engine, other)})
 
