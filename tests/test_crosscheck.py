@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -77,6 +78,14 @@ def test_each_engine_s_cost_is_counted_on_its_own_trials(checked):
         assert cost.steps > 100 * cost.trials and cost.cpu_seconds > 0
         assert cost.ms_per_trial == pytest.approx(1e3 * cost.cpu_seconds / cost.trials)
         assert cost.us_per_step == pytest.approx(1e6 * cost.cpu_seconds / cost.steps)
+        # the retest measured at 1..3 trials from each object's 6, and the label it prices
+        assert len(cost.retest_by_trials) == 3
+        defined = [v for v in cost.retest_by_trials if np.isfinite(v)]
+        assert all(-1.0 <= v <= 1.0 for v in defined)
+        if np.isfinite(cost.trials_measured):
+            assert cost.trials_measured >= 1
+            assert cost.core_seconds_measured == pytest.approx(
+                math.ceil(cost.trials_measured) * cost.ms_per_trial / 1e3)
 
 
 @pytest.mark.slow

@@ -289,7 +289,10 @@ def crosscheck_tables(found: dict[str, Any]) -> tuple[str, pd.DataFrame, pd.Data
              "the grip (alike in both engines), the engine's own view of it, and the draws its "
              "trials average (`grip_env.dataset.label_shares`). Costs: "
              "the CPU of the run that simulated each engine's trials (a run that resumes "
-             "another reads them back), so two engines' rows may come from different loads.")
+             "another reads them back), so two engines' rows may come from different loads; "
+             "the trials a trustworthy label needs by Spearman-Brown from the retest at the "
+             "dataset's trials, and as measured at every label size over splits of each "
+             "object's retested trials (`grip_env.dataset.retest_curve`).")
     groups = [("all", found["overall"]), *sorted(found.get("families", {}).items()),
               *found.get("by_grips", {}).items(), *found.get("by_pieces", {}).items()]
     agreement = pd.DataFrame([{
