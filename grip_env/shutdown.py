@@ -18,6 +18,10 @@ every tree); scikit-learn's MLP catches it to end training early. The work would
 until the watchdog kills it. So a loop of jobs calls :func:`raise_if_signalled` between jobs,
 and a signal the work never saw still ends the command with its exit code.
 
+A signal that lands while a module is being imported is held until the import ends: an
+extension's import runs Python from C++ (torch's ``_c10d_init``), and an exception raised there
+cannot unwind, so the process would abort (SIGABRT) instead of stopping cleanly.
+
 >>> with stop_on_signals("rerun the same command to finish"):   # doctest: +SKIP
 ...     long_work()
 """
@@ -69,6 +73,7 @@ class _State:
         self.deferring = 0
         self.pending: int | None = None
         self.stopping = False
+        self.held_in_import = False
 
 
 _STATE = _State()
@@ -136,13 +141,44 @@ def raise_if_signalled() -> None:
 
 
 def _on_signal(signum: int, frame: FrameType | None) -> None:
-    if _STATE.pending is not None:
+    if _STATE.pending is None:
+        _STATE.pending = signum
+        _start_watchdog(exit_code(signum))
+    elif not _STATE.held_in_import:
         return  # already stopping: the first signal decides the exit code
-    _STATE.pending = signum
-    _start_watchdog(exit_code(signum))
-    if _STATE.deferring == 0:
-        _STATE.stopping = True
-        raise Interrupted(signum)
+    if _STATE.deferring or _STATE.stopping:
+        return
+    if _importing(frame):
+        if not _STATE.held_in_import:
+            _STATE.held_in_import = True
+            _deliver_after_import(_STATE.pending)
+        return
+    _STATE.held_in_import = False
+    _STATE.stopping = True
+    raise Interrupted(_STATE.pending)
+
+
+def _importing(frame: FrameType | None) -> bool:
+    """Whether ``frame`` runs inside an import (below one of importlib's frames)."""
+    while frame is not None:
+        if frame.f_code.co_filename.startswith("<frozen importlib"):
+            return True
+        frame = frame.f_back
+    return False
+
+
+def _deliver_after_import(signum: int) -> None:
+    """Send ``signum`` to the main thread again once it has left every import (the watchdog
+    still bounds the wait)."""
+    main = threading.main_thread().ident
+
+    def watch() -> None:
+        while _importing(sys._current_frames().get(main)):  # type: ignore[arg-type]
+            time.sleep(0.02)
+        with suppress(ProcessLookupError, OSError):  # the main thread already gone
+            signal.pthread_kill(main, signum)  # type: ignore[arg-type]
+
+    threading.Thread(target=watch, name="signal-after-import", daemon=True).start()
 
 
 def _start_watchdog(code: int) -> None:

@@ -94,6 +94,29 @@ def test_deferred_signal_takes_effect_when_the_block_ends() -> None:
     assert done.returncode == 129 and done.stdout == "finished the block\n"
 
 
+def test_a_signal_during_an_import_takes_effect_when_the_import_ends(tmp_path: Path) -> None:
+    """An extension's import runs Python from C++, where an exception cannot unwind (torch's
+    aborted the selector with SIGABRT): a signal that lands inside an import is held until the
+    module is whole, then stops the command with its code."""
+    (tmp_path / "slow_module.py").write_text(
+        "import os, signal, time\n"
+        "os.kill(os.getpid(), signal.SIGTERM)\n"
+        "time.sleep(0.5)\n"
+        "print('imported whole', flush=True)\n")
+    done = _python(
+        "import sys, time\n"
+        f"sys.path.insert(0, {str(tmp_path)!r})\n"
+        "from grip_env.shutdown import stop_on_signals\n"
+        "with stop_on_signals('rerun it'):\n"
+        "    import slow_module\n"
+        "    time.sleep(30)\n"
+        "    print('not reached')\n"
+    )
+    assert done.returncode == 143, done.stderr
+    assert done.stdout == "imported whole\n"
+    assert done.stderr == "interrupted by SIGTERM: stopped cleanly; rerun it\n"
+
+
 def test_children_still_running_are_ended_and_work_without_signal_is_untouched() -> None:
     done = _python(
         "import os, signal, subprocess, sys, time\n"
