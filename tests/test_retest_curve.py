@@ -57,6 +57,8 @@ def test_the_curve_is_seeded_and_stops_at_the_fewest_trials_of_any_object():
 def test_one_trial_a_grip_is_refused_by_its_count():
     with pytest.raises(ValueError, match="2 or more trials a grip, got 0"):
         retest_curve([np.ones((3, 1))])
+    with pytest.raises(ValueError, match="1 or more splits, got 0"):
+        retest_curve(_objects(2, 4, 4, 1.0, seed=8), splits=0)
 
 
 def test_trials_measured_is_the_first_label_size_that_reaches_the_target():

@@ -349,14 +349,9 @@ def _trials(frame: pd.DataFrame) -> int:
 def _components(runs: _Runs, engines: tuple[str, str]) -> np.ndarray | None:
     """The object's per-trial variance components (``grip_components``) over both engines'
     every trial, or None without the retests or with fewer than two grips."""
-    tables = []
-    for engine in engines:
-        again = runs.retest.get(engine)
-        if again is None:
-            return None
-        both = pd.concat([runs.draws[engine], again])
-        tables.append(both.pivot(index="grip", columns="trial", values="robustness")
-                      .sort_index().sort_index(axis=1).to_numpy(float))
+    tables = [_every_trial(runs, engine) for engine in engines]
+    if any(table is None for table in tables):
+        return None
     outcomes = np.stack(tables, axis=1)
     return grip_components(outcomes) if outcomes.shape[0] >= 2 else None
 
@@ -458,16 +453,20 @@ def _costs(runs: list[_Runs], engines: tuple[str, str], retests: dict[str, float
     return costs
 
 
+def _every_trial(runs: _Runs, engine: str) -> np.ndarray | None:
+    """One object's robustness in ``engine`` over both runs, (grips, 2T) in grip and trial
+    order; None without the retest."""
+    again = runs.retest.get(engine)
+    if again is None:
+        return None
+    both = pd.concat([runs.draws[engine], again])
+    return (both.pivot(index="grip", columns="trial", values="robustness")
+            .sort_index().sort_index(axis=1).to_numpy(float))
+
+
 def _retest_outcomes(runs: list[_Runs], engine: str) -> list[np.ndarray]:
-    """Each retested object's robustness in ``engine``, (grips, 2T): both runs' trials."""
-    found = []
-    for r in runs:
-        again = r.retest.get(engine)
-        if again is not None:
-            both = pd.concat([r.draws[engine], again])
-            found.append(both.pivot(index="grip", columns="trial", values="robustness")
-                         .sort_index().sort_index(axis=1).to_numpy(float))
-    return found
+    """Each retested object's robustness in ``engine``, (grips, 2T)."""
+    return [m for m in (_every_trial(r, engine) for r in runs) if m is not None]
 
 
 def _label_cost(trials: float, per_trial: float) -> float:

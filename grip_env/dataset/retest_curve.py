@@ -48,6 +48,8 @@ def retest_curve(outcomes: Sequence[NDArray[np.float64]], splits: int = SPLITS,
     random sets of n trials, averaged over ``splits`` seeded splits (the same for every object
     with as many trials) and then over objects, skipping the splits and objects where it is
     undefined (grips all alike). NaN where no object defines it."""
+    if splits < 1:
+        raise ValueError(f"a retest curve needs 1 or more splits, got {splits}")
     if not outcomes:
         return np.array([])
     size = min(m.shape[1] for m in outcomes) // 2

@@ -115,7 +115,7 @@ def summary(parts: Path, out: Path) -> None:
     means = {model: {n: float(np.nanmean([r[n] for r in found])) for n in names}
              for model, found in rows.items()}
     print(f"{len(rows['candidate'])} objects (mean over objects), {trials} trials a grip "
-          "against the next " + str(trials) + "\n")
+          f"against the next {trials}\n")
     print("| model | " + " | ".join(names) + " |")
     print("| --- " * (len(names) + 1) + "|")
     for model, figures in means.items():
