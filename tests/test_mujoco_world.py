@@ -281,6 +281,35 @@ def test_a_mujoco_trial_runs_on_a_mesh(mesh_objects):
     assert first.equals(run_trial_outcomes(obj, grips, config, trials=1, seed=3))
 
 
+def test_an_arm_at_rest_steps_its_substeps_in_one_call_bit_for_bit():
+    """While the arm's targets are where it started, ``step`` runs a step's substeps in one
+    call to MuJoCo: the state after moving, holding and being pushed is, bit for bit, that of
+    the general loop (which ``watch_servos`` keeps)."""
+    states = []
+    for watched in (True, False):
+        with MujocoWorld() as mj:
+            mj.watch_servos = watched
+            mj.add_table()
+            block = mj.add_object(next(o for o in load_object_set("default")
+                                       if o.name == "rectangle"), 30.0, 0.2, 0.5)
+            uid = mj.load_robot(HAND_URDF)
+            mj.set_contact_compliance(uid, 5, 3.0e4, 5.0)  # pads: several substeps
+            z = 2  # the gantry's vertical axis
+            mj.set_joint(uid, z, 0.3)
+            mj.position_motors(uid, [z], [0.3], [400.0], 1.0)
+            mj.step(5)  # at rest
+            for k in range(1, 4):  # moving
+                mj.position_motors(uid, [z], [0.3 + 6e-4 * k], [400.0], 1.0)
+                mj.step()
+            mj.step(5)  # at rest again
+            mj.push(block.uid, np.array([3.0, -2.0, 1.0]))
+            mj.step(2)
+            _, d = mj._compiled()
+            assert mj.substeps > 1
+            states.append((d.qpos.tobytes(), d.qvel.tobytes(), d.qacc.tobytes()))
+    assert states[0] == states[1]
+
+
 def _servo_world_in_a_trial(obj_name: str = "rectangle") -> MujocoWorld:
     """The MuJoCo world of one whole trial (approach to ramp) of ``obj_name``'s best grip, its
     servos watched."""

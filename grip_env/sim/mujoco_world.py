@@ -223,6 +223,9 @@ class MujocoWorld:
         references = np.empty((len(offsets), len(self._servo_from)))
         for _ in range(steps):
             self._set_drive_speeds(m, d)
+            if not self.watch_servos and self._servo_target.tobytes() == self._servo_from.tobytes():
+                self._step_still(m, d)
+                continue
             start, speed = self._servo_from, (self._servo_target - self._servo_from) / self.timestep
             lead = 2.0 * self._servo_time_constant * speed
             np.multiply(offsets, speed, out=references)  # in place, the bits of
@@ -238,6 +241,16 @@ class MujocoWorld:
                 d.xfrc_applied[:] = 0.0
                 self._loaded = False
         self._stale = True
+
+    def _step_still(self, m: mujoco.MjModel, d: mujoco.MjData) -> None:
+        """One step of an arm at rest (its target, bit for bit, where it started): every
+        substep's reference is then ``start + offset * 0.0 + 0.0``, the same bits as
+        ``start + 0.0``, so the substeps run in one call to MuJoCo, bit for bit the loop's."""
+        self._servo_references[:] = self._servo_from + 0.0
+        mujoco.mj_step(m, d, self.substeps)
+        if self._loaded:  # a push or twist lasts one step
+            d.xfrc_applied[:] = 0.0
+            self._loaded = False
 
     def servos_within_limits(self) -> bool:
         """Whether no arm servo ever exerted more than its force limit (the last commanded), as
