@@ -218,37 +218,47 @@ class MujocoWorld:
         The arm's servos track a reference that moves at constant speed from the last target to
         the new one through the step, with that speed as their velocity reference."""
         m, d = self._ready()
-        offsets, servos, peak = self._substep_offsets, self._servo_rows, self.servo_peak_n
-        held = self._servo_references  # a view of the servos' rows of ``m.eq_data``
-        references = np.empty((len(offsets), len(self._servo_from)))
         for _ in range(steps):
             self._set_drive_speeds(m, d)
-            if not self.watch_servos and self._servo_target.tobytes() == self._servo_from.tobytes():
+            if self._arm_at_rest():
                 self._step_still(m, d)
-                continue
-            start, speed = self._servo_from, (self._servo_target - self._servo_from) / self.timestep
-            lead = 2.0 * self._servo_time_constant * speed
-            np.multiply(offsets, speed, out=references)  # in place, the bits of
-            references += start  # start + offsets * speed + lead (its sums in its order)
-            references += lead
-            for reference in references:
-                held[:] = reference
-                mujoco.mj_step(m, d)
-                if self.watch_servos:
-                    np.maximum(peak, np.abs(d.efc_force[servos]), out=peak)
-            self._servo_from = self._servo_target.copy()
-            if self._loaded:  # a push or twist lasts one step
-                d.xfrc_applied[:] = 0.0
-                self._loaded = False
+            else:
+                self._step_moving(m, d)
+            self._unload(d)
         self._stale = True
 
+    def _arm_at_rest(self) -> bool:
+        """Whether the servos' targets are, bit for bit, where they start the step (and no
+        servo is watched, which needs every substep's forces)."""
+        return not self.watch_servos and (
+            self._servo_target.tobytes() == self._servo_from.tobytes())
+
+    def _step_moving(self, m: mujoco.MjModel, d: mujoco.MjData) -> None:
+        """One step of an arm on its way: each substep's references, then its physics."""
+        offsets, held = self._substep_offsets, self._servo_references  # held: rows of eq_data
+        start, speed = self._servo_from, (self._servo_target - self._servo_from) / self.timestep
+        lead = 2.0 * self._servo_time_constant * speed
+        references = np.multiply(offsets, speed)  # the bits of start + offsets * speed + lead
+        references += start  # (its sums in its order)
+        references += lead
+        for reference in references:
+            held[:] = reference
+            mujoco.mj_step(m, d)
+            if self.watch_servos:
+                peak = self.servo_peak_n
+                np.maximum(peak, np.abs(d.efc_force[self._servo_rows]), out=peak)
+        self._servo_from = self._servo_target.copy()
+
     def _step_still(self, m: mujoco.MjModel, d: mujoco.MjData) -> None:
-        """One step of an arm at rest (its target, bit for bit, where it started): every
-        substep's reference is then ``start + offset * 0.0 + 0.0``, the same bits as
-        ``start + 0.0``, so the substeps run in one call to MuJoCo, bit for bit the loop's."""
+        """One step of an arm at rest: every substep's reference is then
+        ``start + offset * 0.0 + 0.0``, the same bits as ``start + 0.0``, so the substeps run
+        in one call to MuJoCo, bit for bit the moving arm's loop."""
         self._servo_references[:] = self._servo_from + 0.0
         mujoco.mj_step(m, d, self.substeps)
-        if self._loaded:  # a push or twist lasts one step
+
+    def _unload(self, d: mujoco.MjData) -> None:
+        """End a push or twist: each lasts one step."""
+        if self._loaded:
             d.xfrc_applied[:] = 0.0
             self._loaded = False
 
