@@ -92,7 +92,7 @@ def test_a_pybullet_run_keeps_its_identity_and_a_mujoco_run_is_another():
     assert fingerprint(mujoco) != fingerprint(default)
 
 
-def test_only_the_mujoco_world_imports_mujoco():
+def test_only_the_mujoco_world_and_its_frames_import_mujoco():
     import ast
     from pathlib import Path
 
@@ -104,7 +104,7 @@ def test_only_the_mujoco_world_imports_mujoco():
                      else [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
             if any(name.split(".")[0] == "mujoco" for name in names):
                 importers.add(path.relative_to(root).as_posix())
-    assert importers == {"sim/mujoco_world.py"}
+    assert importers == {"sim/mujoco_world.py", "sim/mujoco_rendering.py"}
 
 
 def test_a_manifest_records_the_engine_its_version_and_its_label_model():
