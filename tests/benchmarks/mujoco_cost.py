@@ -16,6 +16,12 @@ the same). ``--profile`` adds cProfile's top functions by own and cumulative CPU
 through a clock compiled here with the system's C compiler (a Python clock would cost more than
 the phases it times); its share of ``mj_step`` splits the physics into collision, constraint
 solve and the rest.
+``--against TREE --rounds N`` times this tree's ``MujocoWorld`` against another checkout's (its
+``grip_env/sim/mujoco_world.py``, e.g. from ``git archive``) in one process, the two swapped in
+turn for N rounds of the sample, and prints each round's ratio: on a machine whose speed drifts
+between runs, interleaving in one process is what makes a few per cent measurable.
+
+    python -m tests.benchmarks.mujoco_cost --grips 40 --trials 2 --against ../before --rounds 6
 """
 
 from __future__ import annotations
@@ -122,6 +128,44 @@ def print_timers(totals: dict[str, float]) -> None:
             print(f"| {name} | {value / 1e6:.2f} | {value / total:.1%} |")
 
 
+def world_of(tree: Path) -> type:
+    """The ``MujocoWorld`` class of another checkout (its module loaded under its own name)."""
+    import importlib.util
+
+    path = tree / "grip_env" / "sim" / "mujoco_world.py"
+    if not path.is_file():
+        raise SystemExit(f"no {path}: --against takes a checkout of grip-env")
+    spec = importlib.util.spec_from_file_location("mujoco_world_against", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.MujocoWorld
+
+
+def interleave(jobs: list[tuple], trials: int, other: type, rounds: int) -> None:
+    """CPU ms a trial of this tree's world and ``other``, swapped in turn (order alternating)."""
+    import statistics
+
+    from grip_env.sim import mujoco_world
+
+    worlds = {"this": mujoco_world.MujocoWorld, "against": other}
+    times: dict[str, list[float]] = {"this": [], "against": []}
+    try:
+        for k in range(rounds):
+            for name in ("this", "against") if k % 2 else ("against", "this"):
+                mujoco_world.MujocoWorld = worlds[name]
+                started = time.process_time()
+                table = run(jobs, trials)
+                times[name].append(1e3 * (time.process_time() - started) / len(table))
+    finally:
+        mujoco_world.MujocoWorld = worlds["this"]
+    ratios = [a / b for a, b in zip(times["this"], times["against"], strict=True)]
+    for name, values in times.items():
+        print(f"{name}: {', '.join(f'{v:.1f}' for v in values)} ms a trial; "
+              f"median {statistics.median(values):.1f}")
+    print(f"this / against, each round: {', '.join(f'{r:.3f}' for r in ratios)}; "
+          f"median {statistics.median(ratios):.3f}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--grips", type=int, default=12)
@@ -132,8 +176,15 @@ def main() -> None:
     parser.add_argument("--compare", type=Path)
     parser.add_argument("--profile", action="store_true")
     parser.add_argument("--timers", action="store_true")
+    parser.add_argument("--against", type=Path, help="another checkout, timed interleaved")
+    parser.add_argument("--rounds", type=int, default=6)
     args = parser.parse_args()
     jobs = work(args.grips, args.seed, args.engine)
+    if args.against:
+        other = world_of(args.against)
+        run(jobs[:1], 1)  # warm
+        interleave(jobs, args.trials, other, args.rounds)
+        return
     timers = watch_timers() if args.timers else None
     run(jobs[:1], 1)  # warm: imports, caches of the first object
     if timers:
