@@ -129,7 +129,8 @@ def print_timers(totals: dict[str, float]) -> None:
 
 
 def world_of(tree: Path) -> type:
-    """The ``MujocoWorld`` class of another checkout (its module loaded under its own name)."""
+    """The ``MujocoWorld`` class of another checkout (its module loaded under its own name; what
+    it imports from ``grip_env`` comes from this tree)."""
     import importlib.util
 
     path = tree / "grip_env" / "sim" / "mujoco_world.py"
@@ -179,6 +180,8 @@ def main() -> None:
     parser.add_argument("--against", type=Path, help="another checkout, timed interleaved")
     parser.add_argument("--rounds", type=int, default=6)
     args = parser.parse_args()
+    if args.against and args.engine != "mujoco":
+        parser.error("--against swaps MuJoCo's world: it times --engine mujoco only")
     jobs = work(args.grips, args.seed, args.engine)
     if args.against:
         other = world_of(args.against)
