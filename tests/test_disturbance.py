@@ -177,3 +177,67 @@ def test_every_direction_climbs_to_its_own_limit_and_the_weakest_is_the_robustne
     again = DirectionalBlock(block.capacities_g)
     assert robustness(again.probe(config), 1.0 / 9.81, 1.0, config) == limits.min()
     assert again.steps <= block.steps  # robustness stops each direction at the weakest so far
+
+
+class PausableBlock(DirectionalBlock):
+    """The directional block whose climbs can be paused and resumed exactly (as MuJoCo's), and
+    which records the highest level (g) each disturbance was pushed to."""
+
+    def __init__(self, capacities_g: dict[tuple[str, int, float], float]) -> None:
+        super().__init__(capacities_g)
+        self.highest_g: dict[tuple[str, int, float], float] = {}
+
+    def probe(self, config: SimConfig) -> RampProbe:
+        plain = super().probe(config)
+
+        def push(kind: str, vector: np.ndarray) -> None:
+            axis = int(np.argmax(np.abs(vector)))
+            key = (kind, axis, float(np.sign(vector[axis])))
+            self.highest_g[key] = max(self.highest_g.get(key, 0.0), float(np.linalg.norm(vector)))
+            plain.push(kind, vector)
+
+        def pause():
+            position, speed = self.position_mm, self.speed_mm_s
+
+            def resume() -> None:
+                self.position_mm, self.speed_mm_s = position, speed
+            return resume
+
+        return RampProbe(plain.restore, push, plain.step, plain.moved, plain.where, np.eye(3),
+                         pause)
+
+
+@given(places=st.lists(st.tuples(st.integers(-1, 16), st.floats(0.2, 0.8)), min_size=6,
+                       max_size=6))
+def test_directions_climbing_together_find_the_same_level_and_none_climbs_past_it(places):
+    """With a probe that can pause, every direction climbs one level at a time: the ramp gives
+    the level of the directions climbed one after another, and no direction is pushed beyond
+    the first level that fails."""
+    config = SimConfig(ramp_max_steps_per_level=120)
+    capacities = dict(zip(PLANAR_DISTURBANCES,
+                          [between_levels(config, i, share) for i, share in places], strict=True))
+    one_after_another = robustness(DirectionalBlock(capacities).probe(config), 1.0 / 9.81, 1.0,
+                                   config)
+    together = PausableBlock(capacities)
+    assert robustness(together.probe(config), 1.0 / 9.81, 1.0, config) == one_after_another
+    levels = ramp_levels(config)
+    failed = levels[levels > one_after_another]
+    top = failed[0] if failed.size else levels[-1]
+    assert max(together.highest_g.values()) == pytest.approx(top)
+
+
+def test_directions_climbing_together_spend_the_weakest_levels_steps_only():
+    """One direction fails at 32 g, the rest hold 128 g: one after another, the strong
+    directions first, they climb to 128 g before the weak one is found; together, all six stop
+    at 32 g (each level at rest lasts its window)."""
+    config = SimConfig(ramp_steps_per_level=3, ramp_max_steps_per_level=120)
+    capacities = {d: 1000.0 for d in PLANAR_DISTURBANCES}
+    capacities[PLANAR_DISTURBANCES[-1]] = 30.0
+    apart, together = DirectionalBlock(capacities), PausableBlock(capacities)
+    assert robustness(apart.probe(config), 1.0 / 9.81, 1.0, config) == pytest.approx(26.91, 1e-3)
+    assert robustness(together.probe(config), 1.0 / 9.81, 1.0, config) == pytest.approx(26.91,
+                                                                                        1e-3)
+    levels = len(ramp_levels(config))  # 16: 2, 4, 8, then 16 to 128 g by 2^(1/4)
+    reached = int(np.sum(ramp_levels(config) <= 32.0))  # 8: up to the failing 32 g
+    # the five strong directions at rest, 3 steps a level: 16 levels apart, 8 together
+    assert together.steps == apart.steps - 5 * (levels - reached) * 3

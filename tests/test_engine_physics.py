@@ -133,6 +133,29 @@ def test_a_trial_s_robustness_is_its_weakest_direction_s_own_limit(engine):
         assert label == limits[-1]
 
 
+def test_mujocos_directions_climb_together_to_the_same_outcome_in_fewer_steps(monkeypatch):
+    """MuJoCo resumes a paused climb bit for bit, so the ramp's directions climb together, one
+    level each in turn: every outcome of the disc's grips is the one of the directions climbed
+    one after another (``resumes_exactly`` off), in fewer steps."""
+    pytest.importorskip("mujoco")
+    from dataclasses import asdict
+
+    from grip_env.sim.mujoco_world import MujocoWorld
+    from grip_env.sim.trial import TrialScene, grip_plans
+
+    config, disc, grips = _disc_grips(3)
+    config = config.override(sim={"engine": "mujoco"})
+    results = {}
+    for together in (True, False):
+        monkeypatch.setattr(MujocoWorld, "resumes_exactly", together)
+        with TrialScene(disc, config) as scene:
+            results[together] = [asdict(scene.run(plan, NO_ERROR)) for plan in grip_plans(grips)]
+    steps = {k: sum(r.pop("steps") for r in rows) for k, rows in results.items()}
+    assert results[True] == results[False]
+    assert any(r["held"] and r["robustness_g"] < 128.0 for r in results[True])
+    assert steps[True] < steps[False]
+
+
 @pytest.mark.parametrize("engine", ENGINES)
 def test_a_restore_returns_the_held_grip_whatever_ran_since(engine):
     """The hand holds the disc (its best grip by Q_C); the world is saved, the disc pushed one

@@ -310,6 +310,37 @@ def test_an_arm_at_rest_steps_its_substeps_in_one_call_bit_for_bit():
     assert states[0] == states[1]
 
 
+def test_resume_continues_a_saved_moment_bit_for_bit_whatever_was_commanded_since():
+    """``resume`` brings back every command with the state (the arm's targets, the motors'
+    targets, torques and modes, the joints' stops), so the world goes on exactly as it would
+    have; ``restore`` brings back the state only and leaves the commands for the caller."""
+    with MujocoWorld() as mj:
+        mj.add_table()
+        mj.add_object(next(o for o in load_object_set("default") if o.name == "rectangle"),
+                      30.0, 0.2, 0.5)
+        uid = mj.load_robot(HAND_URDF)
+        z, flex = 2, MOUNT_JOINTS + 1  # the gantry's vertical axis; a finger's first joint
+        mj.position_motors(uid, [z], [0.3], [400.0], 1.0)
+        mj.velocity_motors(uid, [flex], [0.5], [0.3])
+        mj.step(3)
+        saved = mj.save()
+        mj.step(6)
+        _, d = mj._compiled()
+        ahead = (d.qpos.tobytes(), d.qvel.tobytes(), d.qacc_warmstart.tobytes())
+        # commanded otherwise since the moment was saved
+        mj.position_motors(uid, [z], [0.31], [100.0], 1.0)
+        mj.position_motors(uid, [flex], [0.2], [0.1], 0.5)
+        mj.joint_floors(uid, [flex], [0.05], [1.0], [1.0])
+        mj.step(2)
+        mj.restore(saved)
+        mj.step(6)
+        assert d.qpos.tobytes() != ahead[0]  # the new commands acted
+        mj.resume(saved)
+        mj.step(6)
+        assert (d.qpos.tobytes(), d.qvel.tobytes(), d.qacc_warmstart.tobytes()) == ahead
+        assert mj.resumes_exactly and not World.resumes_exactly
+
+
 def _servo_world_in_a_trial(obj_name: str = "rectangle") -> MujocoWorld:
     """The MuJoCo world of one whole trial (approach to ramp) of ``obj_name``'s best grip, its
     servos watched."""

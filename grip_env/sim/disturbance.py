@@ -17,8 +17,12 @@ A level of ``a`` g is a force ``m a g`` through the centre of mass, or for the t
 ``m a g k`` that gives a tangential acceleration of ``a`` g at the object's radius of gyration
 ``k``. The level held in a direction is the last one before the
 object moves past the hold tolerance (drift or rotation in the palm frame). The trial's
-robustness is the weakest direction's level; a direction only ramps up to the weakest level found
-so far, so the cost stops at the first level that fails.
+robustness is the weakest direction's level, so no direction needs to climb past the weakest level
+found: where the engine can pause a climb and resume it bit for bit (MuJoCo), the directions climb
+together, one level each in turn, and the ramp ends at the first level any of them fails; elsewhere
+(PyBullet) they climb one after another, each only up to the weakest level found so far. Every
+climb starts from the same restored moment, so both give the same level, the minimum of the
+directions' own limits; they differ only in the steps spent.
 """
 
 from __future__ import annotations
@@ -76,7 +80,9 @@ class RampProbe:
     force (N) or torque (N·m) to the object for the next step; ``step()`` advances one step;
     ``moved()`` says whether the object is past the hold tolerance; ``where()`` gives the
     object's pose in the palm frame as ``moved()`` last saw it; ``palm_axes`` (3, 3) has the
-    palm frame's axes as rows, in world coordinates.
+    palm frame's axes as rows, in world coordinates. ``pause()``, when given, saves this moment
+    and returns a callable that resumes it bit for bit (once); without it the directions climb
+    one after another.
     """
 
     restore: Callable[[], None]
@@ -85,6 +91,7 @@ class RampProbe:
     moved: Callable[[], bool]
     where: Callable[[], tuple[pose.Vector, pose.Quaternion]]
     palm_axes: NDArray[np.float64]
+    pause: Callable[[], Callable[[], None]] | None = None
 
 
 def reaches(level_g: float, reference_g: float) -> bool:
@@ -101,20 +108,65 @@ def reached(levels_g: NDArray[np.float64], reference_g: float) -> NDArray[np.boo
 def robustness(probe: RampProbe, mass_kg: float, gyration_m: float, config: SimConfig) -> float:
     """The highest level (g) held in every direction (gravity acts throughout)."""
     levels = ramp_levels(config)
-    weakest = len(levels)  # index of the first level that failed in some direction
-    for disturbance in disturbances(config):
-        failed = _climb(probe, disturbance, mass_kg, gyration_m, levels[:weakest], config)
-        weakest = min(weakest, failed)
-        if weakest == 0:
-            return 0.0
+    loads = [_load(probe, d, mass_kg, gyration_m) for d in disturbances(config)]
+    climb = _one_after_another if probe.pause is None else _together
+    weakest = climb(probe, loads, levels, config)
     return float(levels[weakest - 1]) if weakest > 0 else 0.0
+
+
+Load = tuple[str, NDArray[np.float64]]
+
+
+def _load(probe: RampProbe, disturbance: tuple[str, int, float], mass_kg: float,
+          gyration_m: float) -> Load:
+    """A disturbance's kind and its world vector per g of level (N, or N·m for a twist)."""
+    kind, axis, sign = disturbance
+    scale = mass_kg * GRAVITY * (gyration_m if kind == "torque" else 1.0)
+    return kind, sign * probe.palm_axes[axis] * scale
+
+
+def _one_after_another(probe: RampProbe, loads: list[Load], levels: NDArray[np.float64],
+                       config: SimConfig) -> int:
+    """Each direction from the saved moment up to the weakest level found so far: the index
+    of the first level that failed in some direction (``len(levels)`` if none did)."""
+    weakest = len(levels)
+    for kind, unit in loads:
+        probe.restore()
+        weakest = min(weakest, _first_failure(probe, kind, unit, levels[:weakest], config))
+        if weakest == 0:
+            break
+    return weakest
+
+
+def _together(probe: RampProbe, loads: list[Load], levels: NDArray[np.float64],
+              config: SimConfig) -> int:
+    """Every direction one level at a time, each resumed where it paused, until one fails: the
+    index of that level (``len(levels)`` if none did). Within a level, the direction whose
+    object has crept nearest its tolerance goes first, as the likeliest to fail there."""
+    pause = probe.pause
+    if pause is None:
+        raise ValueError("climbing the directions together needs a probe that can pause")
+    resumes: list[Callable[[], None]] = [probe.restore] * len(loads)
+    nearness = [0.0] * len(loads)
+    reference = None
+    for index, level in enumerate(levels):
+        for d in sorted(range(len(loads)), key=lambda d: -nearness[d]):
+            resumes[d]()
+            reference = reference or probe.where()  # the saved moment's pose
+            kind, unit = loads[d]
+            if not _holds(probe, kind, unit * level, config):
+                return index
+            resumes[d] = pause()
+            drift, turn = pose.moved_from(reference, probe.where())
+            nearness[d] = max(drift / config.hold_tolerance_mm, turn / config.hold_rotation_deg)
+    return len(levels)
 
 
 def direction_limits(probe: RampProbe, mass_kg: float, gyration_m: float,
                      config: SimConfig) -> NDArray[np.float64]:
     """Each disturbance's own limit (g, in the order of ``disturbances(config)``; 0 when its
     first level fails): every direction climbs to its own first failure, where
-    :func:`robustness` stops each at the weakest level found so far. A diagnostic: it costs
+    :func:`robustness` stops at the weakest level found. A diagnostic: it costs
     more, and since every climb starts from the same restored moment (in both engines),
     :func:`robustness` is the minimum of these limits."""
     levels = ramp_levels(config)
@@ -127,11 +179,9 @@ def _climb(probe: RampProbe, disturbance: tuple[str, int, float], mass_kg: float
            gyration_m: float, levels: NDArray[np.float64], config: SimConfig) -> int:
     """From the saved moment, ramp one disturbance through ``levels``: the index of the first
     level at which the object moved (``len(levels)`` if none did)."""
-    kind, axis, sign = disturbance
+    kind, unit = _load(probe, disturbance, mass_kg, gyration_m)
     probe.restore()
-    unit = sign * probe.palm_axes[axis]
-    scale = mass_kg * GRAVITY * (gyration_m if kind == "torque" else 1.0)
-    return _first_failure(probe, kind, unit * scale, levels, config)
+    return _first_failure(probe, kind, unit, levels, config)
 
 
 def _first_failure(
@@ -139,21 +189,28 @@ def _first_failure(
     config: SimConfig,
 ) -> int:
     """Index of the first level at which the object moved (``len(levels)`` if none did)."""
+    for index, level in enumerate(levels):
+        if not _holds(probe, kind, unit * level, config):
+            return index
+    return len(levels)
+
+
+def _holds(probe: RampProbe, kind: str, vector: NDArray[np.float64], config: SimConfig) -> bool:
+    """Hold one level until the object is at rest under it (or the step cap): whether it
+    stayed within the hold tolerance."""
     window = config.ramp_steps_per_level
     longest = max(config.ramp_max_steps_per_level, window)
     still_mm = SETTLED_SHARE * config.hold_tolerance_mm
     still_deg = SETTLED_SHARE * config.hold_rotation_deg
-    for index, level in enumerate(levels):
-        vector = unit * level
-        recent = deque([probe.where()], maxlen=window + 1)
-        for step in range(1, longest + 1):
-            probe.push(kind, vector)
-            probe.step()
-            if probe.moved():
-                return index
-            recent.append(probe.where())
-            if step >= window:
-                drift, turn = pose.moved_from(recent[0], recent[-1])
-                if drift < still_mm and turn < still_deg:
-                    break
-    return len(levels)
+    recent = deque([probe.where()], maxlen=window + 1)
+    for step in range(1, longest + 1):
+        probe.push(kind, vector)
+        probe.step()
+        if probe.moved():
+            return False
+        recent.append(probe.where())
+        if step >= window:
+            drift, turn = pose.moved_from(recent[0], recent[-1])
+            if drift < still_mm and turn < still_deg:
+                break
+    return True

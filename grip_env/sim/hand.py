@@ -357,14 +357,20 @@ class Hand:
                          tuple(f.broken_away for f in self.fingers), self._target)
 
     def restore(self, state: HandState) -> None:
-        """Bring the controller back to ``state`` (after ``restoreState`` of the same moment)."""
+        """Bring the controller back to ``state`` (after ``restoreState`` of the same moment)
+        and command its motors, stops and palm target again."""
+        self.resume(state)
+        self._command_motors()
+        self._raise_floors(range(6))
+        self.move(np.asarray(state.palm_target[0]), state.palm_target[1])
+
+    def resume(self, state: HandState) -> None:
+        """Bring the controller back to ``state`` after the world resumed the same moment with
+        every command (``Engine.resume``): its memory only, nothing commanded again."""
         self._peaks, self._origin = state.peak.ravel().tolist(), state.origin.copy()
         for finger, broken in zip(self.fingers, state.broken_away, strict=True):
             finger.broken_away = broken
-        self._command_motors()
-        self._raise_floors(range(6))
         self._target = state.palm_target
-        self.move(np.asarray(state.palm_target[0]), state.palm_target[1])
 
     def touching(self, body: int) -> NDArray[np.bool_]:
         """(3, 2): whether each finger's proximal and distal links (planar order) touch ``body``."""

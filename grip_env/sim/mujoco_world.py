@@ -62,6 +62,7 @@ from __future__ import annotations
 import functools
 import math
 import xml.etree.ElementTree as ET
+from dataclasses import dataclass
 from pathlib import Path
 
 import mujoco
@@ -146,6 +147,20 @@ DEFAULT_POSITION_GAIN = 0.1
 GRAVITY = (0.0, 0.0, -9.81)
 
 
+@dataclass(frozen=True)
+class _Commands:
+    """What the controllers commanded at a saved moment (``MujocoWorld.save``)."""
+
+    servo_from: NDArray[np.float64]
+    servo_target: NDArray[np.float64]
+    servo_limit: NDArray[np.float64]
+    drive_command: NDArray[np.float64]
+    drive_is_position: NDArray[np.bool_]
+    drive_gain: NDArray[np.float64]
+    drive_torques: NDArray[np.float64]
+    joint_ranges: NDArray[np.float64]
+
+
 class MujocoWorld:
     """A headless MuJoCo world; use as a context manager or ``close()``.
 
@@ -156,6 +171,8 @@ class MujocoWorld:
     """
 
     watch_servos: bool = False
+    #: ``resume`` brings back the whole state and every command, so it continues bit for bit.
+    resumes_exactly = True
 
     def __init__(self, timestep: float = 1.0 / 240.0, solver_iterations: int = 50) -> None:
         self.timestep = timestep
@@ -177,8 +194,7 @@ class MujocoWorld:
         self._model: mujoco.MjModel | None = None
         self._saved: dict[int, mujoco.MjData] = {}
         self._spare: mujoco.MjData | None = None  # scratch for constants or a saved state
-        self._saved_servos: dict[int, NDArray[np.float64]] = {}
-        self._saved_drives: dict[int, NDArray[np.float64]] = {}
+        self._saved_commands: dict[int, _Commands] = {}
         self._addresses: dict[tuple[int, tuple[int, ...]], tuple[NDArray, NDArray]] = {}
         self._joint_rows: dict[tuple[int, tuple[int, ...]], NDArray[np.int64]] = {}
         # joint_floors' calls whose stops carry the stops' current time constant (rewritten
@@ -202,8 +218,7 @@ class MujocoWorld:
         self._model = None
         self._spare = None
         self._saved.clear()
-        self._saved_servos.clear()
-        self._saved_drives.clear()
+        self._saved_commands.clear()
 
     def __enter__(self) -> MujocoWorld:
         return self
@@ -608,29 +623,46 @@ class MujocoWorld:
 
     # ------------------------------------------------------------------ states and loads
     def save(self) -> int:
-        """Save the whole simulation state in memory; returns a state id."""
+        """Save the whole simulation state and the commands in memory; returns a state id."""
         m, d = self._compiled()
         state = self._spare_data()
         mujoco.mj_copyData(state, m, d)
         key = max(self._saved, default=-1) + 1
         self._saved[key] = state
-        self._saved_servos[key] = self._servo_from.copy()
-        self._saved_drives[key] = self._drive_command.copy()
+        self._saved_commands[key] = _Commands(
+            self._servo_from.copy(), self._servo_target.copy(), self._servo_limit.copy(),
+            self._drive_command.copy(), self._drive_is_position.copy(), self._drive_gain.copy(),
+            m.tendon_frictionloss.copy(), self._jnt_range.copy())
         return key
 
     def restore(self, state: int) -> None:
-        """Return the world to a saved state (model parameters, such as limits, stay)."""
+        """Return the world to a saved state. Of the commands, only the servos' start and the
+        motors' targets come back: the limits and the motors' torques and modes stay, for the
+        caller to command again (the trial's hand does, ``Hand.restore``)."""
         m, d = self._compiled()
         mujoco.mj_copyData(d, m, self._saved[state])
-        self._servo_from = self._saved_servos[state].copy()
-        self._drive_command = self._saved_drives[state].copy()
+        saved = self._saved_commands[state]
+        self._servo_from = saved.servo_from.copy()
+        self._drive_command = saved.drive_command.copy()
         self._stale = True
+
+    def resume(self, state: int) -> None:
+        """Return the world to a saved state with every command as it was then: the world goes
+        on bit for bit as it would have from that moment (``resumes_exactly``)."""
+        m, _ = self._compiled()
+        self.restore(state)
+        saved = self._saved_commands[state]
+        self._servo_target = saved.servo_target.copy()
+        self._servo_limit = saved.servo_limit.copy()
+        self._drive_is_position = saved.drive_is_position.copy()
+        self._drive_gain = saved.drive_gain.copy()
+        m.tendon_frictionloss[:] = saved.drive_torques
+        self._jnt_range[:] = saved.joint_ranges
 
     def forget(self, state: int) -> None:
         """Free a saved state (its data is kept as the spare, ``_spare_data``)."""
         self._spare = self._saved.pop(state, self._spare)
-        self._saved_servos.pop(state, None)
-        self._saved_drives.pop(state, None)
+        self._saved_commands.pop(state, None)
 
     def push(self, body: int, force_n: NDArray) -> None:
         """A world-frame force (N) through ``body``'s centre of mass, for the next step."""

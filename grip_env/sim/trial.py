@@ -311,13 +311,29 @@ class TrialScene:
             restore()
             seen[0] = reference
 
+        paused: set[int] = set()
+
+        def pause() -> Callable[[], None]:
+            key, hand_state, where = world.save(), self.hand.state(), seen[0]
+            paused.add(key)
+
+            def resume() -> None:
+                world.resume(key)
+                self.hand.resume(hand_state)
+                seen[0] = where
+                world.forget(key)
+                paused.discard(key)
+            return resume
+
         axes = np.stack([palm_to_world(yaw, np.eye(3)[k]) for k in range(3)])
-        probe = RampProbe(restore_seen, push, counter.step, moved, lambda: seen[0], axes)
+        probe = RampProbe(restore_seen, push, counter.step, moved, lambda: seen[0], axes,
+                          pause if world.resumes_exactly else None)
         try:
             search = self.ramp or robustness
             return search(probe, self.mass_kg * noise.mass_scale, self.gyration_m, sim)
         finally:
-            world.forget(saved)
+            for key in (saved, *paused):
+                world.forget(key)
 
     def _object_in_palm(self) -> tuple[pose.Vector, pose.Quaternion]:
         """The object's pose (mm, quaternion) in the palm frame."""

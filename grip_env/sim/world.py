@@ -60,6 +60,9 @@ shape itself."""
 class World:
     """A headless PyBullet world owning its own client; use as a context manager or ``close()``."""
 
+    #: ``restore`` finds the contacts afresh, so a paused moment cannot be resumed bit for bit.
+    resumes_exactly = False
+
     def __init__(self, timestep: float = 1.0 / 240.0, solver_iterations: int = 50) -> None:
         # A stop signal during the connection would leave a half-built client whose finaliser
         # fails noisily at exit: the connection is made whole first, then the signal acts.
@@ -423,6 +426,10 @@ class World:
         """
         self.client.restoreState(state)
         self._renew_contacts()
+
+    def resume(self, state: int) -> None:
+        """``restore``: PyBullet cannot resume a moment bit for bit (``resumes_exactly``)."""
+        self.restore(state)
 
     def _renew_contacts(self) -> None:
         """Empty every contact manifold that holds points (their pairs kept from colliding for
