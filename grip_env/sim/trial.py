@@ -285,55 +285,13 @@ class TrialScene:
 
     def _robustness(self, yaw: float, noise: TrialNoise, counter: _StepCounter) -> float:
         """The disturbance ramp from this moment (``grip_env.sim.disturbance``)."""
-        world, sim = self.world, self.config.sim
-        saved, hand_state = world.save(), self.hand.state()
-        reference = self._object_in_palm()
-        uid = self.object.uid
-
-        def restore() -> None:
-            world.restore(saved)
-            self.hand.restore(hand_state)
-
-        def push(kind: str, vector: NDArray) -> None:
-            if kind == "torque":
-                world.twist(uid, vector)
-            else:
-                world.push(uid, vector)
-
-        seen = [reference]
-
-        def moved() -> bool:
-            seen[0] = self._object_in_palm()
-            drift, turn = pose.moved_from(reference, seen[0])
-            return drift > sim.hold_tolerance_mm or turn > sim.hold_rotation_deg
-
-        def restore_seen() -> None:
-            restore()
-            seen[0] = reference
-
-        paused: set[int] = set()
-
-        def pause() -> Callable[[], None]:
-            key, hand_state, where = world.save(), self.hand.state(), seen[0]
-            paused.add(key)
-
-            def resume() -> None:
-                world.resume(key)
-                self.hand.resume(hand_state)
-                seen[0] = where
-                world.forget(key)
-                paused.discard(key)
-            return resume
-
-        axes = np.stack([palm_to_world(yaw, np.eye(3)[k]) for k in range(3)])
-        probe = RampProbe(restore_seen, push, counter.step, moved, lambda: seen[0], axes,
-                          pause if world.resumes_exactly else None)
+        moment = _HeldMoment(self, yaw, counter)
         try:
             search = self.ramp or robustness
-            return search(probe, self.mass_kg * noise.mass_scale, self.gyration_m, sim)
+            return search(moment.probe(), self.mass_kg * noise.mass_scale, self.gyration_m,
+                          self.config.sim)
         finally:
-            for key in (saved, *paused):
-                world.forget(key)
+            moment.close()
 
     def _object_in_palm(self) -> tuple[pose.Vector, pose.Quaternion]:
         """The object's pose (mm, quaternion) in the palm frame."""
@@ -346,6 +304,61 @@ class TrialScene:
 
     def _object_height(self) -> float:
         return float(self.world.pose_mm(self.object.uid)[0][2])
+
+
+class _HeldMoment:
+    """The held grip's moment, saved for the ramp: its probe restores it, pushes the object,
+    steps, watches the object in the palm frame and (where the engine resumes exactly) pauses a
+    climb in progress."""
+
+    def __init__(self, scene: TrialScene, yaw: float, counter: _StepCounter) -> None:
+        self.scene, self.world, self.counter = scene, scene.world, counter
+        self.saved, self.hand_state = self.world.save(), scene.hand.state()
+        self.reference = self.seen = scene._object_in_palm()
+        self.paused: set[int] = set()
+        self.palm_axes = np.stack([palm_to_world(yaw, np.eye(3)[k]) for k in range(3)])
+
+    def probe(self) -> RampProbe:
+        return RampProbe(self.restore, self.push, self.counter.step, self.moved, self.where,
+                         self.palm_axes, self.pause if self.world.resumes_exactly else None)
+
+    def restore(self) -> None:
+        self.world.restore(self.saved)
+        self.scene.hand.restore(self.hand_state)
+        self.seen = self.reference
+
+    def push(self, kind: str, vector: NDArray) -> None:
+        if kind == "torque":
+            self.world.twist(self.scene.object.uid, vector)
+        else:
+            self.world.push(self.scene.object.uid, vector)
+
+    def moved(self) -> bool:
+        sim = self.scene.config.sim
+        self.seen = self.scene._object_in_palm()
+        drift, turn = pose.moved_from(self.reference, self.seen)
+        return drift > sim.hold_tolerance_mm or turn > sim.hold_rotation_deg
+
+    def where(self) -> tuple[pose.Vector, pose.Quaternion]:
+        return self.seen
+
+    def pause(self) -> Callable[[], None]:
+        """Save this moment of a climb; the callable returned resumes it (once)."""
+        key, hand_state, seen = self.world.save(), self.scene.hand.state(), self.seen
+        self.paused.add(key)
+
+        def resume() -> None:
+            self.world.resume(key)
+            self.scene.hand.resume(hand_state)
+            self.seen = seen
+            self.world.forget(key)
+            self.paused.discard(key)
+        return resume
+
+    def close(self) -> None:
+        """Free every state saved for the ramp."""
+        for key in (self.saved, *self.paused):
+            self.world.forget(key)
 
 
 class _StepCounter:

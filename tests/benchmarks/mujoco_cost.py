@@ -22,6 +22,9 @@ turn for N rounds of the sample, and prints each round's ratio: on a machine who
 between runs, interleaving in one process is what makes a few per cent measurable.
 
     python -m tests.benchmarks.mujoco_cost --grips 40 --trials 2 --against ../before --rounds 6
+
+``--apart --rounds N`` times, the same way, this tree's world against itself with the ramp's
+directions climbed one after another (``resumes_exactly`` off) instead of together.
 """
 
 from __future__ import annotations
@@ -142,6 +145,13 @@ def world_of(tree: Path) -> type:
     return module.MujocoWorld
 
 
+def climbing_apart() -> type:
+    """This tree's ``MujocoWorld`` with the ramp's directions climbed one after another."""
+    from grip_env.sim.mujoco_world import MujocoWorld
+
+    return type("MujocoWorldApart", (MujocoWorld,), {"resumes_exactly": False})
+
+
 def interleave(jobs: list[tuple], trials: int, other: type, rounds: int) -> None:
     """CPU ms a trial of this tree's world and ``other``, swapped in turn (order alternating)."""
     import statistics
@@ -178,13 +188,17 @@ def main() -> None:
     parser.add_argument("--profile", action="store_true")
     parser.add_argument("--timers", action="store_true")
     parser.add_argument("--against", type=Path, help="another checkout, timed interleaved")
+    parser.add_argument("--apart", action="store_true",
+                        help="timed interleaved against the directions climbed one by one")
     parser.add_argument("--rounds", type=int, default=6)
     args = parser.parse_args()
-    if args.against and args.engine != "mujoco":
-        parser.error("--against swaps MuJoCo's world: it times --engine mujoco only")
+    if (args.against or args.apart) and args.engine != "mujoco":
+        parser.error("--against and --apart swap MuJoCo's world: they time --engine mujoco only")
+    if args.against and args.apart:
+        parser.error("--against and --apart each name the world to time against: give one")
     jobs = work(args.grips, args.seed, args.engine)
-    if args.against:
-        other = world_of(args.against)
+    if args.against or args.apart:
+        other = world_of(args.against) if args.against else climbing_apart()
         run(jobs[:1], 1)  # warm
         interleave(jobs, args.trials, other, args.rounds)
         return
