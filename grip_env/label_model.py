@@ -90,7 +90,7 @@ MuJoCo's (``sim.engine: mujoco``):
   same hand and integration as ``-lean``.
 - ``mujoco-2026.12-together``: the ramp's directions climb together, one level each in turn, each
   resumed bit for bit where it paused (``MujocoWorld.resume``), so none climbs past the weakest
-  level found. Every outcome is ``-hertz``'s bit for bit but the step count, 12-15 % fewer steps a
+  level found. Every outcome is ``-hertz``'s bit for bit but the step count, 10-15 % fewer steps a
   trial (PyBullet cannot resume a climb exactly and keeps climbing them one after another).
   BENCHMARKS.md, "MuJoCo's directions climb together".
 """
