@@ -310,10 +310,12 @@ def test_an_arm_at_rest_steps_its_substeps_in_one_call_bit_for_bit():
     assert states[0] == states[1]
 
 
-def test_resume_continues_a_saved_moment_bit_for_bit_whatever_was_commanded_since():
+@pytest.mark.parametrize("keep", ["save", "pause"])
+def test_resume_continues_a_saved_moment_bit_for_bit_whatever_was_commanded_since(keep):
     """``resume`` brings back every command with the state (the arm's targets, the motors'
     targets, torques and modes, the joints' stops), so the world goes on exactly as it would
-    have; ``restore`` brings back the state only and leaves the commands for the caller."""
+    have, from a moment kept whole (``save``) or as its integration state (``pause``);
+    ``restore`` brings back the state only and leaves the commands for the caller."""
     with MujocoWorld() as mj:
         mj.add_table()
         mj.add_object(next(o for o in load_object_set("default") if o.name == "rectangle"),
@@ -323,7 +325,7 @@ def test_resume_continues_a_saved_moment_bit_for_bit_whatever_was_commanded_sinc
         mj.position_motors(uid, [z], [0.3], [400.0], 1.0)
         mj.velocity_motors(uid, [flex], [0.5], [0.3])
         mj.step(3)
-        saved = mj.save()
+        saved = getattr(mj, keep)()
         mj.step(6)
         _, d = mj._compiled()
         ahead = (d.qpos.tobytes(), d.qvel.tobytes(), d.qacc_warmstart.tobytes())

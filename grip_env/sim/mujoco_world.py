@@ -145,6 +145,8 @@ MULTI_CONTACT = True
 #: Bullet's default position gain of a position motor when none is given.
 DEFAULT_POSITION_GAIN = 0.1
 GRAVITY = (0.0, 0.0, -9.81)
+#: What ``pause`` keeps of ``mjData``: everything a step reads and does not derive.
+INTEGRATION_STATE = mujoco.mjtState.mjSTATE_INTEGRATION
 
 
 @dataclass(frozen=True)
@@ -159,6 +161,15 @@ class _Commands:
     drive_gain: NDArray[np.float64]
     drive_torques: NDArray[np.float64]
     joint_ranges: NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class _Saved:
+    """A saved moment: the whole ``mjData`` (``save``) or its integration state (``pause``)."""
+
+    data: mujoco.MjData | None
+    state: NDArray[np.float64] | None
+    commands: _Commands
 
 
 class MujocoWorld:
@@ -192,9 +203,8 @@ class MujocoWorld:
         self._free: list[bool] = []
         self.substeps = 1
         self._model: mujoco.MjModel | None = None
-        self._saved: dict[int, mujoco.MjData] = {}
+        self._saved: dict[int, _Saved] = {}  # by state id: save's and pause's
         self._spare: mujoco.MjData | None = None  # scratch for constants or a saved state
-        self._saved_commands: dict[int, _Commands] = {}
         self._addresses: dict[tuple[int, tuple[int, ...]], tuple[NDArray, NDArray]] = {}
         self._joint_rows: dict[tuple[int, tuple[int, ...]], NDArray[np.int64]] = {}
         # joint_floors' calls whose stops carry the stops' current time constant (rewritten
@@ -218,7 +228,6 @@ class MujocoWorld:
         self._model = None
         self._spare = None
         self._saved.clear()
-        self._saved_commands.clear()
 
     def __enter__(self) -> MujocoWorld:
         return self
@@ -625,14 +634,29 @@ class MujocoWorld:
     def save(self) -> int:
         """Save the whole simulation state and the commands in memory; returns a state id."""
         m, d = self._compiled()
-        state = self._spare_data()
-        mujoco.mj_copyData(state, m, d)
+        data = self._spare_data()
+        mujoco.mj_copyData(data, m, d)
+        return self._keep(data, None)
+
+    def pause(self) -> int:
+        """Save a moment to ``restore`` or ``resume`` before the next step reads anything
+        else: what the steps start from (MuJoCo's integration state: positions, velocities, the
+        solver's warm start, applied loads, time) and every command, without the rest of
+        ``mjData`` that ``save`` copies (contacts, forces: the next step derives them again);
+        returns a state id. The steps after it are bit for bit ``save``'s, and it allocates no
+        ``mjData``."""
+        m, d = self._compiled()
+        state = np.empty(mujoco.mj_stateSize(m, INTEGRATION_STATE))
+        mujoco.mj_getState(m, d, state, INTEGRATION_STATE)
+        return self._keep(None, state)
+
+    def _keep(self, data: mujoco.MjData | None, state: NDArray[np.float64] | None) -> int:
         key = max(self._saved, default=-1) + 1
-        self._saved[key] = state
-        self._saved_commands[key] = _Commands(
+        m = self._model
+        self._saved[key] = _Saved(data, state, _Commands(
             self._servo_from.copy(), self._servo_target.copy(), self._servo_limit.copy(),
             self._drive_command.copy(), self._drive_is_position.copy(), self._drive_gain.copy(),
-            m.tendon_frictionloss.copy(), self._jnt_range.copy())
+            m.tendon_frictionloss.copy(), self._jnt_range.copy()))
         return key
 
     def restore(self, state: int) -> None:
@@ -640,18 +664,21 @@ class MujocoWorld:
         motors' targets come back: the limits and the motors' torques and modes stay, for the
         caller to command again (the trial's hand does, ``Hand.restore``)."""
         m, d = self._compiled()
-        mujoco.mj_copyData(d, m, self._saved[state])
-        saved = self._saved_commands[state]
-        self._servo_from = saved.servo_from.copy()
-        self._drive_command = saved.drive_command.copy()
+        saved = self._saved[state]
+        if saved.data is not None:
+            mujoco.mj_copyData(d, m, saved.data)
+        else:  # a pause: what the next step reads is set, the rest is derived again by it
+            mujoco.mj_setState(m, d, saved.state, INTEGRATION_STATE)
+        self._servo_from = saved.commands.servo_from.copy()
+        self._drive_command = saved.commands.drive_command.copy()
         self._stale = True
 
     def resume(self, state: int) -> None:
-        """Return the world to a saved state with every command as it was then: the world goes
-        on bit for bit as it would have from that moment (``resumes_exactly``)."""
+        """Return the world to a saved or paused state with every command as it was then: the
+        world goes on bit for bit as it would have from that moment (``resumes_exactly``)."""
         m, _ = self._compiled()
         self.restore(state)
-        saved = self._saved_commands[state]
+        saved = self._saved[state].commands
         self._servo_target = saved.servo_target.copy()
         self._servo_limit = saved.servo_limit.copy()
         self._drive_is_position = saved.drive_is_position.copy()
@@ -660,9 +687,10 @@ class MujocoWorld:
         self._jnt_range[:] = saved.joint_ranges
 
     def forget(self, state: int) -> None:
-        """Free a saved state (its data is kept as the spare, ``_spare_data``)."""
-        self._spare = self._saved.pop(state, self._spare)
-        self._saved_commands.pop(state, None)
+        """Free a saved state (a saved ``mjData`` is kept as the spare, ``_spare_data``)."""
+        saved = self._saved.pop(state, None)
+        if saved is not None and saved.data is not None:
+            self._spare = saved.data
 
     def push(self, body: int, force_n: NDArray) -> None:
         """A world-frame force (N) through ``body``'s centre of mass, for the next step."""

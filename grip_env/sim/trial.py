@@ -313,7 +313,7 @@ class _HeldMoment:
 
     def __init__(self, scene: TrialScene, yaw: float, counter: _StepCounter) -> None:
         self.scene, self.world, self.counter = scene, scene.world, counter
-        self.saved, self.hand_state = self.world.save(), scene.hand.state()
+        self.saved, self.hand_state = self.world.pause(), scene.hand.state()
         self.reference = self.seen = scene._object_in_palm()
         self.paused: set[int] = set()
         self.palm_axes = np.stack([palm_to_world(yaw, np.eye(3)[k]) for k in range(3)])
@@ -344,7 +344,7 @@ class _HeldMoment:
 
     def pause(self) -> Callable[[], None]:
         """Save this moment of a climb; the callable returned resumes it (once)."""
-        key, hand_state, seen = self.world.save(), self.scene.hand.state(), self.seen
+        key, hand_state, seen = self.world.pause(), self.scene.hand.state(), self.seen
         self.paused.add(key)
 
         def resume() -> None:

@@ -427,6 +427,10 @@ class World:
         self.client.restoreState(state)
         self._renew_contacts()
 
+    def pause(self) -> int:
+        """``save``: a moment to ``restore`` or ``resume`` before the next step."""
+        return self.save()
+
     def resume(self, state: int) -> None:
         """``restore``: PyBullet cannot resume a moment bit for bit (``resumes_exactly``)."""
         self.restore(state)
