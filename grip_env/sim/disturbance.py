@@ -109,8 +109,10 @@ def robustness(probe: RampProbe, mass_kg: float, gyration_m: float, config: SimC
     """The highest level (g) held in every direction (gravity acts throughout)."""
     levels = ramp_levels(config)
     loads = [_load(probe, d, mass_kg, gyration_m) for d in disturbances(config)]
-    climb = _one_after_another if probe.pause is None else _together
-    weakest = climb(probe, loads, levels, config)
+    if probe.pause is None:
+        weakest = _one_after_another(probe, loads, levels, config)
+    else:
+        weakest = _together(probe, probe.pause, loads, levels, config)
     return float(levels[weakest - 1]) if weakest > 0 else 0.0
 
 
@@ -138,21 +140,19 @@ def _one_after_another(probe: RampProbe, loads: list[Load], levels: NDArray[np.f
     return weakest
 
 
-def _together(probe: RampProbe, loads: list[Load], levels: NDArray[np.float64],
-              config: SimConfig) -> int:
-    """Every direction one level at a time, each resumed where it paused, until one fails: the
-    index of that level (``len(levels)`` if none did). Within a level, the direction whose
-    object has crept nearest its tolerance goes first, as the likeliest to fail there."""
-    pause = probe.pause
-    if pause is None:
-        raise ValueError("climbing the directions together needs a probe that can pause")
+def _together(probe: RampProbe, pause: Callable[[], Callable[[], None]], loads: list[Load],
+              levels: NDArray[np.float64], config: SimConfig) -> int:
+    """Every direction one level at a time, each resumed where ``pause`` left it, until one
+    fails: the index of that level (``len(levels)`` if none did). Within a level, the direction
+    whose object has crept nearest its tolerance goes first, as the likeliest to fail there."""
     resumes: list[Callable[[], None]] = [probe.restore] * len(loads)
     nearness = [0.0] * len(loads)
-    reference = None
+    reference: tuple[pose.Vector, pose.Quaternion] | None = None
     for index, level in enumerate(levels):
         for d in sorted(range(len(loads)), key=lambda d: -nearness[d]):
             resumes[d]()
-            reference = reference or probe.where()  # the saved moment's pose
+            if reference is None:  # the saved moment's pose, seen after the first restore
+                reference = probe.where()
             kind, unit = loads[d]
             if not _holds(probe, kind, unit * level, config):
                 return index

@@ -142,7 +142,21 @@ def world_of(tree: Path) -> type:
     spec = importlib.util.spec_from_file_location("mujoco_world_against", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
+    missing = [name for name in engine_members() if not hasattr(module.MujocoWorld, name)]
+    if missing:
+        raise SystemExit(f"{path}'s MujocoWorld lacks {', '.join(missing)}, which this tree's "
+                         f"trial protocol calls: --against takes a checkout with its engine seam")
     return module.MujocoWorld
+
+
+def engine_members() -> list[str]:
+    """What the trial protocol asks of an engine's class (``Engine``'s methods and
+    ``resumes_exactly``)."""
+    from grip_env.sim.engine import Engine
+
+    methods = [name for name, value in vars(Engine).items()
+               if callable(value) and not name.startswith("_")]
+    return [*methods, "resumes_exactly"]
 
 
 def climbing_apart() -> type:
