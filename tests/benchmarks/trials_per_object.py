@@ -81,6 +81,7 @@ def judge(objects: list[Splits], rule: Rule) -> tuple[float, float, float]:
 
 
 def fixed(n: int) -> Rule:
+    """``n`` trials for every object (the datasets' rule)."""
     return lambda first_two: np.full(first_two.shape, n)
 
 
