@@ -55,13 +55,19 @@ def retest_curve(outcomes: Sequence[NDArray[np.float64]], splits: int = SPLITS,
     size = min(m.shape[1] for m in outcomes) // 2
     if size < 1:
         raise ValueError(f"a retest curve needs 2 or more trials a grip, got {2 * size}")
-    order = np.random.default_rng(seed).random((splits, 2 * size)).argsort(axis=1)
+    order = split_order(splits, 2 * size, seed)
     per_object = np.array([_object_curve(np.asarray(m, float)[:, :2 * size], order)
                            for m in outcomes])
     defined = np.isfinite(per_object)
     total = np.where(defined, per_object, 0.0).sum(axis=0)
     count = defined.sum(axis=0)
     return np.divide(total, count, out=np.full(size, np.nan), where=count > 0)
+
+
+def split_order(splits: int, trials: int, seed: int) -> NDArray[np.int64]:
+    """``splits`` seeded random orders of ``trials`` trials, (splits, trials): the same for
+    every object with as many trials."""
+    return np.random.default_rng(seed).random((splits, trials)).argsort(axis=1)
 
 
 def _object_curve(matrix: NDArray[np.float64], order: NDArray[np.int64]) -> NDArray[np.float64]:

@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from grip_env.dataset.crosscheck import _every_trial
-from grip_env.dataset.retest_curve import TRUSTWORTHY, _column_spearman
+from grip_env.dataset.retest_curve import TRUSTWORTHY, _column_spearman, split_order
 from tests.benchmarks.crosscheck_contact_loads import kept_runs
 
 Rule = Callable[[NDArray[np.float64]], NDArray[np.int64]]
@@ -153,7 +153,7 @@ def main() -> None:
     if not found:
         raise SystemExit(f"{args.parts} keeps no retested object in {args.engine}")
     trials = min(m.shape[1] for m, _ in found)
-    order = np.random.default_rng(args.seed).random((args.splits, trials)).argsort(axis=1)
+    order = split_order(args.splits, trials, args.seed)
     objects = [Splits(m[:, :trials], order, seconds) for m, seconds in found]
     grips = sum(s.grips for s in objects)
     print(f"{args.engine}: {len(objects)} objects, {grips} grips, {trials} trials a grip, "
